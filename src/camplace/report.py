@@ -1,0 +1,102 @@
+"""Stage 8 - outputs: placement.json, metrics.json, visibility.npz, placement.csv.
+
+Keys follow the output contract (docs/output-contract.md). Every file is written
+atomically (temporary file + rename).
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import time
+from pathlib import Path
+
+import numpy as np
+
+from camplace.candidates import Candidates
+from camplace.files import atomic_savez, atomic_write_json, atomic_write_text
+from camplace.metrics import Metrics
+from camplace.solvers.base import Placement
+from camplace.visibility import Visibility
+
+
+def _round(x: float, nd: int = 9) -> float:
+    return float(round(float(x), nd))
+
+
+def camera_entries(candidates: Candidates, selected: np.ndarray) -> list[dict]:
+    """One placement.json camera object per selected candidate (in id order)."""
+    out = []
+    for i in np.sort(np.asarray(selected, np.int64)):
+        cam = candidates.cameras[int(candidates.camera_ids[i])]
+        yaw, pitch, roll = (float(a) for a in candidates.angles_deg[i])
+        out.append({
+            "candidate_id": int(i),
+            "location_id": int(candidates.location_ids[i]),
+            "position": [_round(v) for v in candidates.positions[i]],
+            "yaw_deg": _round(yaw), "pitch_deg": _round(pitch), "roll_deg": _round(roll),
+            "rotation": [[float(v) for v in row] for row in candidates.rotations[i]],
+            "camera": cam.name,
+            "intrinsics": cam.intrinsics(),
+        })
+    return out
+
+
+def placement_dict(scene_name: str, placement: Placement, budget: int, candidates: Candidates) -> dict:
+    return {
+        "scene": scene_name,
+        "solver": placement.solver,
+        "budget": int(budget),
+        "status": placement.status,
+        "objective": float(placement.objective),
+        "bound": None if placement.bound is None else float(placement.bound),
+        "gap": placement.gap,
+        "n_cameras": int(len(placement.selected)),
+        "cameras": camera_entries(candidates, placement.selected),
+    }
+
+
+def placement_csv(cameras: list[dict]) -> str:
+    """The mount list: header id,x,y,z,yaw,pitch,roll,lens (metres, degrees)."""
+    buf = io.StringIO()
+    w = csv.writer(buf, lineterminator="\n")
+    w.writerow(["id", "x", "y", "z", "yaw", "pitch", "roll", "lens"])
+    for c in cameras:
+        w.writerow([c["candidate_id"], *c["position"], c["yaw_deg"], c["pitch_deg"], c["roll_deg"], c["camera"]])
+    return buf.getvalue()
+
+
+def visibility_arrays(vis: Visibility) -> dict[str, np.ndarray]:
+    """The arrays of visibility.npz (no pickles)."""
+    V, t, c = vis.V, vis.targets, vis.candidates
+    return {
+        "data": V.data.astype(np.uint8), "indices": V.indices.astype(np.int32),
+        "indptr": V.indptr.astype(np.int64), "shape": np.array(V.shape, dtype=np.int64),
+        "gamma": t.gamma.astype(np.int64), "weights": t.weights.astype(np.float64),
+        "target_positions": t.positions.astype(np.float64), "target_normals": t.normals.astype(np.float64),
+        "target_region_ids": t.region_ids.astype(np.int32), "region_names": np.array(t.region_names, dtype=str),
+        "candidate_positions": c.positions.astype(np.float64), "rotations": c.rotations.astype(np.float64),
+        "candidate_angles_deg": c.angles_deg.astype(np.float64), "camera_ids": c.camera_ids.astype(np.int32),
+        "camera_names": np.array([cam.name for cam in c.cameras], dtype=str),
+        "location_ids": c.location_ids.astype(np.int64),
+    }
+
+
+def write_outputs(out_dir: str | Path, scene_name: str, vis: Visibility, placement: Placement, budget: int,
+                  metrics: Metrics, timings: dict[str, float]) -> dict[str, Path]:
+    """Write the contract files into out_dir; returns name -> path."""
+    t0 = time.perf_counter()
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    pdict = placement_dict(scene_name, placement, budget, vis.candidates)
+    paths = {
+        "visibility.npz": atomic_savez(out / "visibility.npz", **visibility_arrays(vis)),
+        "placement.json": atomic_write_json(out / "placement.json", pdict),
+        "placement.csv": atomic_write_text(out / "placement.csv", placement_csv(pdict["cameras"])),
+    }
+    timings = dict(timings)
+    timings["report"] = time.perf_counter() - t0
+    m = metrics.to_dict()
+    m["timings_s"] = {k: round(float(v), 4) for k, v in timings.items()}
+    paths["metrics.json"] = atomic_write_json(out / "metrics.json", m)
+    return paths
