@@ -131,6 +131,7 @@ class Placement(_Strict):
     budget: Annotated[int, Field(ge=0, strict=True)] = 20
     solver: str = "greedy"
     time_limit_s: PositiveFloat = 600.0
+    money_budget: Annotated[float, Field(ge=0, allow_inf_nan=False)] | None = None  # Σ camera cost limit
 
 
 class SceneSpec(_Strict):

@@ -32,6 +32,7 @@ class PlacementProblem:
     budget: int
     location_ids: np.ndarray
     camera_costs: np.ndarray | None = None
+    money_budget: float | None = None  # Σ camera_costs[selected] must not exceed this (None: no limit)
 
     def __post_init__(self) -> None:
         n_g, n_p = self.V.shape
@@ -43,6 +44,8 @@ class PlacementProblem:
             raise InputError(f"problem: budget must be >= 0, got {self.budget}")
         if np.any(self.gamma < 0):
             raise InputError("problem: gamma must be non-negative integers")
+        if self.money_budget is not None and not self.money_budget >= 0:
+            raise InputError(f"problem: money_budget must be >= 0, got {self.money_budget}")
 
     @property
     def n_candidates(self) -> int:
@@ -82,6 +85,17 @@ class PlacementProblem:
         locs = self.location_ids[sel]
         if len(np.unique(locs)) != len(locs):
             raise ValueError("two selected cameras share a location")
+        if self.money_budget is not None and len(sel):
+            spent = float(self.costs[sel].sum())
+            if spent > self.money_budget + 1e-9 * max(1.0, self.money_budget):
+                raise ValueError(f"cameras cost {spent:g}, over the money budget {self.money_budget:g}")
+
+    @property
+    def costs(self) -> np.ndarray:
+        """(N_g,) float64 price of each candidate (camera_costs, or 1 each when not given)."""
+        if self.camera_costs is None:
+            return np.ones(self.n_candidates)
+        return np.asarray(self.camera_costs, np.float64)
 
 
 def build_problem(V: sp.csr_matrix, gamma: np.ndarray, weights: np.ndarray | None, budget: int,
