@@ -1,0 +1,46 @@
+"""Shared fixtures: small hand-made scenes and one cached run of the built-in demo."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from camplace.config import parse_scene
+
+REPO = Path(__file__).resolve().parents[1]
+SHARED = REPO.parent / "shared"
+
+
+def box_room(obstacles=(), targets=None, mounts=None, footprint=None, height=3.0, voxel=0.25, cameras=None):
+    """A scene spec for hand-checked geometry tests (defaults: 4 m x 4 m x 3 m room)."""
+    return parse_scene({
+        "name": "test-room",
+        "voxel_size": voxel,
+        "occupancy_resolution": 0.05,
+        "room": {"footprint": footprint or [[0, 0], [4, 0], [4, 4], [0, 4]], "height": height},
+        "obstacles": list(obstacles),
+        "targets": targets or [{"name": "walkable", "kind": "volume", "heights": [1.0], "coverage": 1}],
+        "cameras": cameras or [{"name": "cam", "resolution": [640, 480], "fov_deg": [90, 70], "max_range": 10.0}],
+        "mounts": mounts or [{"kind": "ceiling_grid", "camera": "cam", "spacing": 1.0,
+                              "yaw_deg": [0], "pitch_deg": [45]}],
+    })
+
+
+@pytest.fixture(scope="session")
+def demo_run():
+    """The whole pipeline on the built-in demo scene (run once per test session)."""
+    from camplace.pipeline import run
+
+    return run("demo")
+
+
+@pytest.fixture(scope="session")
+def demo_out(tmp_path_factory, demo_run):
+    """The demo run's output folder (contract files)."""
+    from camplace.report import write_outputs
+
+    out = tmp_path_factory.mktemp("demo-out")
+    r = demo_run
+    write_outputs(out, r.scene.name, r.visibility, r.placement, r.problem.budget, r.metrics, r.timings_s)
+    return out
