@@ -21,12 +21,16 @@ class Metrics:
     coverage_histogram: dict[str, int]
     regions: dict[str, dict]
     timings_s: dict[str, float] = field(default_factory=dict)
+    well_triangulated_pct: float | None = None  # % of targets with a camera pair meeting at a usable angle
 
     def to_dict(self) -> dict:
-        return {"cost": self.cost, "coverage_gap": self.coverage_gap,
-                "non_triangulatable_pct": self.non_triangulatable_pct,
-                "coverage_histogram": self.coverage_histogram, "regions": self.regions,
-                "timings_s": self.timings_s}
+        out = {"cost": self.cost, "coverage_gap": self.coverage_gap,
+               "non_triangulatable_pct": self.non_triangulatable_pct,
+               "coverage_histogram": self.coverage_histogram, "regions": self.regions,
+               "timings_s": self.timings_s}
+        if self.well_triangulated_pct is not None:
+            out["well_triangulated_pct"] = self.well_triangulated_pct
+        return out
 
 
 def _figures(gamma: np.ndarray, weights: np.ndarray, cov: np.ndarray) -> dict:
@@ -43,8 +47,11 @@ def _figures(gamma: np.ndarray, weights: np.ndarray, cov: np.ndarray) -> dict:
 
 
 def compute_metrics(problem: PlacementProblem, selected: np.ndarray, region_ids: np.ndarray | None = None,
-                    region_names: tuple[str, ...] | list[str] = ()) -> Metrics:
-    """Score a selection (candidate ids) on the problem; per region when ids are given."""
+                    region_names: tuple[str, ...] | list[str] = (),
+                    well_triangulated: np.ndarray | None = None) -> Metrics:
+    """Score a selection (candidate ids) on the problem; per region when ids are given.
+    well_triangulated: optional (N_p,) bool from camplace.triangulation (adds the
+    ``well_triangulated_pct`` figures, overall and per region)."""
     cov = problem.coverage(selected)
     top = _figures(problem.gamma, problem.weights, cov)
     regions: dict[str, dict] = {}
@@ -53,5 +60,11 @@ def compute_metrics(problem: PlacementProblem, selected: np.ndarray, region_ids:
             m = region_ids == r
             fig = _figures(problem.gamma[m], problem.weights[m], cov[m])
             fig["targets"] = int(m.sum())
+            if well_triangulated is not None:
+                fig["well_triangulated_pct"] = 100.0 * float(np.mean(well_triangulated[m])) if m.any() else 0.0
             regions[str(name)] = fig
-    return Metrics(top["cost"], top["coverage_gap"], top["non_triangulatable_pct"], top["coverage_histogram"], regions)
+    wt = None
+    if well_triangulated is not None:
+        wt = 100.0 * float(np.mean(well_triangulated)) if len(well_triangulated) else 0.0
+    return Metrics(top["cost"], top["coverage_gap"], top["non_triangulatable_pct"], top["coverage_histogram"], regions,
+                   well_triangulated_pct=wt)
