@@ -12,12 +12,31 @@ from pathlib import Path
 from typing import Annotated, Any, Literal, Union
 
 import yaml
-from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
+from pydantic import (BaseModel, BeforeValidator, ConfigDict, Discriminator, Field, Tag, ValidationError,
+                      field_validator, model_validator)
+from pydantic_core import PydanticCustomError
 
 from camplace.errors import InputError
 
-PositiveFloat = Annotated[float, Field(gt=0, allow_inf_nan=False)]
-Finite = Annotated[float, Field(allow_inf_nan=False)]
+MAX_ANGLES_PER_AXIS = 3600  # an angle list/range longer than this is a typo (e.g. step 0.001)
+
+
+def _no_bool(v: Any) -> Any:
+    """YAML turns yes/no/true/false into booleans; never accept them as numbers."""
+    if isinstance(v, bool):
+        raise PydanticCustomError("bool_not_number", "expected a number, not a boolean")
+    return v
+
+
+def scene_error(path: str, message: str) -> PydanticCustomError:
+    """A validation error raised by a model validator that names its own key path
+    (relative to the scene's top level), e.g. ``scene_error("mounts[0].camera", "...")``."""
+    return PydanticCustomError("scene", "{message}", {"path": path, "message": message})
+
+
+PositiveFloat = Annotated[float, BeforeValidator(_no_bool), Field(gt=0, allow_inf_nan=False)]
+Finite = Annotated[float, BeforeValidator(_no_bool), Field(allow_inf_nan=False)]
+PositiveInt = Annotated[int, BeforeValidator(_no_bool), Field(gt=0)]
 Point2 = tuple[Finite, Finite]
 Point3 = tuple[Finite, Finite, Finite]
 FACES = ("+x", "-x", "+y", "-y", "+z", "-z")
@@ -34,12 +53,36 @@ class AngleRange(_Strict):
     stop: Finite
     step: PositiveFloat
 
+    @model_validator(mode="after")
+    def _sane(self) -> "AngleRange":
+        if self.stop < self.start:
+            raise scene_error("stop", f"must be >= start ({self.start}), got {self.stop}")
+        n = self.count()
+        if n > MAX_ANGLES_PER_AXIS:
+            raise scene_error("step", f"{self.step} gives {n} angles from {self.start} to {self.stop}; "
+                                      f"expected at most {MAX_ANGLES_PER_AXIS} (use a larger step)")
+        return self
+
+    def count(self) -> int:
+        """Number of angles, computed without building the list."""
+        return max(int(math.floor((self.stop - self.start) / self.step + 1e-9)) + 1, 0)
+
     def values(self) -> list[float]:
-        n = int(math.floor((self.stop - self.start) / self.step + 1e-9)) + 1
-        return [self.start + k * self.step for k in range(max(n, 0))]
+        return [self.start + k * self.step for k in range(self.count())]
 
 
-Angles = Union[AngleRange, list[Finite], Finite]
+def _angles_kind(v: Any) -> str:
+    if isinstance(v, (dict, AngleRange)):
+        return "range"
+    if isinstance(v, (list, tuple)):
+        return "list"
+    return "value"
+
+
+AngleList = Annotated[list[Finite], Field(min_length=1, max_length=MAX_ANGLES_PER_AXIS)]
+Angles = Annotated[Union[Annotated[AngleRange, Tag("range")], Annotated[AngleList, Tag("list")],
+                         Annotated[Finite, Tag("value")]], Discriminator(_angles_kind)]
+_UNION_TAGS = ("range", "list", "value")
 
 
 def angle_values(a: Angles) -> list[float]:
@@ -54,6 +97,19 @@ class Room(_Strict):
     footprint: list[Point2] = Field(min_length=3)
     height: PositiveFloat
 
+    @model_validator(mode="after")
+    def _simple_polygon(self) -> "Room":
+        import shapely
+        from shapely.geometry import Polygon
+
+        poly = Polygon(self.footprint)
+        if not poly.is_valid:
+            raise scene_error("footprint", f"expected a simple polygon (edges must not cross or touch), "
+                                           f"got {shapely.is_valid_reason(poly)}")
+        if poly.area <= 1e-9:
+            raise scene_error("footprint", "the polygon has zero area (all corners on one line?)")
+        return self
+
 
 class Box(_Strict):
     min: Point3
@@ -63,7 +119,8 @@ class Box(_Strict):
     def _ordered(self) -> "Box":
         for k, (lo, hi) in enumerate(zip(self.min, self.max)):
             if not hi > lo:
-                raise ValueError(f"box max must exceed min on every axis (axis {'xyz'[k]}: min {lo}, max {hi})")
+                raise scene_error(f"max[{k}]", f"box max must exceed min on every axis (axis {'xyz'[k]}: "
+                                               f"min {lo}, max {hi})")
         return self
 
 
@@ -110,8 +167,9 @@ class TargetRegion(_Strict):
 class Camera(_Strict):
     name: str = Field(min_length=1)
     model: Literal["pinhole"] = "pinhole"
-    resolution: tuple[Annotated[int, Field(gt=0)], Annotated[int, Field(gt=0)]]
-    fov_deg: tuple[Annotated[float, Field(gt=0, lt=180)], Annotated[float, Field(gt=0, lt=180)]]
+    resolution: tuple[PositiveInt, PositiveInt]
+    fov_deg: tuple[Annotated[float, BeforeValidator(_no_bool), Field(gt=0, lt=180)],
+                   Annotated[float, BeforeValidator(_no_bool), Field(gt=0, lt=180)]]
     max_range: PositiveFloat = 5.0
     cost: Annotated[float, Field(ge=0, allow_inf_nan=False)] = 1.0
 
@@ -148,26 +206,49 @@ class SceneSpec(_Strict):
     @model_validator(mode="after")
     def _references(self) -> "SceneSpec":
         for key, items in (("obstacles", self.obstacles), ("targets", self.targets), ("cameras", self.cameras)):
-            seen: set[str] = set()
+            seen: dict[str, int] = {}
             for i, it in enumerate(items):
                 if it.name in seen:
-                    raise ValueError(f"{key}[{i}].name: duplicate name '{it.name}'")
-                seen.add(it.name)
+                    raise scene_error(f"{key}[{i}].name", f"duplicate name '{it.name}' (already used by "
+                                                          f"{key}[{seen[it.name]}]); names must be unique")
+                seen[it.name] = i
+        H = self.room.height
+        fp = [p for p in self.room.footprint]
+        xlo, ylo = min(p[0] for p in fp), min(p[1] for p in fp)
+        xhi, yhi = max(p[0] for p in fp), max(p[1] for p in fp)
+        for i, ob in enumerate(self.obstacles):
+            b = ob.box
+            if b is not None and (b.max[0] <= xlo or b.min[0] >= xhi or b.max[1] <= ylo or b.min[1] >= yhi
+                                  or b.max[2] <= 0 or b.min[2] >= H):
+                raise scene_error(f"obstacles[{i}].box", f"lies entirely outside the room (x {xlo}..{xhi}, "
+                                                         f"y {ylo}..{yhi}, z 0..{H} m)")
         obstacle_names = [o.name for o in self.obstacles]
         for i, t in enumerate(self.targets):
-            for name in t.of or []:
+            for k, name in enumerate(t.of or []):
                 if name not in obstacle_names:
-                    raise ValueError(f"targets[{i}].of: unknown obstacle '{name}'{_did_you_mean(name, obstacle_names)}")
-            for h in t.heights or []:
-                if not 0 < h < self.room.height:
-                    raise ValueError(f"targets[{i}].heights: {h} m is outside the room (0, {self.room.height}) m")
+                    raise scene_error(f"targets[{i}].of[{k}]", f"unknown obstacle '{name}'"
+                                      f"{_did_you_mean(name, obstacle_names)}; expected one of "
+                                      f"{_names(obstacle_names)}")
+            for k, h in enumerate(t.heights or []):
+                if not 0 < h < H:
+                    raise scene_error(f"targets[{i}].heights[{k}]",
+                                      f"{h} m is outside the room; expected a height in (0, {H}) m")
+                if h in (t.heights or [])[:k]:
+                    raise scene_error(f"targets[{i}].heights[{k}]", f"duplicate height {h} m")
         camera_names = [c.name for c in self.cameras]
         for i, m in enumerate(self.mounts):
             if m.camera not in camera_names:
-                raise ValueError(f"mounts[{i}].camera: unknown camera '{m.camera}'{_did_you_mean(m.camera, camera_names)}")
-            if m.offset_below_ceiling >= self.room.height:
-                raise ValueError(f"mounts[{i}].offset_below_ceiling: {m.offset_below_ceiling} m is not below the ceiling")
+                raise scene_error(f"mounts[{i}].camera", f"unknown camera '{m.camera}'"
+                                  f"{_did_you_mean(m.camera, camera_names)}; expected one of {_names(camera_names)}")
+            off = getattr(m, "offset_below_ceiling", None)
+            if off is not None and off >= H:
+                raise scene_error(f"mounts[{i}].offset_below_ceiling",
+                                  f"{off} m is not below the ceiling; expected a value in [0, {H}) m")
         return self
+
+
+def _names(names: list[str]) -> str:
+    return ", ".join(f"'{n}'" for n in names[:8]) + (", ..." if len(names) > 8 else "") if names else "(none defined)"
 
 
 def _did_you_mean(word: str, choices: list[str]) -> str:
@@ -176,55 +257,127 @@ def _did_you_mean(word: str, choices: list[str]) -> str:
 
 
 def _loc_to_path(loc: tuple[Any, ...]) -> str:
+    """pydantic's error location -> ``mounts[0].yaw_deg.step`` (union tags dropped)."""
     out = ""
     for part in loc:
         if isinstance(part, int):
             out += f"[{part}]"
-        elif part in ("AngleRange", "list[float]", "float", "list[constrained-float]", "constrained-float"):
+        elif part in _UNION_TAGS or _is_branch_name(str(part)):
             continue  # union branch names are noise for the user
         else:
             out += ("." if out else "") + str(part)
     return out
 
 
+def _is_branch_name(part: str) -> bool:
+    """pydantic names the branch of an untagged union by its type ('float', 'list[...]', 'Box', ...)."""
+    return part in ("float", "int", "str", "bool", "constrained-float", "constrained-int", "constrained-str") or (
+        part.endswith("]") and "[" in part) or part.startswith("function-") or (
+        part[:1].isupper() and part in _model_names())
+
+
+def _model_names() -> set[str]:
+    if not _MODEL_NAMES:
+        seen: set[type[BaseModel]] = set()
+        todo: list[type[BaseModel]] = [SceneSpec]
+        while todo:
+            m = todo.pop()
+            if m not in seen:
+                seen.add(m)
+                for f in m.model_fields.values():
+                    todo += _models_in(f.annotation)
+        _MODEL_NAMES.update(m.__name__ for m in seen)
+    return _MODEL_NAMES
+
+
+_MODEL_NAMES: set[str] = set()
+
+
+def _models_in(tp: Any) -> list[type[BaseModel]]:
+    """Every pydantic model a type annotation may hold (through Annotated, Union, list, tuple, dict)."""
+    import typing
+
+    if isinstance(tp, type) and issubclass(tp, BaseModel):
+        return [tp]
+    if typing.get_origin(tp) is typing.Annotated:
+        return _models_in(typing.get_args(tp)[0])
+    out: list[type[BaseModel]] = []
+    for a in typing.get_args(tp) or ():
+        for m in _models_in(a):
+            if m not in out:
+                out.append(m)
+    return out
+
+
 def _fields_of(model: type[BaseModel], loc: tuple[Any, ...]) -> list[str]:
     """Field names valid at the parent of ``loc`` (for 'did you mean')."""
-    cur: Any = model
+    cur = [model]
     for part in loc[:-1]:
-        if isinstance(part, int):
+        if isinstance(part, int) or part in _UNION_TAGS:
             continue
-        field = getattr(cur, "model_fields", {}).get(part)
-        if field is None:
-            return []
-        ann = field.annotation
-        args = getattr(ann, "__args__", ()) or ()
-        nxt = [a for a in (ann, *args) if isinstance(a, type) and issubclass(a, BaseModel)]
-        for a in args:
-            for b in getattr(a, "__args__", ()) or ():
-                if isinstance(b, type) and issubclass(b, BaseModel):
-                    nxt.append(b)
+        nxt: list[type[BaseModel]] = []
+        for m in cur:
+            f = m.model_fields.get(str(part))
+            if f is not None:
+                nxt += [x for x in _models_in(f.annotation) if x not in nxt]
         if not nxt:
+            if any(m.__name__ == part for m in cur):  # union branch named by its model
+                continue
             return []
-        cur = nxt[0]
-    return list(getattr(cur, "model_fields", {}).keys())
+        cur = nxt
+    names: list[str] = []
+    for m in cur:
+        names += [k for k in m.model_fields if k not in names]
+    return names
 
 
-def format_validation_error(err: ValidationError, source: str, model: type[BaseModel] = None) -> str:
-    """One line: ``source: key.path: what is wrong`` (the first error; count of the rest)."""
-    e = err.errors()[0]
-    path = _loc_to_path(tuple(e["loc"]))
+_ERROR_ORDER = {"extra_forbidden": 0}  # a mistyped key also shows up as a missing one: name the typo
+
+
+def format_error_entry(e: dict, model: type[BaseModel] | None = None, missing: tuple[str, ...] = ()) -> tuple[str, str]:
+    """One pydantic error -> (key path, message); ``missing``: required keys missing beside it."""
+    import re
+
+    loc = tuple(e["loc"])
+    path = _loc_to_path(loc)
     msg = e["msg"]
-    if e["type"] == "extra_forbidden":
-        key = str(e["loc"][-1])
-        hint = _did_you_mean(key, _fields_of(model, tuple(e["loc"]))) if model else ""
-        msg = f"unknown key '{key}'{hint}"
-    elif msg.startswith("Value error, "):
+    t = e["type"]
+    ctx = e.get("ctx") or {}
+    if t == "scene":
+        sub = ctx.get("path", "")
+        path = (path + ("." if path and not sub.startswith("[") else "") + sub) if sub else path
+        return path, ctx.get("message", msg)
+    if t == "extra_forbidden":
+        key = str(loc[-1])
+        hint = _did_you_mean(key, list(missing)) or (_did_you_mean(key, _fields_of(model, loc)) if model else "")
+        return path, f"unknown key '{key}'{hint}"
+    if t == "missing":
+        return path, "required key is missing"
+    if msg.startswith("Value error, "):
         msg = msg[len("Value error, "):]
-    if e["type"] not in ("extra_forbidden", "missing") and "input" in e and not isinstance(e["input"], (dict, list)):
-        msg += f" (got {e['input']!r})"
-    more = len(err.errors()) - 1
-    tail = f" [+{more} more error(s)]" if more else ""
-    return f"{source}: {path or '<top>'}: {msg}{tail}"
+    msg = re.sub(r"^Input should be ", "expected ", msg)
+    msg = re.sub(r"^Input should have ", "expected ", msg)
+    inp = e.get("input")
+    if isinstance(inp, float) and not math.isfinite(inp):
+        msg = "expected a finite number"
+    if t == "literal_error" and isinstance(inp, str):
+        msg += _did_you_mean(inp, re.findall(r"'([^']*)'", str(ctx.get("expected", ""))))
+    if "input" in e and not isinstance(inp, (dict, list, tuple, BaseModel)):
+        r = repr(inp)
+        msg += f" (got {r if len(r) <= 60 else r[:57] + '...'})"
+    return path, msg
+
+
+def format_validation_error(err: ValidationError, source: str, model: type[BaseModel] | None = None) -> str:
+    """One line: ``source: key.path: what is wrong`` (the first error; count of the rest)."""
+    errors = sorted(err.errors(), key=lambda e: _ERROR_ORDER.get(e["type"], 1))
+    first = errors[0]
+    missing = tuple(str(e["loc"][-1]) for e in errors
+                    if e["type"] == "missing" and tuple(e["loc"][:-1]) == tuple(first["loc"][:-1]))
+    path, msg = format_error_entry(first, model, missing)
+    more = len(errors) - 1
+    tail = f" (and {more} more error{'s' if more > 1 else ''})" if more else ""
+    return f"{source}: {path or '<top>'}: {msg}{tail}".replace("\n", " ")
 
 
 def parse_scene(data: Any, source: str = "<scene>") -> SceneSpec:
