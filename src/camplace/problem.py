@@ -106,3 +106,105 @@ def build_problem(V: sp.csr_matrix, gamma: np.ndarray, weights: np.ndarray | Non
     w = np.ones(n_p) if weights is None else np.asarray(weights, np.float64)
     loc = np.arange(n_g, dtype=np.int64) if location_ids is None else np.asarray(location_ids, np.int64)
     return PlacementProblem(V, np.asarray(gamma, np.int64), w, int(budget), loc)
+
+
+# ---------------------------------------------------------------------------
+# Reductions that keep the optimum (applied by camplace.solvers.solve before any solver)
+
+
+@dataclass(frozen=True)
+class Reduction:
+    """A reduced problem and the maps back. candidates: (N_g',) int64 original id of each
+    reduced row; target_map: (N_p,) int64 reduced target of each original target (−1:
+    dropped because it can never cost anything: Γ_j = 0 or w_j = 0); info: sizes
+    before/after and what each rule removed."""
+
+    problem: PlacementProblem
+    candidates: np.ndarray
+    target_map: np.ndarray
+    info: dict
+
+    def lift(self, selected: np.ndarray) -> np.ndarray:
+        """Reduced candidate ids -> sorted original candidate ids."""
+        return np.sort(self.candidates[np.asarray(selected, np.int64)])
+
+
+def dominated_candidates(V: sp.csr_matrix, location_ids: np.ndarray, costs: np.ndarray) -> np.ndarray:
+    """(N_g,) bool: candidate a is dominated when another candidate b at the SAME location
+    sees a superset of its targets at no higher price (exact ties: the lower id survives).
+    Replacing a by b keeps every constraint and never raises any cost, so dropping a keeps
+    the optimum. (Across locations this is not valid: it can break one-per-location.)"""
+    n_g = V.shape[0]
+    out = np.zeros(n_g, bool)
+    order = np.argsort(location_ids, kind="stable")
+    locs = location_ids[order]
+    bounds = np.flatnonzero(np.diff(locs)) + 1
+    nnz = np.diff(V.indptr)
+    for group in np.split(order, bounds):
+        if len(group) < 2:
+            continue
+        sub = V[group].astype(np.int32)
+        inter = (sub @ sub.T).toarray()
+        n = nnz[group]
+        c = costs[group]
+        # key order: more targets, then cheaper, then lower id wins
+        subset = inter == n[:, None]  # subset[a, b]: row a ⊆ row b
+        np.fill_diagonal(subset, False)
+        better = (n[None, :] > n[:, None]) | ((n[None, :] == n[:, None]) & (
+            (c[None, :] < c[:, None]) | ((c[None, :] == c[:, None]) & (group[None, :] < group[:, None]))))
+        dom = subset & (c[None, :] <= c[:, None]) & better
+        out[group[dom.any(axis=1)]] = True
+    return out
+
+
+def reduce_problem(problem: PlacementProblem, dominance: bool = True) -> Reduction:
+    """Apply, in order: drop targets that never cost anything (Γ_j = 0 or w_j = 0); drop
+    candidates that see no remaining target; drop candidates dominated at their own
+    location (:func:`dominated_candidates`); merge targets with identical columns and Γ
+    into one target whose weight is the sum. The reduced problem has the same optimal
+    cost, and cost(lift(s)) == reduced cost(s) for every selection s."""
+    import time
+
+    t0 = time.perf_counter()
+    V = sp.csr_matrix(problem.V)
+    n_g, n_p = V.shape
+    info: dict = {"candidates_before": n_g, "targets_before": n_p, "nonzeros_before": int(V.nnz)}
+    live_t = np.nonzero((problem.gamma > 0) & (problem.weights > 0))[0]
+    info["dropped_zero_targets"] = int(n_p - len(live_t))
+    Vt = V[:, live_t].tocsr()
+    row_nnz = np.diff(Vt.indptr)
+    keep_c = row_nnz > 0
+    info["dropped_blind_candidates"] = int((~keep_c).sum())
+    costs = problem.costs
+    if dominance:
+        cand = np.nonzero(keep_c)[0]
+        dom = dominated_candidates(Vt[cand], problem.location_ids[cand], costs[cand])
+        keep_c[cand[dom]] = False
+        info["dropped_dominated_candidates"] = int(dom.sum())
+    cand = np.nonzero(keep_c)[0]
+    Vc = Vt[cand]
+    # merge identical (column, Γ)
+    cols = sp.csc_matrix(Vc)
+    cols.sort_indices()
+    gamma_live = problem.gamma[live_t]
+    key_to_new: dict[tuple, int] = {}
+    group_of = np.empty(len(live_t), np.int64)
+    for j in range(len(live_t)):
+        key = (int(gamma_live[j]), cols.indices[cols.indptr[j]:cols.indptr[j + 1]].tobytes())
+        g = key_to_new.setdefault(key, len(key_to_new))
+        group_of[j] = g
+    n_new = len(key_to_new)
+    first = np.full(n_new, -1, np.int64)
+    first[group_of[::-1]] = np.arange(len(live_t))[::-1]
+    weights = np.bincount(group_of, weights=problem.weights[live_t], minlength=n_new)
+    Vr = sp.csr_matrix(cols[:, first])
+    Vr.sort_indices()
+    target_map = np.full(n_p, -1, np.int64)
+    target_map[live_t] = group_of
+    info["merged_targets"] = int(len(live_t) - n_new)
+    reduced = PlacementProblem(Vr, gamma_live[first].astype(np.int64), weights.astype(np.float64), problem.budget,
+                               np.asarray(problem.location_ids)[cand],
+                               None if problem.camera_costs is None else costs[cand], problem.money_budget)
+    info.update(candidates_after=int(len(cand)), targets_after=int(n_new), nonzeros_after=int(Vr.nnz),
+                seconds=time.perf_counter() - t0)
+    return Reduction(reduced, cand.astype(np.int64), target_map, info)

@@ -12,19 +12,37 @@ from camplace.errors import InputError
 from camplace.problem import PlacementProblem
 from camplace.solvers.base import Placement
 from camplace.solvers.greedy import solve_greedy
+from camplace.solvers.mip import solve_mip
 
 SOLVERS: dict[str, Callable[..., Placement]] = {
     "greedy": solve_greedy,
+    "mip": solve_mip,
 }
 
 
-def solve(problem: PlacementProblem, solver: str = "greedy", **options) -> Placement:
-    """Run the named solver on the problem."""
+def solve(problem: PlacementProblem, solver: str = "greedy", *, reduce: bool = True, **options) -> Placement:
+    """Run the named solver on the problem. With reduce=True (default) the solver sees
+    camplace.problem.reduce_problem(problem) (same optimum, fewer rows/columns); the
+    selection is mapped back, the objective recomputed on the original problem, and
+    the sizes before/after are in placement.info['reduction']."""
     try:
         fn = SOLVERS[solver]
     except KeyError:
         raise InputError(f"unknown solver '{solver}'; expected one of {', '.join(sorted(SOLVERS))}") from None
-    return fn(problem, **options)
+    if not reduce:
+        return fn(problem, **options)
+    from dataclasses import replace
+
+    from camplace.problem import reduce_problem
+
+    red = reduce_problem(problem)
+    p = fn(red.problem, **options)
+    sel = red.lift(p.selected)
+    info = dict(p.info)
+    info["reduction"] = red.info
+    if isinstance(info.get("order"), list):
+        info["order"] = [int(red.candidates[i]) for i in info["order"]]
+    return replace(p, selected=sel, objective=problem.cost(sel), info=info)
 
 
 __all__ = ["Placement", "SOLVERS", "solve"]

@@ -2,7 +2,9 @@
 
 from __future__ import annotations
 
+import time
 from dataclasses import dataclass, field
+from typing import Callable
 
 import numpy as np
 
@@ -29,3 +31,44 @@ class Placement:
         if self.objective <= 0:
             return 0.0
         return max(0.0, (self.objective - self.bound) / self.objective)
+
+
+# ---------------------------------------------------------------------------
+# The common solver signature (every solver follows it):
+#
+#   solve_x(problem, *, time_limit_s=None, threads=None, seed=0, should_stop=None,
+#           progress=None, on_incumbent=None, **options) -> Placement
+#
+# time_limit_s: wall-clock seconds (None: no limit); threads: solver threads (None:
+# solver default); should_stop(): polled, when True the solver returns its best
+# placement with status 'interrupted'; progress(stage, done, total): progress report;
+# on_incumbent(objective, bound_or_None): called when a better placement is found.
+# Unknown options common to other solvers are accepted and ignored.
+
+ShouldStop = Callable[[], bool]
+ProgressFn = Callable[[str, int, int], None]
+OnIncumbent = Callable[[float, "float | None"], None]
+
+COMMON_OPTIONS = frozenset({"time_limit_s", "threads", "seed", "should_stop", "progress", "on_incumbent",
+                            "local_search", "verbose", "warm_start", "mip_rel_gap", "reduce"})
+
+
+def stopped(should_stop: ShouldStop | None) -> bool:
+    """True when the caller asked the solver to stop."""
+    return bool(should_stop is not None and should_stop())
+
+
+def deadline(time_limit_s: float | None) -> float:
+    """perf_counter() value at which the time limit runs out (inf when None)."""
+    return float("inf") if time_limit_s is None else time.perf_counter() + max(0.0, float(time_limit_s))
+
+
+def trivial_placement(problem, name: str, t0: float) -> Placement | None:
+    """The proven-optimal answer when nothing can be chosen or nothing needs cover
+    (no candidate, budget 0, or zero cost with no camera); else None."""
+    import numpy as np
+
+    if problem.n_candidates == 0 or problem.budget == 0 or problem.normalizer == 0:
+        cost = problem.normalizer
+        return Placement(np.zeros(0, np.int64), cost, cost, "optimal", name, time.perf_counter() - t0, {})
+    return None
