@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import difflib
 import math
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Annotated, Any, Literal, Union
 
@@ -380,6 +381,162 @@ def format_validation_error(err: ValidationError, source: str, model: type[BaseM
     return f"{source}: {path or '<top>'}: {msg}{tail}".replace("\n", " ")
 
 
+# --- checks that need more than one key: referenced files, memory -------------------------------
+
+FILE_KEYS = ("mesh", "point_cloud", "octomap", "file", "path")  # scene keys that name a file
+
+
+def _walk_files(obj: Any, path: str):
+    """Yield (key path, file name) for every FILE_KEYS string anywhere in a spec."""
+    if isinstance(obj, BaseModel):
+        for k in type(obj).model_fields:
+            v = getattr(obj, k, None)
+            sub = f"{path}.{k}" if path else k
+            if k in FILE_KEYS and isinstance(v, (str, Path)):
+                yield sub, str(v)
+            else:
+                yield from _walk_files(v, sub)
+    elif isinstance(obj, (list, tuple)):
+        for i, v in enumerate(obj):
+            yield from _walk_files(v, f"{path}[{i}]")
+
+
+def check_referenced_files(spec: BaseModel, base_dir: Path | None, source: str) -> None:
+    """Every file the scene names (meshes, point clouds, ...) must exist, relative to the scene file."""
+    for path, name in _walk_files(spec, ""):
+        f = Path(name).expanduser()
+        if not f.is_absolute() and base_dir is not None:
+            f = base_dir / f
+        if not f.is_file():
+            where = f" (looked in {f.parent})" if not Path(name).is_absolute() else ""
+            raise InputError(f"{source}: {path}: file '{name}' not found{where}")
+
+
+GIB = 1024**3
+
+
+def memory_limit_bytes() -> int:
+    """The memory a run may plan to use: ``CAMPLACE_MAX_MEMORY_GB`` if set, else 80 % of physical RAM."""
+    import os
+
+    env = os.environ.get("CAMPLACE_MAX_MEMORY_GB")
+    if env:
+        try:
+            v = float(env)
+        except ValueError:
+            raise InputError(f"CAMPLACE_MAX_MEMORY_GB: expected a number of GiB, got '{env}'") from None
+        if not (v > 0 and math.isfinite(v)):
+            raise InputError(f"CAMPLACE_MAX_MEMORY_GB: expected a positive number of GiB, got '{env}'")
+        return int(v * GIB)
+    try:
+        return int(0.8 * os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES"))
+    except (ValueError, OSError, AttributeError):  # pragma: no cover - non-POSIX
+        return 8 * GIB
+
+
+# bytes per item, measured roughly on the stage code (arrays + temporaries)
+BYTES_PER_OCC_CELL = 1.0  # bool grid
+BYTES_PER_OCC_COLUMN = 40.0  # 2D meshgrid + inside test over x, y
+BYTES_PER_TARGET = 160.0  # positions, normals, gamma, weights, region ids, masks, visibility inputs
+BYTES_PER_TARGET_GRID_CELL = 40.0  # xy meshgrid of the volume grid
+BYTES_PER_CANDIDATE = 500.0  # positions, angles, rotations (+ temporaries), ids, visibility counts
+
+
+@dataclass(frozen=True)
+class ResourceEstimate:
+    """Sizes a scene will allocate, computed from the spec alone (nothing allocated).
+    Each ``items`` entry: (key path to blame, what, count, bytes)."""
+
+    items: tuple[tuple[str, str, float, float], ...]
+
+    @property
+    def total_bytes(self) -> float:
+        return float(sum(it[3] for it in self.items))
+
+    def count(self, what: str) -> float:
+        return float(sum(it[2] for it in self.items if it[1] == what))
+
+
+def _n_angles(a: Any) -> int:
+    if isinstance(a, AngleRange):
+        return a.count()
+    if isinstance(a, (list, tuple)):
+        return len(a)
+    return 1
+
+
+def estimate_resources(spec: "SceneSpec") -> ResourceEstimate:
+    """Upper estimates of the occupancy grid, target and candidate sizes of a scene."""
+    fp = [tuple(map(float, p)) for p in spec.room.footprint]
+    w = max(p[0] for p in fp) - min(p[0] for p in fp)
+    d = max(p[1] for p in fp) - min(p[1] for p in fp)
+    H = float(spec.room.height)
+    items: list[tuple[str, str, float, float]] = []
+    r = float(spec.occupancy_resolution)
+    nx, ny, nz = (math.ceil(e / r) + 2 for e in (w, d, H))
+    cells = float(nx) * ny * nz
+    items.append(("occupancy_resolution", "occupancy cells", cells,
+                  cells * BYTES_PER_OCC_CELL + float(nx) * ny * BYTES_PER_OCC_COLUMN))
+    v = float(spec.voxel_size)
+    grid_xy = float(math.floor(w / v) + 1) * float(math.floor(d / v) + 1)
+    boxes = {o.name: o.box for o in spec.obstacles if getattr(o, "box", None) is not None}
+    for i, t in enumerate(spec.targets):
+        if t.kind == "volume":
+            n = grid_xy * len(t.heights or [])
+            items.append((f"targets[{i}]", "targets", n, n * BYTES_PER_TARGET + grid_xy * BYTES_PER_TARGET_GRID_CELL))
+        else:
+            n = 0.0
+            for name in t.of or []:
+                b = boxes.get(name)
+                if b is None:
+                    continue
+                ext = [hi - lo for lo, hi in zip(b.min, b.max)]
+                for a in range(3):
+                    u, q = [k for k in range(3) if k != a]
+                    n += 2 * (math.ceil(ext[u] / v) + 1) * (math.ceil(ext[q] / v) + 1)
+            items.append((f"targets[{i}]", "targets", n, n * BYTES_PER_TARGET))
+    for i, m in enumerate(spec.mounts):
+        spacing = getattr(m, "spacing", None)
+        if not spacing:
+            continue
+        if getattr(m, "kind", "") == "ceiling_grid":
+            pts = float(math.floor(w / spacing) + 1) * float(math.floor(d / spacing) + 1)
+        else:  # wall or other mounts: along the boundary, a few heights
+            perim = sum(math.dist(fp[k], fp[(k + 1) % len(fp)]) for k in range(len(fp)))
+            pts = (perim / spacing + len(fp)) * (math.floor(H / spacing) + 1)
+        n = pts * _n_angles(getattr(m, "yaw_deg", 1)) * _n_angles(getattr(m, "pitch_deg", 1)) * \
+            _n_angles(getattr(m, "roll_deg", 1))
+        items.append((f"mounts[{i}]", "candidates", n, n * BYTES_PER_CANDIDATE))
+    return ResourceEstimate(tuple(items))
+
+
+def _gib(b: float) -> str:
+    return f"{b / GIB:.1f} GiB" if b >= 0.1 * GIB else f"{b / 1024**2:.0f} MiB"
+
+
+def check_resources(spec: "SceneSpec", source: str, limit_bytes: int | None = None) -> ResourceEstimate:
+    """Refuse (InputError, with the numbers) a scene whose grids would not fit in memory,
+    before anything is allocated."""
+    limit = memory_limit_bytes() if limit_bytes is None else int(limit_bytes)
+    est = estimate_resources(spec)
+    hint = "set the limit with --max-memory-gb or CAMPLACE_MAX_MEMORY_GB"
+    fix = {"occupancy_resolution": "use a coarser occupancy_resolution",
+           "targets": "use a coarser voxel_size or fewer heights", "mounts": "use a larger spacing or fewer angles"}
+    for path, what, n, b in sorted(est.items, key=lambda it: -it[3]):
+        if b > limit:
+            key = path if path == "occupancy_resolution" else (
+                "voxel_size" if path.startswith("targets") else path + ".spacing")
+            value = {"occupancy_resolution": spec.occupancy_resolution, "voxel_size": spec.voxel_size}.get(key)
+            shown = f" {value} m" if value is not None else ""
+            raise InputError(f"{source}: {key}:{shown} would need {n:.3g} {what} ({_gib(b)} of memory, limit "
+                             f"{_gib(limit)}); {fix[path.split('[')[0]]} ({hint})")
+    if est.total_bytes > limit:
+        parts = ", ".join(f"{p}: {_gib(b)}" for p, _, _, b in sorted(est.items, key=lambda it: -it[3])[:3])
+        raise InputError(f"{source}: the scene would need about {_gib(est.total_bytes)} of memory ({parts}), "
+                         f"limit {_gib(limit)}; use coarser grids ({hint})")
+    return est
+
+
 def parse_scene(data: Any, source: str = "<scene>") -> SceneSpec:
     """Validate a scene mapping; raise InputError with a one-line message."""
     if not isinstance(data, dict):
@@ -402,4 +559,6 @@ def load_scene_file(path: str | Path) -> SceneSpec:
         raise InputError(f"{p}: not valid YAML: {first}") from None
     if data is None:
         raise InputError(f"{p}: the file is empty; expected a YAML mapping of scene keys")
-    return parse_scene(data, str(p))
+    spec = parse_scene(data, str(p))
+    check_referenced_files(spec, p.resolve().parent, str(p))
+    return spec

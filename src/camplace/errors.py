@@ -13,3 +13,9 @@ class InputError(CamplaceError):
     """Bad input: a file, a key path or an option that does not hold what is expected."""
 
     exit_code = 2
+
+
+class Interrupted(CamplaceError):
+    """The user stopped the run (Ctrl-C) before there was a placement to write."""
+
+    exit_code = 130

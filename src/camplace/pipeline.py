@@ -16,7 +16,9 @@ import numpy as np
 from camplace.builtin import resolve_scene
 from camplace.cameras import CameraModel, camera_from_spec
 from camplace.candidates import build_candidates
-from camplace.config import SceneSpec
+from camplace.checks import check_feasibility
+from camplace.config import SceneSpec, check_resources
+from camplace.errors import InputError, Interrupted
 from camplace.metrics import Metrics, compute_metrics
 from camplace.problem import PlacementProblem
 from camplace.scene import Scene, build_scene
@@ -44,11 +46,20 @@ def _stage(progress: Progress | None, name: str) -> None:
 
 
 def prepare(scene: str | Path | SceneSpec, progress: Progress | None = None,
-            timings: dict | None = None, log: list | None = None) -> tuple[Scene, Visibility]:
-    """Scene, targets, candidates and visibility (blind candidates dropped)."""
+            timings: dict | None = None, log: list | None = None, *, should_stop: Callable[[], bool] | None = None,
+            max_memory_bytes: int | None = None, require_feasible: bool = False) -> tuple[Scene, Visibility]:
+    """Scene, targets, candidates and visibility (blind candidates dropped).
+
+    Refuses (InputError) a scene whose grids would exceed ``max_memory_bytes`` (default:
+    camplace.config.memory_limit_bytes()) before allocating them. Targets that cannot
+    reach their coverage are a warning in ``log``, an InputError if ``require_feasible``.
+    ``should_stop()`` polled between visibility chunks raises camplace.errors.Interrupted."""
     timings = {} if timings is None else timings
     log = [] if log is None else log
     spec, base_dir, source = resolve_scene(scene)
+    check_resources(spec, source, max_memory_bytes)
+    if should_stop is not None:
+        progress = _stoppable(progress, should_stop)
     t = time.perf_counter()
     _stage(progress, "scene")
     sc = build_scene(spec, base_dir, source)
@@ -71,10 +82,37 @@ def prepare(scene: str | Path | SceneSpec, progress: Progress | None = None,
     log.append(f"targets: {len(targets)} ({', '.join(f'{n}: {int((targets.region_ids == r).sum())}' for r, n in enumerate(targets.region_names))})")
     log.append(f"visibility: V {vis.V.shape[0]} x {vis.V.shape[1]}, nnz {vis.V.nnz}")
     if vis.V.shape[0] == 0:
-        from camplace.errors import InputError
-
-        raise InputError(f"scene '{spec.name}': no candidate pose sees any target")
+        raise InputError(f"{source}: mounts: no candidate pose sees any target ({cands.info['generated']} "
+                         f"generated, {len(cands)} in free space); check mounts, cameras (max_range, fov_deg) "
+                         f"and targets")
+    tg = vis.targets
+    feas = check_feasibility(vis.V, tg.gamma, vis.candidates.location_ids, tg.region_ids, tg.region_names)
+    if not feas.ok:
+        msg = feas.describe(tg.positions, tg.region_ids, tg.region_names)
+        if require_feasible:
+            raise InputError(f"{source}: targets: {msg} (--require-feasible)")
+        log.append(f"warning: {msg}")
     return sc, vis
+
+
+def _stoppable(progress: Progress | None, should_stop: Callable[[], bool]) -> Progress:
+    """A progress callback that raises Interrupted between visibility chunks once should_stop() is true."""
+    def cb(stage: str, done: int, total: int) -> None:
+        if progress:
+            progress(stage, done, total)
+        if stage == "visibility" and should_stop():
+            raise Interrupted(f"interrupted during visibility ({done}/{total} chunks); nothing written")
+    return cb
+
+
+def check_solver_name(name: str, key: str) -> None:
+    """InputError naming ``key`` (e.g. '--solver' or 'scene.yaml: placement.solver') for an unknown solver."""
+    from camplace.config import _did_you_mean
+    from camplace.solvers import SOLVERS
+
+    if name not in SOLVERS:
+        raise InputError(f"{key}: unknown solver '{name}'{_did_you_mean(name, list(SOLVERS))}; expected one of "
+                         f"{', '.join(sorted(SOLVERS))}")
 
 
 def problem_from_visibility(vis: Visibility, budget: int) -> PlacementProblem:
@@ -84,13 +122,33 @@ def problem_from_visibility(vis: Visibility, budget: int) -> PlacementProblem:
 
 
 def run(scene: str | Path | SceneSpec, budget: int | None = None, solver: str | None = None,
-        progress: Progress | None = None, **solver_options) -> RunResult:
-    """Run every stage on a scene (built-in name, YAML path or spec)."""
+        progress: Progress | None = None, *, time_limit_s: float | None = None,
+        should_stop: Callable[[], bool] | None = None, max_memory_bytes: int | None = None,
+        require_feasible: bool = False, **solver_options) -> RunResult:
+    """Run every stage on a scene (built-in name, YAML path or spec).
+
+    budget / solver / time_limit_s default to the scene's ``placement`` keys. The solver
+    name and budget are checked before any heavy stage. ``should_stop()`` is polled
+    between visibility chunks (Interrupted) and by the solver, which then returns its
+    best placement with status 'interrupted'. See ``prepare`` for the other options."""
     timings: dict[str, float] = {}
     log: list[str] = []
-    sc, vis = prepare(scene, progress, timings, log)
+    spec, _, source = resolve_scene(scene)
+    if solver is None:
+        check_solver_name(spec.placement.solver, f"{source}: placement.solver")
+    else:
+        check_solver_name(solver, "solver")
+    if budget is not None and (isinstance(budget, bool) or int(budget) != budget or budget < 0):
+        raise InputError(f"budget: expected a non-negative integer, got {budget!r}")
+    if time_limit_s is not None and not (time_limit_s > 0 and np.isfinite(time_limit_s)):
+        raise InputError(f"time limit: expected a positive number of seconds, got {time_limit_s!r}")
+    sc, vis = prepare(scene, progress, timings, log, should_stop=should_stop, max_memory_bytes=max_memory_bytes,
+                      require_feasible=require_feasible)
     budget = sc.spec.placement.budget if budget is None else budget
     solver = sc.spec.placement.solver if solver is None else solver
+    solver_options.setdefault("time_limit_s", sc.spec.placement.time_limit_s if time_limit_s is None else time_limit_s)
+    if should_stop is not None:
+        solver_options.setdefault("should_stop", should_stop)
     problem = problem_from_visibility(vis, budget)
     t = time.perf_counter()
     _stage(progress, "solve")
