@@ -14,7 +14,7 @@ from pathlib import Path
 import numpy as np
 
 from camplace.candidates import Candidates
-from camplace.files import atomic_savez, atomic_write_json, atomic_write_text
+from camplace.files import AtomicBatch, atomic_savez, atomic_write_json, atomic_write_text
 from camplace.metrics import Metrics
 from camplace.solvers.base import Placement
 from camplace.visibility import Visibility
@@ -83,20 +83,24 @@ def visibility_arrays(vis: Visibility) -> dict[str, np.ndarray]:
 
 
 def write_outputs(out_dir: str | Path, scene_name: str, vis: Visibility, placement: Placement, budget: int,
-                  metrics: Metrics, timings: dict[str, float]) -> dict[str, Path]:
-    """Write the contract files into out_dir; returns name -> path."""
+                  metrics: Metrics, timings: dict[str, float], repeatable: bool = False) -> dict[str, Path]:
+    """Write the contract files into out_dir; returns name -> path. ``repeatable``
+    writes every timing as 0.0 (byte-identical metrics.json for identical runs)."""
     t0 = time.perf_counter()
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     pdict = placement_dict(scene_name, placement, budget, vis.candidates)
+    batch = AtomicBatch()  # the contract files replace the old ones together, only once all are written
     paths = {
-        "visibility.npz": atomic_savez(out / "visibility.npz", **visibility_arrays(vis)),
-        "placement.json": atomic_write_json(out / "placement.json", pdict),
-        "placement.csv": atomic_write_text(out / "placement.csv", placement_csv(pdict["cameras"])),
+        "visibility.npz": batch.stage_savez(out / "visibility.npz", **visibility_arrays(vis)),
+        "placement.json": batch.stage_json(out / "placement.json", pdict),
+        "placement.csv": batch.stage_text(out / "placement.csv", placement_csv(pdict["cameras"])),
     }
     timings = dict(timings)
     timings["report"] = time.perf_counter() - t0
     m = metrics.to_dict()
-    m["timings_s"] = {k: round(float(v), 4) for k, v in timings.items()}
-    paths["metrics.json"] = atomic_write_json(out / "metrics.json", m)
+    # repeatable: timings written as 0.0 so that metrics.json is byte-identical between runs
+    m["timings_s"] = {k: 0.0 if repeatable else round(float(v), 4) for k, v in timings.items()}
+    paths["metrics.json"] = batch.stage_json(out / "metrics.json", m)
+    batch.commit()
     return paths
