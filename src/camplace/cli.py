@@ -3,13 +3,17 @@
 from __future__ import annotations
 
 import json
+import os
+import signal
 import sys
+from contextlib import contextmanager
 from pathlib import Path
 from typing import Optional
 
 import typer
 from rich.console import Console
 from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
+from rich.markup import escape
 from rich.table import Table
 
 from camplace.builtin import BUILTIN_SCENES, builtin_yaml
@@ -28,15 +32,52 @@ def _main(debug: bool = typer.Option(False, "--debug", help="Show Python traceba
     _state["quiet"] = quiet
 
 
-class _RichProgress:
-    """Renders pipeline progress callbacks as rich progress bars."""
+class _StopFlag:
+    """Ctrl-C handling: the first SIGINT only sets a flag (polled by the pipeline and the
+    solver, which then return the best placement so far); the second aborts."""
 
-    def __init__(self, progress: Progress) -> None:
+    def __init__(self) -> None:
+        self.count = 0
+
+    def __call__(self) -> bool:
+        return self.count > 0
+
+    def _handler(self, signum, frame) -> None:  # noqa: ARG002 - signal handler signature
+        self.count += 1
+        if self.count > 1:
+            raise KeyboardInterrupt
+
+    @contextmanager
+    def installed(self):
+        try:
+            prev = signal.signal(signal.SIGINT, self._handler)
+        except ValueError:  # not the main thread: leave Ctrl-C alone
+            yield self
+            return
+        try:
+            yield self
+        finally:
+            signal.signal(signal.SIGINT, prev)
+
+
+class _RichProgress:
+    """Renders pipeline progress callbacks as rich progress bars (one plain line per
+    stage when stderr is not a terminal, e.g. a log file)."""
+
+    def __init__(self, progress: Progress, stop: _StopFlag | None = None) -> None:
         self.progress = progress
         self.tasks: dict[str, int] = {}
+        self.stop = stop
+        self.told_stop = False
 
     def __call__(self, stage: str, done: int, total: int) -> None:
+        if self.stop is not None and self.stop() and not self.told_stop:
+            self.told_stop = True
+            console.print("[yellow]interrupt: stopping; the best placement so far will be written "
+                          "(Ctrl-C again to abort)[/yellow]")
         if stage not in self.tasks:
+            if not console.is_terminal and not _state["quiet"]:
+                console.print(f"stage: {stage}", highlight=False)
             self.tasks[stage] = self.progress.add_task(stage, total=total)
         self.progress.update(self.tasks[stage], completed=done, total=total)
         if done == 0 and total == 1:
@@ -49,17 +90,20 @@ def _progress() -> Progress:
                     disable=_state["quiet"])
 
 
-def _summary(result, out_dir: Path) -> None:
+def _summary(result, out_dir: Path, repeatable: bool = False) -> None:
     from camplace.report import write_outputs
 
     p, m = result.placement, result.metrics
     paths = write_outputs(out_dir, result.scene.name, result.visibility, p, result.problem.budget, m,
-                          result.timings_s)
+                          result.timings_s, repeatable=repeatable)
+    for line in result.log:
+        if line.startswith("warning:"):
+            console.print(f"[yellow]{escape(line)}[/yellow]", soft_wrap=True)
+        elif not _state["quiet"]:
+            console.print(f"[dim]{escape(line)}[/dim]")
     if _state["quiet"]:
         typer.echo(str(out_dir))
         return
-    for line in result.log:
-        console.print(f"[dim]{line}[/dim]")
     t = Table(title=f"camplace - {result.scene.name}", show_header=False)
     t.add_row("solver / status", f"{p.solver} / {p.status}")
     t.add_row("cameras (budget)", f"{len(p.selected)} ({result.problem.budget})")
@@ -126,22 +170,55 @@ def main() -> None:
     except CamplaceError as err:
         if _state["debug"]:
             raise
-        console.print(f"[bold red]error:[/bold red] {err}", highlight=False, soft_wrap=True)
+        label = "interrupted" if err.exit_code == 130 else "error"
+        console.print(f"[bold red]{label}:[/bold red] {escape(str(err))}", highlight=False, soft_wrap=True)
         sys.exit(err.exit_code)
     except KeyboardInterrupt:
-        console.print("[bold red]interrupted[/bold red]")
+        if _state["debug"]:
+            raise
+        console.print("[bold red]interrupted[/bold red] (second Ctrl-C): stopped without writing outputs")
         sys.exit(130)
     except Exception as err:  # click usage errors and the like
-        import click
-
-        if isinstance(err, click.exceptions.ClickException):
-            err.show()
+        kind = _click_kind(err)
+        if kind == "usage":
+            err.show()  # type: ignore[attr-defined] - one usage line + the problem
             sys.exit(2)
-        if isinstance(err, click.exceptions.Exit):
-            sys.exit(err.exit_code)
-        if isinstance(err, click.exceptions.Abort):
+        if kind == "exit":
+            sys.exit(err.exit_code)  # type: ignore[attr-defined]
+        if kind == "abort":
             sys.exit(130)
-        raise
+        if _state["debug"]:
+            raise
+        if isinstance(err, OSError):  # disk full, permission denied, ...: the user can act on it
+            console.print(f"[bold red]error:[/bold red] {escape(str(err))}", highlight=False, soft_wrap=True)
+            sys.exit(1)
+        console.print(f"[bold red]internal error:[/bold red] {type(err).__name__}: {escape(str(err))} "
+                      f"(a bug in camplace: run with --debug for the traceback and report it)",
+                      highlight=False, soft_wrap=True)
+        sys.exit(1)
+
+
+def _click_kind(err: BaseException) -> str | None:
+    """'usage', 'exit', 'abort' for click's exceptions (typer may vendor click), else None."""
+    mods = []
+    try:
+        import click.exceptions as ce
+
+        mods.append(ce)
+    except ImportError:  # pragma: no cover
+        pass
+    try:
+        import typer._click.exceptions as te  # typer >= 0.20 ships its own click
+
+        mods.append(te)
+    except ImportError:
+        pass
+    if any(isinstance(err, getattr(m, "ClickException", ())) for m in mods):
+        return "usage"
+    name = type(err).__name__  # click's and typer's own Exit / Abort classes
+    if name == "Exit" and hasattr(err, "exit_code"):
+        return "exit"
+    return "abort" if name == "Abort" else None
 
 
 if __name__ == "__main__":  # pragma: no cover

@@ -13,6 +13,7 @@ from __future__ import annotations
 import math
 import time
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Callable
 
 import numba
@@ -119,20 +120,51 @@ def _passes_view(cam_p, R, params, tx, ty, tz, nx_, ny_, nz_, cos_max):
     return True
 
 
+@numba.njit(cache=True, inline="always")
+def _cell_span(lo: float, cell: float, n: int, p: float, rng: float) -> tuple[int, int]:
+    """Index range [a, b] of the grid cells along one axis within rng of coordinate p."""
+    a = int(math.floor((p - rng - lo) / cell))
+    b = int(math.floor((p + rng - lo) / cell))
+    return max(a, 0), min(b, n - 1)
+
+
+@numba.njit(cache=True, inline="always")
+def _cell_near(grid, cx: int, cy: int, px: float, py: float, rng: float) -> bool:
+    """True if the xy rectangle of cell (cx, cy) comes within rng (+1 um) of (px, py)."""
+    x0, y0, c = grid[0], grid[1], grid[2]
+    dx = max(x0 + cx * c - px, 0.0, px - (x0 + (cx + 1) * c))
+    dy = max(y0 + cy * c - py, 0.0, py - (y0 + (cy + 1) * c))
+    r = rng + 1e-6
+    return dx * dx + dy * dy <= r * r
+
+
 @numba.njit(cache=True, parallel=True)
 def _visibility_kernel(occ, origin, res, cam_pos, cam_rot, cam_ids, cam_params,
-                       tpos, tnrm, tcos):
-    """CSR (indptr, indices) of V for a chunk of candidates."""
+                       tpos, tnrm, tcos, grid, cell_start, cell_tids):
+    """CSR (indptr, indices) of V for a chunk of candidates, indices ascending per row.
+
+    Targets are bucketed in an xy grid (``grid`` = [x0, y0, cell, nx, ny], CSR
+    ``cell_start`` / ``cell_tids``, see ``target_grid``): each candidate visits only the
+    cells within its max range, so the work scales with the visible pairs, not N_g x N_p."""
     n_c = cam_pos.shape[0]
-    n_t = tpos.shape[0]
+    gnx, gny = int(grid[3]), int(grid[4])
     counts = np.zeros(n_c, np.int64)
     for i in numba.prange(n_c):
         params = cam_params[cam_ids[i]]
+        p = cam_pos[i]
+        ax, bx = _cell_span(grid[0], grid[2], gnx, p[0], params[7])
+        ay, by = _cell_span(grid[1], grid[2], gny, p[1], params[7])
         k = 0
-        for j in range(n_t):
-            if _passes_view(cam_pos[i], cam_rot[i], params, tpos[j, 0], tpos[j, 1], tpos[j, 2],
-                            tnrm[j, 0], tnrm[j, 1], tnrm[j, 2], tcos[j]):
-                k += 1
+        for cx in range(ax, bx + 1):
+            for cy in range(ay, by + 1):
+                if not _cell_near(grid, cx, cy, p[0], p[1], params[7]):
+                    continue
+                cell = cx * gny + cy
+                for q in range(cell_start[cell], cell_start[cell + 1]):
+                    j = cell_tids[q]
+                    if _passes_view(cam_pos[i], cam_rot[i], params, tpos[j, 0], tpos[j, 1], tpos[j, 2],
+                                    tnrm[j, 0], tnrm[j, 1], tnrm[j, 2], tcos[j]):
+                        k += 1
         counts[i] = k
     offs = np.zeros(n_c + 1, np.int64)
     for i in range(n_c):
@@ -144,17 +176,26 @@ def _visibility_kernel(occ, origin, res, cam_pos, cam_rot, cam_ids, cam_params,
         params = cam_params[cam_ids[i]]
         p = cam_pos[i]
         k = offs[i]
-        for j in range(n_t):
-            nx_, ny_, nz_ = tnrm[j, 0], tnrm[j, 1], tnrm[j, 2]
-            if not _passes_view(p, cam_rot[i], params, tpos[j, 0], tpos[j, 1], tpos[j, 2], nx_, ny_, nz_, tcos[j]):
-                continue
-            ex = tpos[j, 0] + nx_ * off_len
-            ey = tpos[j, 1] + ny_ * off_len
-            ez = tpos[j, 2] + nz_ * off_len
-            if segment_clear(occ, origin[0], origin[1], origin[2], res, p[0], p[1], p[2], ex, ey, ez):
-                buf[k] = j
-                k += 1
+        ax, bx = _cell_span(grid[0], grid[2], gnx, p[0], params[7])
+        ay, by = _cell_span(grid[1], grid[2], gny, p[1], params[7])
+        for cx in range(ax, bx + 1):
+            for cy in range(ay, by + 1):
+                if not _cell_near(grid, cx, cy, p[0], p[1], params[7]):
+                    continue
+                cell = cx * gny + cy
+                for q in range(cell_start[cell], cell_start[cell + 1]):
+                    j = cell_tids[q]
+                    nx_, ny_, nz_ = tnrm[j, 0], tnrm[j, 1], tnrm[j, 2]
+                    if not _passes_view(p, cam_rot[i], params, tpos[j, 0], tpos[j, 1], tpos[j, 2], nx_, ny_, nz_, tcos[j]):
+                        continue
+                    ex = tpos[j, 0] + nx_ * off_len
+                    ey = tpos[j, 1] + ny_ * off_len
+                    ez = tpos[j, 2] + nz_ * off_len
+                    if segment_clear(occ, origin[0], origin[1], origin[2], res, p[0], p[1], p[2], ex, ey, ez):
+                        buf[k] = j
+                        k += 1
         seen[i] = k - offs[i]
+        buf[offs[i]:k].sort()  # cells are visited out of id order: restore ascending ids
     indptr = np.zeros(n_c + 1, np.int64)
     for i in range(n_c):
         indptr[i + 1] = indptr[i] + seen[i]
@@ -170,9 +211,60 @@ def target_cos_limits(targets: Targets) -> np.ndarray:
     return np.where(targets.is_surface, lim - 1e-12, -1.0)
 
 
+GRID_CELLS_PER_RANGE = 8  # target-grid cell = smallest max range / this (m)
+BRUTE_FORCE_CELL = 1e300  # one cell holding every target: the kernel visits all of them
+
+
+@dataclass(frozen=True)
+class TargetGrid:
+    """Targets bucketed by xy cell, for range culling. params: [x0, y0, cell, nx, ny]
+    float64 (m, m, m, count, count); cell_start: (nx * ny + 1,) int64 CSR offsets;
+    cell_tids: (N_p,) int32 target ids by cell (x-major), ascending inside a cell."""
+
+    params: np.ndarray
+    cell_start: np.ndarray
+    cell_tids: np.ndarray
+
+
+def target_grid(targets: Targets, cell: float) -> TargetGrid:
+    """Bucket the targets in square xy cells of ``cell`` metres (``np.inf`` = one cell)."""
+    pos = np.asarray(targets.positions, np.float64)
+    cell = BRUTE_FORCE_CELL if not np.isfinite(cell) else float(cell)
+    if cell <= 0:
+        raise ValueError(f"target grid cell must be > 0 m, got {cell}")
+    if len(pos) == 0:
+        return TargetGrid(np.array([0.0, 0.0, cell, 1.0, 1.0]), np.zeros(2, np.int64), np.zeros(0, np.int32))
+    lo = pos[:, :2].min(0)
+    hi = pos[:, :2].max(0)
+    n = np.maximum(np.floor((hi - lo) / cell).astype(np.int64) + 1, 1)
+    c = np.clip(np.floor((pos[:, :2] - lo) / cell).astype(np.int64), 0, n - 1)
+    key = c[:, 0] * n[1] + c[:, 1]
+    order = np.argsort(key, kind="stable").astype(np.int32)
+    start = np.zeros(int(n[0] * n[1]) + 1, np.int64)
+    np.cumsum(np.bincount(key, minlength=int(n[0] * n[1])), out=start[1:])
+    return TargetGrid(np.array([lo[0], lo[1], cell, float(n[0]), float(n[1])]), start, order)
+
+
+def default_grid_cell(candidates: Candidates) -> float:
+    """Grid cell (m) for range culling: the smallest camera range / GRID_CELLS_PER_RANGE."""
+    rng = min((c.max_range for c in candidates.cameras), default=1.0)
+    return max(rng / GRID_CELLS_PER_RANGE, 0.05)
+
+
 def visibility_block(occupancy: OccupancyGrid, targets: Targets, candidates: Candidates,
-                     start: int, stop: int) -> sp.csr_matrix:
-    """V rows [start, stop) as a CSR block (stop - start, N_p)."""
+                     start: int, stop: int, grid: TargetGrid | None = None) -> sp.csr_matrix:
+    """V rows [start, stop) as a CSR block (stop - start, N_p). ``grid``: the targets'
+    range-culling grid (built here when None; ``target_grid(targets, np.inf)`` = no culling)."""
+    indptr, indices = _block_arrays(occupancy, targets, candidates, start, stop, grid)
+    data = np.ones(len(indices), dtype=np.uint8)
+    return sp.csr_matrix((data, indices, indptr), shape=(stop - start, len(targets)))
+
+
+def _block_arrays(occupancy: OccupancyGrid, targets: Targets, candidates: Candidates,
+                  start: int, stop: int, grid: TargetGrid | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """(indptr (rows + 1,) int64, indices (nnz,) int32) of V rows [start, stop)."""
+    if grid is None:
+        grid = target_grid(targets, default_grid_cell(candidates))
     occ = occupancy.occupied.view(np.uint8)
     params = np.stack([c.params for c in candidates.cameras])
     indptr, indices = _visibility_kernel(
@@ -181,31 +273,107 @@ def visibility_block(occupancy: OccupancyGrid, targets: Targets, candidates: Can
         np.ascontiguousarray(candidates.rotations[start:stop], dtype=np.float64),
         np.ascontiguousarray(candidates.camera_ids[start:stop], dtype=np.int64), params,
         np.ascontiguousarray(targets.positions, dtype=np.float64),
-        np.ascontiguousarray(targets.normals, dtype=np.float64), target_cos_limits(targets))
-    data = np.ones(len(indices), dtype=np.uint8)
-    return sp.csr_matrix((data, indices, indptr), shape=(stop - start, len(targets)))
+        np.ascontiguousarray(targets.normals, dtype=np.float64), target_cos_limits(targets),
+        grid.params, grid.cell_start, grid.cell_tids)
+    return indptr, indices
+
+
+def _chunk_task(shared: tuple, bounds: tuple[int, int]) -> tuple[np.ndarray, np.ndarray]:
+    """One unit of work for an executor: shared = (occupancy, targets, candidates, grid)."""
+    occupancy, targets, candidates, grid = shared
+    return _block_arrays(occupancy, targets, candidates, bounds[0], bounds[1], grid)
+
+
+def visibility_cache_key(occupancy: OccupancyGrid, targets: Targets, candidates: Candidates,
+                         mode: str, chunk_size: int) -> str:
+    """Content hash of everything V depends on, code version included."""
+    from camplace import cameras as _cameras_mod
+    from camplace import visibility as _vis_mod
+    from camplace.cache import code_version, content_key
+
+    occ = OccupancyGrid(np.packbits(occupancy.occupied, axis=None), occupancy.origin, occupancy.resolution)
+    return content_key("visibility", code_version(_vis_mod, _cameras_mod), mode, int(chunk_size),
+                       occupancy.occupied.shape, occ, targets, candidates)
 
 
 def compute_visibility(occupancy: OccupancyGrid, targets: Targets, candidates: Candidates,
-                       chunk_size: int = 512, progress: Progress | None = None) -> Visibility:
-    """V for every candidate (rows in candidate order). Candidates are processed in chunks
-    (the unit of work for executors); inside a chunk the kernel runs parallel threads."""
+                       chunk_size: int = 2048, progress: Progress | None = None, executor=None,
+                       cache_dir: str | Path | None = None, grid_cell: float | None = None) -> Visibility:
+    """V for every candidate (rows in candidate order).
+
+    Candidates are processed in chunks of ``chunk_size`` rows, the unit of work of the
+    ``executor`` (camplace.distributed; default in-process; inside a chunk the kernel
+    runs parallel threads). Chunks stream back as CSR blocks and are copied into the
+    final CSR arrays, never densified. With ``cache_dir`` each block is also stored
+    under a content-hash key (camplace.cache): finished blocks are loaded instead of
+    recomputed (a second run, or a run resumed after an interruption), and V is then
+    assembled block by block from disk (peak memory ~ one V + one block; without the
+    cache, the blocks and V coexist during the assembly). ``grid_cell``: range-culling
+    cell (m; default smallest range / 8; ``np.inf`` disables culling). The result does
+    not depend on executor, cache or grid_cell."""
+    from camplace.distributed import InProcessExecutor
+
     t0 = time.perf_counter()
-    n = len(candidates)
+    n, n_p = len(candidates), len(targets)
     bounds = [(s, min(s + chunk_size, n)) for s in range(0, n, chunk_size)]
-    blocks = []
+    store = None
+    if cache_dir is not None:
+        from camplace.cache import BlockStore
+
+        key = visibility_cache_key(occupancy, targets, candidates, "voxel", chunk_size)
+        store = BlockStore(cache_dir, key, bounds, n_p)
+    blocks: dict[int, tuple[np.ndarray, np.ndarray]] = {}
+    nnz = np.zeros(len(bounds), np.int64)
+    todo = []
+    for k in range(len(bounds)):
+        got = store.nnz(k) if store is not None else None
+        if got is None:
+            todo.append(k)
+        else:
+            nnz[k] = got
+    cached = len(bounds) - len(todo)
+    done = cached
+    if progress:
+        progress("visibility", done, len(bounds))
+    if todo:
+        grid = target_grid(targets, default_grid_cell(candidates) if grid_cell is None else grid_cell)
+        ex = executor if executor is not None else InProcessExecutor()
+        shared = (occupancy, targets, candidates, grid)
+        for t, (indptr, indices) in ex.map_unordered(_chunk_task, shared, [bounds[k] for k in todo]):
+            k = todo[t]
+            nnz[k] = len(indices)
+            if store is not None:
+                store.save(k, indptr, indices)
+            else:
+                blocks[k] = (indptr, indices)
+            done += 1
+            if progress:
+                progress("visibility", done, len(bounds))
+    indptr = np.zeros(n + 1, np.int64)
+    indices = np.empty(int(nnz.sum()), np.int32)
+    pos = 0
     for k, (s, e) in enumerate(bounds):
-        blocks.append(visibility_block(occupancy, targets, candidates, s, e))
-        if progress:
-            progress("visibility", k + 1, len(bounds))
-    V = sp.vstack(blocks, format="csr") if blocks else sp.csr_matrix((0, len(targets)), dtype=np.uint8)
-    V.sort_indices()
-    return Visibility(V.astype(np.uint8), candidates, targets, "voxel",
-                      {"seconds": time.perf_counter() - t0, "nnz": int(V.nnz), "chunks": len(bounds)})
+        blk = blocks.pop(k) if store is None else store.load(k)
+        if blk is None:  # pragma: no cover - a block vanished from the cache during the run
+            blk = _block_arrays(occupancy, targets, candidates, s, e)
+        bp, bi = blk
+        indptr[s + 1:e + 1] = bp[1:] + pos
+        indices[pos:pos + len(bi)] = bi
+        pos += len(bi)
+    V = sp.csr_matrix((np.ones(len(indices), np.uint8), indices, indptr), shape=(n, n_p))
+    info = {"seconds": time.perf_counter() - t0, "nnz": int(V.nnz), "chunks": len(bounds),
+            "cached_chunks": cached, "executor": getattr(executor, "name", "in-process")}
+    if store is not None:
+        info["cache"] = str(store.dir)
+    return Visibility(V, candidates, targets, "voxel", info)
 
 
 def drop_blind_candidates(vis: Visibility) -> Visibility:
-    """Remove candidates that see no target (rows of V with no entry)."""
-    keep = np.diff(vis.V.indptr) > 0
+    """Remove candidates that see no target (rows of V with no entry). The empty rows
+    hold no entries, so V's data and indices are shared, not copied."""
+    counts = np.diff(vis.V.indptr)
+    keep = counts > 0
     info = dict(vis.info, dropped_blind=int((~keep).sum()))
-    return Visibility(vis.V[keep], vis.candidates.subset(keep), vis.targets, vis.mode, info)
+    indptr = np.r_[0, np.cumsum(counts[keep])].astype(vis.V.indptr.dtype)
+    V = sp.csr_matrix((vis.V.data, vis.V.indices, indptr), shape=(int(keep.sum()), vis.V.shape[1]), copy=False)
+    return Visibility(V, vis.candidates.subset(keep), vis.targets, vis.mode, info)
