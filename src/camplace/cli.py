@@ -119,11 +119,25 @@ def _summary(result, out_dir: Path, repeatable: bool = False) -> None:
     Console().print(t)
 
 
-def _run(scene: str, budget: Optional[int], solver: Optional[str], out: Optional[Path]) -> None:
+_WORKERS_OPT = typer.Option(1, "--workers", min=1, help="Local worker processes for visibility (1 = in-process).")
+_SCHEDULER_OPT = typer.Option(None, "--scheduler", envvar="CAMPLACE_SCHEDULER",
+                              help="Dask scheduler address (tcp://host:port) to run visibility on a cluster.")
+_CACHE_OPT = typer.Option(None, "--cache", help="Visibility cache folder (default $CAMPLACE_CACHE or ~/.cache/camplace).")
+_NO_CACHE_OPT = typer.Option(False, "--no-cache", help="Neither reuse nor store visibility blocks.")
+
+
+def _scale_options(workers: int, scheduler: Optional[str], cache: Optional[Path], no_cache: bool) -> dict:
+    from camplace.cache import default_cache_dir
+
+    return {"workers": workers, "scheduler": scheduler or None,
+            "cache_dir": None if no_cache else (cache or default_cache_dir())}
+
+
+def _run(scene: str, budget: Optional[int], solver: Optional[str], out: Optional[Path], **scale) -> None:
     from camplace.pipeline import run
 
     with _progress() as prog:
-        result = run(scene, budget=budget, solver=solver, progress=_RichProgress(prog))
+        result = run(scene, budget=budget, solver=solver, progress=_RichProgress(prog), **scale)
     out_dir = out or Path("camplace-out") / result.scene.name
     _summary(result, out_dir)
 
@@ -131,20 +145,24 @@ def _run(scene: str, budget: Optional[int], solver: Optional[str], out: Optional
 @app.command()
 def demo(out: Optional[Path] = typer.Option(None, "--out", help="Output folder (default camplace-out/standard-store)."),
          budget: int = typer.Option(40, "--budget", help="Number of cameras N_s."),
-         solver: str = typer.Option("greedy", "--solver", help="Solver name.")) -> None:
+         solver: str = typer.Option("greedy", "--solver", help="Solver name."),
+         workers: int = _WORKERS_OPT, scheduler: Optional[str] = _SCHEDULER_OPT,
+         cache: Optional[Path] = _CACHE_OPT, no_cache: bool = _NO_CACHE_OPT) -> None:
     """Run the whole pipeline on the built-in standard-store and print a summary."""
-    _run("standard-store", budget, solver, out)
+    _run("standard-store", budget, solver, out, **_scale_options(workers, scheduler, cache, no_cache))
 
 
 @app.command("run")
-def run_cmd(scene: str = typer.Argument(..., help="Scene YAML file or built-in name (demo, standard-store, store-a)."),
+def run_cmd(scene: str = typer.Argument(..., help="Scene YAML file or built-in name (demo, standard-store, store-a, warehouse[:AREA_M2])."),
             budget: Optional[int] = typer.Option(None, "--budget", help="Number of cameras N_s (default: the scene's)."),
             solver: Optional[str] = typer.Option(None, "--solver", help="Solver (default: the scene's)."),
-            out: Optional[Path] = typer.Option(None, "--out", help="Output folder (default camplace-out/<scene>).")) -> None:
+            out: Optional[Path] = typer.Option(None, "--out", help="Output folder (default camplace-out/<scene>)."),
+            workers: int = _WORKERS_OPT, scheduler: Optional[str] = _SCHEDULER_OPT,
+            cache: Optional[Path] = _CACHE_OPT, no_cache: bool = _NO_CACHE_OPT) -> None:
     """Run the whole pipeline on a scene and write placement.json, metrics.json, visibility.npz."""
     if budget is not None and budget < 0:
         raise CamplaceInputErrorProxy(f"--budget: expected a non-negative integer, got {budget}")
-    _run(scene, budget, solver, out)
+    _run(scene, budget, solver, out, **_scale_options(workers, scheduler, cache, no_cache))
 
 
 @app.command()

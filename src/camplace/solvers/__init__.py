@@ -12,11 +12,17 @@ from camplace.errors import InputError
 from camplace.problem import PlacementProblem
 from camplace.solvers.base import Placement
 from camplace.solvers.greedy import solve_greedy
+from camplace.solvers.horster import solve_horster
 from camplace.solvers.mip import solve_mip
+from camplace.solvers.paper_mip import solve_paper_mip
+from camplace.solvers.zhao import solve_zhao
 
 SOLVERS: dict[str, Callable[..., Placement]] = {
     "greedy": solve_greedy,
     "mip": solve_mip,
+    "paper-mip": solve_paper_mip,
+    "zhao": solve_zhao,
+    "horster": solve_horster,
 }
 
 
