@@ -24,6 +24,7 @@ from camplace.problem import PlacementProblem
 from camplace.scene import Scene, build_scene
 from camplace.solvers import Placement, solve
 from camplace.targets import build_targets
+from camplace.distributed import make_executor
 from camplace.visibility import Visibility, compute_visibility, drop_blind_candidates
 
 Progress = Callable[[str, int, int], None]
@@ -47,8 +48,14 @@ def _stage(progress: Progress | None, name: str) -> None:
 
 def prepare(scene: str | Path | SceneSpec, progress: Progress | None = None,
             timings: dict | None = None, log: list | None = None, *, should_stop: Callable[[], bool] | None = None,
-            max_memory_bytes: int | None = None, require_feasible: bool = False) -> tuple[Scene, Visibility]:
+            max_memory_bytes: int | None = None, require_feasible: bool = False, workers: int = 1,
+            scheduler: str | None = None, cache_dir: str | Path | None = None) -> tuple[Scene, Visibility]:
     """Scene, targets, candidates and visibility (blind candidates dropped).
+
+    Visibility chunks run on a Dask cluster when ``scheduler`` (``tcp://host:port``, or
+    env CAMPLACE_SCHEDULER) is given, on ``workers`` local processes when > 1, else
+    in-process (camplace.distributed); with ``cache_dir`` V is stored / reused in
+    blocks under a content-hash key (camplace.cache). Same V bit for bit either way.
 
     Refuses (InputError) a scene whose grids would exceed ``max_memory_bytes`` (default:
     camplace.config.memory_limit_bytes()) before allocating them. Targets that cannot
@@ -74,13 +81,18 @@ def prepare(scene: str | Path | SceneSpec, progress: Progress | None = None,
     cands = build_candidates(sc, cameras)
     timings["candidates"] = time.perf_counter() - t
     t = time.perf_counter()
-    vis = compute_visibility(sc.occupancy, targets, cands, progress=progress)
+    with make_executor(workers, scheduler) as executor:
+        vis = compute_visibility(sc.occupancy, targets, cands, progress=progress, executor=executor,
+                                 cache_dir=cache_dir)
     vis = drop_blind_candidates(vis)
     timings["visibility"] = time.perf_counter() - t
     log.append(f"candidates: {cands.info['generated']} generated, {cands.info['dropped_inside_obstacle']} inside "
                f"obstacles, {vis.info['dropped_blind']} seeing no target, {len(vis.candidates)} kept")
     log.append(f"targets: {len(targets)} ({', '.join(f'{n}: {int((targets.region_ids == r).sum())}' for r, n in enumerate(targets.region_names))})")
     log.append(f"visibility: V {vis.V.shape[0]} x {vis.V.shape[1]}, nnz {vis.V.nnz}")
+    if vis.info.get("executor") != "in-process" or "cache" in vis.info:
+        log.append(f"visibility: {vis.info['chunks']} chunks on {vis.info.get('executor')}, "
+                   f"{vis.info.get('cached_chunks', 0)} from cache {vis.info.get('cache', '(off)')}")
     if vis.V.shape[0] == 0:
         raise InputError(f"{source}: mounts: no candidate pose sees any target ({cands.info['generated']} "
                          f"generated, {len(cands)} in free space); check mounts, cameras (max_range, fov_deg) "
@@ -124,7 +136,8 @@ def problem_from_visibility(vis: Visibility, budget: int) -> PlacementProblem:
 def run(scene: str | Path | SceneSpec, budget: int | None = None, solver: str | None = None,
         progress: Progress | None = None, *, time_limit_s: float | None = None,
         should_stop: Callable[[], bool] | None = None, max_memory_bytes: int | None = None,
-        require_feasible: bool = False, **solver_options) -> RunResult:
+        require_feasible: bool = False, workers: int = 1, scheduler: str | None = None,
+        cache_dir: str | Path | None = None, **solver_options) -> RunResult:
     """Run every stage on a scene (built-in name, YAML path or spec).
 
     budget / solver / time_limit_s default to the scene's ``placement`` keys. The solver
@@ -143,7 +156,7 @@ def run(scene: str | Path | SceneSpec, budget: int | None = None, solver: str | 
     if time_limit_s is not None and not (time_limit_s > 0 and np.isfinite(time_limit_s)):
         raise InputError(f"time limit: expected a positive number of seconds, got {time_limit_s!r}")
     sc, vis = prepare(scene, progress, timings, log, should_stop=should_stop, max_memory_bytes=max_memory_bytes,
-                      require_feasible=require_feasible)
+                      require_feasible=require_feasible, workers=workers, scheduler=scheduler, cache_dir=cache_dir)
     budget = sc.spec.placement.budget if budget is None else budget
     solver = sc.spec.placement.solver if solver is None else solver
     solver_options.setdefault("time_limit_s", sc.spec.placement.time_limit_s if time_limit_s is None else time_limit_s)
