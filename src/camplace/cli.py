@@ -133,13 +133,56 @@ def _scale_options(workers: int, scheduler: Optional[str], cache: Optional[Path]
             "cache_dir": None if no_cache else (cache or default_cache_dir())}
 
 
-def _run(scene: str, budget: Optional[int], solver: Optional[str], out: Optional[Path], **scale) -> None:
+def _check_options(budget: Optional[int], time_limit: Optional[float], max_memory_gb: Optional[float],
+                   out: Optional[Path]) -> None:
+    """CLI options, checked before any work (InputError naming the option)."""
+    import math
+
+    from camplace.errors import InputError
+
+    if budget is not None and budget < 0:
+        raise InputError(f"--budget: expected a non-negative integer, got {budget}")
+    if time_limit is not None and not (time_limit > 0 and math.isfinite(time_limit)):
+        raise InputError(f"--time-limit: expected a positive number of seconds, got {time_limit}")
+    if max_memory_gb is not None and not (max_memory_gb > 0 and math.isfinite(max_memory_gb)):
+        raise InputError(f"--max-memory-gb: expected a positive number of GiB, got {max_memory_gb}")
+    if out is not None:
+        if out.exists() and not out.is_dir():
+            raise InputError(f"--out: '{out}' is a file; expected a folder")
+        parent = next((a for a in [out, *out.parents] if a.exists()), Path("."))
+        if not parent.is_dir() or not os.access(parent, os.W_OK):
+            raise InputError(f"--out: cannot create or write into '{parent}'")
+
+
+def _run(scene: str, budget: Optional[int], solver: Optional[str], out: Optional[Path],
+         time_limit: Optional[float] = None, require_feasible: bool = False, max_memory_gb: Optional[float] = None,
+         repeatable: bool = False, **scale) -> None:
     from camplace.pipeline import run
 
-    with _progress() as prog:
-        result = run(scene, budget=budget, solver=solver, progress=_RichProgress(prog), **scale)
-    out_dir = out or Path("camplace-out") / result.scene.name
-    _summary(result, out_dir)
+    _check_options(budget, time_limit, max_memory_gb, out)
+    repeatable = repeatable or os.environ.get("CAMPLACE_REPEATABLE", "") not in ("", "0")
+    stop = _StopFlag()
+    with stop.installed():  # first Ctrl-C: finish with the best placement so far; second: abort
+        with _progress() as prog:
+            result = run(scene, budget=budget, solver=solver, progress=_RichProgress(prog, stop),
+                         time_limit_s=time_limit, should_stop=stop, require_feasible=require_feasible,
+                         max_memory_bytes=None if max_memory_gb is None else int(max_memory_gb * 1024**3), **scale)
+        out_dir = out or Path("camplace-out") / result.scene.name
+        _summary(result, out_dir, repeatable)
+    if stop():
+        console.print(f"[yellow]interrupted: wrote the best placement found so far (status "
+                      f"'{result.placement.status}') to {escape(str(out_dir))}[/yellow]")
+        raise typer.Exit(130)
+
+
+_TIME_LIMIT_OPT = typer.Option(None, "--time-limit", help="Solver time limit in seconds (default: the scene's "
+                               "placement.time_limit_s); the best placement found is written.")
+_REQUIRE_FEASIBLE_OPT = typer.Option(False, "--require-feasible", help="Fail (exit 2) when some targets cannot "
+                                     "reach their coverage (default: a warning that names them).")
+_MAX_MEMORY_OPT = typer.Option(None, "--max-memory-gb", help="Refuse scenes whose grids would need more memory "
+                               "(default: CAMPLACE_MAX_MEMORY_GB or 80 % of RAM).")
+_REPEATABLE_OPT = typer.Option(False, "--repeatable", help="Write timings as 0 so that identical runs give "
+                               "byte-identical metrics.json (also CAMPLACE_REPEATABLE=1).")
 
 
 @app.command()
@@ -147,9 +190,11 @@ def demo(out: Optional[Path] = typer.Option(None, "--out", help="Output folder (
          budget: int = typer.Option(40, "--budget", help="Number of cameras N_s."),
          solver: str = typer.Option("greedy", "--solver", help="Solver name."),
          workers: int = _WORKERS_OPT, scheduler: Optional[str] = _SCHEDULER_OPT,
-         cache: Optional[Path] = _CACHE_OPT, no_cache: bool = _NO_CACHE_OPT) -> None:
+         cache: Optional[Path] = _CACHE_OPT, no_cache: bool = _NO_CACHE_OPT,
+         time_limit: Optional[float] = _TIME_LIMIT_OPT, repeatable: bool = _REPEATABLE_OPT) -> None:
     """Run the whole pipeline on the built-in standard-store and print a summary."""
-    _run("standard-store", budget, solver, out, **_scale_options(workers, scheduler, cache, no_cache))
+    _run("standard-store", budget, solver, out, time_limit, repeatable=repeatable,
+         **_scale_options(workers, scheduler, cache, no_cache))
 
 
 @app.command("run")
@@ -158,11 +203,15 @@ def run_cmd(scene: str = typer.Argument(..., help="Scene YAML file or built-in n
             solver: Optional[str] = typer.Option(None, "--solver", help="Solver (default: the scene's)."),
             out: Optional[Path] = typer.Option(None, "--out", help="Output folder (default camplace-out/<scene>)."),
             workers: int = _WORKERS_OPT, scheduler: Optional[str] = _SCHEDULER_OPT,
-            cache: Optional[Path] = _CACHE_OPT, no_cache: bool = _NO_CACHE_OPT) -> None:
-    """Run the whole pipeline on a scene and write placement.json, metrics.json, visibility.npz."""
-    if budget is not None and budget < 0:
-        raise CamplaceInputErrorProxy(f"--budget: expected a non-negative integer, got {budget}")
-    _run(scene, budget, solver, out, **_scale_options(workers, scheduler, cache, no_cache))
+            cache: Optional[Path] = _CACHE_OPT, no_cache: bool = _NO_CACHE_OPT,
+            time_limit: Optional[float] = _TIME_LIMIT_OPT, require_feasible: bool = _REQUIRE_FEASIBLE_OPT,
+            max_memory_gb: Optional[float] = _MAX_MEMORY_OPT, repeatable: bool = _REPEATABLE_OPT) -> None:
+    """Run the whole pipeline on a scene and write placement.json, metrics.json, visibility.npz.
+
+    Ctrl-C during the solve writes the best placement found so far (status 'interrupted',
+    exit code 130); a second Ctrl-C aborts without writing."""
+    _run(scene, budget, solver, out, time_limit, require_feasible, max_memory_gb, repeatable,
+         **_scale_options(workers, scheduler, cache, no_cache))
 
 
 @app.command()
