@@ -33,7 +33,7 @@ def camera_entries(candidates: Candidates, selected: np.ndarray) -> list[dict]:
         out.append({
             "candidate_id": int(i),
             "location_id": int(candidates.location_ids[i]),
-            "position": [_round(v) for v in candidates.positions[i]],
+            "position": [float(v) for v in candidates.positions[i]],  # exact: evaluate re-raycasts it
             "yaw_deg": _round(yaw), "pitch_deg": _round(pitch), "roll_deg": _round(roll),
             "rotation": [[float(v) for v in row] for row in candidates.rotations[i]],
             "camera": cam.name,
@@ -83,20 +83,35 @@ def visibility_arrays(vis: Visibility) -> dict[str, np.ndarray]:
 
 
 def write_outputs(out_dir: str | Path, scene_name: str, vis: Visibility, placement: Placement, budget: int,
-                  metrics: Metrics, timings: dict[str, float], repeatable: bool = False) -> dict[str, Path]:
-    """Write the contract files into out_dir; returns name -> path. ``repeatable``
-    writes every timing as 0.0 (byte-identical metrics.json for identical runs)."""
+                  metrics: Metrics, timings: dict[str, float], scene=None, report: bool = True,
+                  repeatable: bool = False) -> dict[str, Path]:
+    """Write the contract files into out_dir and, with ``report``, the report set
+    (report.html, PNG figures, opencv/ and colmap/ exports; camplace.report_html);
+    ``scene`` (camplace.scene.Scene) adds the room and obstacles to the pictures;
+    ``repeatable`` writes every timing as 0.0 (byte-identical metrics.json for
+    identical runs). Returns name -> path."""
     t0 = time.perf_counter()
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     pdict = placement_dict(scene_name, placement, budget, vis.candidates)
+    timings = dict(timings)
+    report_paths = {}
+    if report:  # before the contract batch, so a failing report leaves no staged files behind
+        from camplace.figures import SceneView
+        from camplace.report_html import write_report
+
+        sel = np.asarray(placement.selected, np.int64)
+        cov = np.bincount(vis.V[sel].indices, minlength=vis.V.shape[1]).astype(np.int64)
+        m = dict(metrics.to_dict(), timings_s={k: round(float(v), 4) for k, v in timings.items()})
+        report_paths = write_report(out, vis.targets, cov, pdict, m, SceneView.from_scene(scene) if scene else None,
+                                    n_candidates=int(vis.V.shape[0]))
     batch = AtomicBatch()  # the contract files replace the old ones together, only once all are written
     paths = {
         "visibility.npz": batch.stage_savez(out / "visibility.npz", **visibility_arrays(vis)),
         "placement.json": batch.stage_json(out / "placement.json", pdict),
         "placement.csv": batch.stage_text(out / "placement.csv", placement_csv(pdict["cameras"])),
+        **report_paths,
     }
-    timings = dict(timings)
     timings["report"] = time.perf_counter() - t0
     m = metrics.to_dict()
     # repeatable: timings written as 0.0 so that metrics.json is byte-identical between runs

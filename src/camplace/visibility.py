@@ -20,7 +20,7 @@ import numba
 import numpy as np
 import scipy.sparse as sp
 
-from camplace.cameras import project_nb
+from camplace.cameras import project_nb, px_per_m_nb
 from camplace.candidates import Candidates
 from camplace.scene import OccupancyGrid
 from camplace.targets import Targets
@@ -99,8 +99,9 @@ def segment_clear(occ: np.ndarray, ox: float, oy: float, oz: float, res: float,
 
 
 @numba.njit(cache=True, inline="always")
-def _passes_view(cam_p, R, params, tx, ty, tz, nx_, ny_, nz_, cos_max):
-    """Range, image and incidence tests of one (camera, target) pair."""
+def _passes_view(cam_p, R, params, tx, ty, tz, nx_, ny_, nz_, cos_max, min_px=0.0):
+    """Range, image, incidence and pixel-density (``min_px`` px/m, 0 = none) tests of one
+    (camera, target) pair."""
     vx, vy, vz = tx - cam_p[0], ty - cam_p[1], tz - cam_p[2]
     d2 = vx * vx + vy * vy + vz * vz
     rng = params[7]
@@ -116,6 +117,13 @@ def _passes_view(cam_p, R, params, tx, ty, tz, nx_, ny_, nz_, cos_max):
     if nx_ != 0.0 or ny_ != 0.0 or nz_ != 0.0:
         c = -(vx * nx_ + vy * ny_ + vz * nz_) / math.sqrt(d2)  # cos of incidence (view ray vs normal)
         if c <= 0.0 or c < cos_max:
+            return False
+    if min_px > 0.0:
+        # density on the surface plane (normal in the camera frame) or across the view ray
+        nxc = R[0, 0] * nx_ + R[1, 0] * ny_ + R[2, 0] * nz_
+        nyc = R[0, 1] * nx_ + R[1, 1] * ny_ + R[2, 1] * nz_
+        nzc = R[0, 2] * nx_ + R[1, 2] * ny_ + R[2, 2] * nz_
+        if px_per_m_nb(params, xc, yc, zc, nxc, nyc, nzc) < min_px:
             return False
     return True
 
