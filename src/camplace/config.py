@@ -149,6 +149,16 @@ class TargetRegion(_Strict):
     of: list[str] | None = None  # surface: obstacle names
     faces: list[Literal["+x", "-x", "+y", "-y", "+z", "-z"]] | None = None
     max_incidence_deg: Annotated[float, Field(gt=0, le=90, allow_inf_nan=False)] = 90.0
+    # image quality: px/m on the target, or a DORI level (detect, observe, recognise, identify)
+    min_px_per_m: Union[Annotated[float, BeforeValidator(_no_bool), Field(ge=0, allow_inf_nan=False)],
+                        Literal["detect", "observe", "recognise", "recognize", "identify"], None] = None
+
+    @property
+    def min_px_per_m_value(self) -> float:
+        """Minimum pixel density in px/m (DORI names resolved; 0 = no limit)."""
+        from camplace.quality import px_per_m_value
+
+        return px_per_m_value(self.min_px_per_m)
 
     @model_validator(mode="after")
     def _kind_keys(self) -> "TargetRegion":
@@ -165,14 +175,51 @@ class TargetRegion(_Strict):
         return self
 
 
+class Intrinsics(_Strict):
+    """Calibrated pinhole intrinsics (pixels)."""
+
+    fx: PositiveFloat
+    fy: PositiveFloat
+    cx: Finite
+    cy: Finite
+
+
 class Camera(_Strict):
+    """A camera type: give exactly one of ``fov_deg``, ``intrinsics`` or ``calibration``
+    (an OpenCV calibration YAML/JSON file, path relative to the scene file)."""
+
     name: str = Field(min_length=1)
-    model: Literal["pinhole"] = "pinhole"
-    resolution: tuple[PositiveInt, PositiveInt]
-    fov_deg: tuple[Annotated[float, BeforeValidator(_no_bool), Field(gt=0, lt=180)],
-                   Annotated[float, BeforeValidator(_no_bool), Field(gt=0, lt=180)]]
+    model: Literal["pinhole", "opencv", "fisheye"] = "pinhole"
+    resolution: tuple[PositiveInt, PositiveInt] | None = None
+    fov_deg: tuple[Annotated[float, BeforeValidator(_no_bool), Field(gt=0, le=360)],
+                   Annotated[float, BeforeValidator(_no_bool), Field(gt=0, le=360)]] | None = None
+    intrinsics: Intrinsics | None = None
+    distortion: list[Finite] | None = None
+    calibration: str | None = None
+    max_fov_deg: Annotated[float, BeforeValidator(_no_bool), Field(gt=0, le=360)] | None = None
     max_range: PositiveFloat = 5.0
     cost: Annotated[float, Field(ge=0, allow_inf_nan=False)] = 1.0
+
+    @model_validator(mode="after")
+    def _lens(self) -> "Camera":
+        given = [k for k in ("fov_deg", "intrinsics", "calibration") if getattr(self, k) is not None]
+        if len(given) != 1:
+            raise ValueError("give exactly one of 'fov_deg', 'intrinsics', 'calibration'"
+                             + (f" (got {', '.join(given)})" if given else ""))
+        if self.resolution is None and self.calibration is None:
+            raise scene_error("resolution", "required key is missing ([width, height] in pixels)")
+        if self.fov_deg is not None and self.model != "fisheye" and max(self.fov_deg) >= 180:
+            raise scene_error("fov_deg", f"a {self.model} lens sees less than 180 degrees; got {list(self.fov_deg)} "
+                                         "(use model: fisheye for wider lenses)")
+        n = len(self.distortion or [])
+        allowed = {"pinhole": (0,), "opencv": (0, 4, 5, 8), "fisheye": (0, 4)}[self.model]
+        if n not in allowed:
+            what = "no distortion (use model: opencv)" if self.model == "pinhole" else \
+                f"{' or '.join(str(a) for a in allowed if a)} coefficients"
+            raise scene_error("distortion", f"model '{self.model}' takes {what}, got {n}")
+        if self.max_fov_deg is not None and self.model != "fisheye":
+            raise scene_error("max_fov_deg", "belongs to fisheye cameras")
+        return self
 
 
 class Mount(_Strict):

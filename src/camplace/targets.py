@@ -34,6 +34,7 @@ class Targets:
     region_names: tuple[str, ...]
     region_kinds: tuple[str, ...]
     max_incidence_deg: np.ndarray
+    min_px_per_m: np.ndarray | None = None  # (R,) px/m per region, 0 = no limit (issue 4)
 
     def __len__(self) -> int:
         return len(self.positions)
@@ -118,6 +119,7 @@ def build_targets(scene: Scene) -> Targets:
         np.concatenate(pos), np.concatenate(nrm), np.concatenate(gam), np.concatenate(wts), np.concatenate(rid),
         tuple(r.name for r in regions), tuple(r.kind for r in regions),
         np.array([r.max_incidence_deg for r in regions], dtype=np.float64),
+        np.array([r.min_px_per_m_value for r in regions], dtype=np.float64),
     )
     if len(t) == 0:
         raise InputError(f"scene '{scene.name}': targets: no target point lies in free space inside the room")
