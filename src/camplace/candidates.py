@@ -90,26 +90,71 @@ def ceiling_grid_positions(scene: Scene, mount: Mount) -> np.ndarray:
     return np.c_[gx[inside], gy[inside], np.full(int(inside.sum()), z)]
 
 
+def wall_positions(scene: Scene, mount: Mount) -> tuple[np.ndarray, np.ndarray]:
+    """Mount points along walls: every ``spacing`` m (the first half a spacing from a
+    wall's end) on each wall segment - ``mount.walls`` or, by default, the footprint's
+    edges - moved ``wall_clearance`` m inward, at z = ``height``.
+
+    Returns (positions (M, 3) m, inward-facing yaw (M,) degrees). Points outside the
+    footprint are dropped. The inward side of a given segment is the one whose offset
+    midpoint lies inside the footprint."""
+    poly = scene.polygon
+    fp = scene.footprint
+    if mount.walls is not None:
+        segs = np.asarray(mount.walls, float).reshape(-1, 2, 2)
+    else:
+        segs = np.stack([fp, np.roll(fp, -1, axis=0)], axis=1)
+    s = float(mount.spacing)
+    out_p, out_yaw = [], []
+    for a, b in segs:
+        d = b - a
+        length = float(np.hypot(*d))
+        if length < 1e-9:
+            continue
+        u = d / length
+        n = np.array([-u[1], u[0]])  # left normal; flip if it points out of the room
+        mid = (a + b) / 2
+        probe = max(mount.wall_clearance, 0.05)
+        if not shapely.contains_xy(poly, *(mid + n * probe)) and shapely.contains_xy(poly, *(mid - n * probe)):
+            n = -n
+        k = max(int(np.floor(length / s + 1e-9)), 1)
+        t = (np.arange(k) + 0.5) * (length / k)
+        xy = a + np.outer(t, u) + n * mount.wall_clearance
+        out_p.append(np.c_[xy, np.full(k, float(mount.height))])
+        out_yaw.append(np.full(k, np.degrees(np.arctan2(n[1], n[0]))))
+    if not out_p:
+        return np.zeros((0, 3)), np.zeros(0)
+    p, yaw = np.concatenate(out_p), np.concatenate(out_yaw)
+    keep = shapely.contains_xy(poly, p[:, 0], p[:, 1])
+    return p[keep], yaw[keep]
+
+
 def build_candidates(scene: Scene, cameras: dict[str, CameraModel]) -> Candidates:
     """Every mount of the scene expanded into poses; poses inside an obstacle are dropped."""
     cam_list = tuple(cameras.values())
     cam_index = {c.name: k for k, c in enumerate(cam_list)}
     pos, ang, cid = [], [], []
     for mount in scene.spec.mounts:
-        if mount.kind != "ceiling_grid":  # pragma: no cover - schema only allows ceiling_grid today
-            raise InputError(f"mount kind '{mount.kind}' is not supported")
-        p = ceiling_grid_positions(scene, mount)
+        if mount.kind == "wall":  # yaw relative to the inward normal of each wall
+            p, base_yaw = wall_positions(scene, mount)
+        else:
+            p, base_yaw = ceiling_grid_positions(scene, mount), None
         yaws, pitches, rolls = (angle_values(a) for a in (mount.yaw_deg, mount.pitch_deg, mount.roll_deg))
         yy, pp, rr = np.meshgrid(yaws, pitches, rolls, indexing="ij")
         a = np.c_[yy.ravel(), pp.ravel(), rr.ravel()]
         pos.append(np.repeat(p, len(a), axis=0))
-        ang.append(np.tile(a, (len(p), 1)))
+        a_all = np.tile(a, (len(p), 1))
+        if base_yaw is not None:
+            a_all[:, 0] = (a_all[:, 0] + np.repeat(base_yaw, len(a))) % 360.0
+        ang.append(a_all)
         cid.append(np.full(len(p) * len(a), cam_index[mount.camera], dtype=np.int32))
     positions = np.concatenate(pos) if pos else np.zeros((0, 3))
     angles = np.concatenate(ang) if ang else np.zeros((0, 3))
     camera_ids = np.concatenate(cid) if cid else np.zeros(0, np.int32)
     n_all = len(positions)
     inside_obstacle = scene.occupancy.is_occupied(positions)
+    if getattr(scene, "free_space", None) is not None:  # scans: not in space no scanner saw (inside things)
+        inside_obstacle |= ~scene.free_space.observed_at(positions)
     positions, angles, camera_ids = positions[~inside_obstacle], angles[~inside_obstacle], camera_ids[~inside_obstacle]
     if len(positions) == 0:
         raise InputError(f"scene '{scene.name}': mounts: no candidate pose lies in free space "

@@ -125,18 +125,62 @@ class Box(_Strict):
         return self
 
 
+class CloudTransform(_Strict):
+    """p -> R(rotate_deg: about x, then y, then z) · (scale · p) + translate; then, with
+    ``level_floor``, the dominant floor plane (RANSAC, normal within 30° of ``up``) is
+    made z = 0 with +z up."""
+
+    scale: PositiveFloat = 1.0
+    rotate_deg: Point3 = (0.0, 0.0, 0.0)
+    translate: Point3 = (0.0, 0.0, 0.0)
+    level_floor: bool = False
+    up: Literal["+x", "-x", "+y", "-y", "+z", "-z"] = "+z"
+
+
+class OutlierRemoval(_Strict):
+    """Statistical outlier removal: drop points whose mean distance to ``neighbors``
+    nearest points is above the cloud mean by ``std_ratio`` standard deviations."""
+
+    neighbors: Annotated[int, Field(ge=1, le=256, strict=True)] = 16
+    std_ratio: PositiveFloat = 2.0
+
+
+class FreeSpaceSpec(_Strict):
+    """How free space is derived from scans / OctoMaps (volume targets come from it)."""
+
+    clearance: Annotated[float, Field(ge=0, allow_inf_nan=False)] = 0.1  # m from any occupied cell
+    connected_to_floor: bool = True  # keep only free space connected to the main floor area
+
+
 class Obstacle(_Strict):
     name: str = Field(min_length=1)
     box: Box | None = None
     mesh: str | None = None
     point_cloud: str | None = None
-    solid: bool = False
+    octomap: str | None = None  # an OctoMap .bt / .ot file (path relative to the scene file)
+    solid: bool = False  # mesh: also fill the cells a closed mesh encloses
+    occludes: bool = True  # false: a labelled box for surface targets only (a scan gives the occlusion)
+    # point-cloud clean-up (issue 5), each optional and reported: see docs/scan-to-mount-list.md
+    transform: CloudTransform | None = None
+    crop: Box | None = None  # keep points inside this box (scene frame, after transform)
+    downsample: PositiveFloat | None = None  # voxel edge (m)
+    remove_outliers: OutlierRemoval | None = None
+    viewpoints: list[Point3] | None = None  # scanner positions (file frame), for free-space carving
 
     @model_validator(mode="after")
     def _one_source(self) -> "Obstacle":
-        given = [k for k in ("box", "mesh", "point_cloud") if getattr(self, k) is not None]
+        given = [k for k in ("box", "mesh", "point_cloud", "octomap") if getattr(self, k) is not None]
         if len(given) != 1:
-            raise ValueError("give exactly one of 'box', 'mesh', 'point_cloud'")
+            raise ValueError("give exactly one of 'box', 'mesh', 'point_cloud', 'octomap'")
+        if self.point_cloud is None:
+            for k in ("downsample", "remove_outliers", "viewpoints"):
+                if getattr(self, k) is not None:
+                    raise scene_error(k, "belongs to 'point_cloud' obstacles")
+        if self.box is not None and (self.transform is not None or self.crop is not None):
+            raise scene_error("transform" if self.transform is not None else "crop",
+                              "belongs to point_cloud, mesh and octomap obstacles")
+        if self.solid and self.mesh is None:
+            raise scene_error("solid", "belongs to 'mesh' obstacles")
         return self
 
 
@@ -147,6 +191,7 @@ class TargetRegion(_Strict):
     weight: PositiveFloat = 1.0
     heights: list[Finite] | None = None  # volume: target layer heights (m)
     of: list[str] | None = None  # surface: obstacle names
+    box: Box | None = None  # surface on scans: the occupied cells inside this box (normals by PCA)
     faces: list[Literal["+x", "-x", "+y", "-y", "+z", "-z"]] | None = None
     max_incidence_deg: Annotated[float, Field(gt=0, le=90, allow_inf_nan=False)] = 90.0
     # image quality: px/m on the target, or a DORI level (detect, observe, recognise, identify)
@@ -165,11 +210,13 @@ class TargetRegion(_Strict):
         if self.kind == "volume":
             if not self.heights:
                 raise ValueError("a volume region needs 'heights' (a non-empty list of metres)")
-            if self.of is not None or self.faces is not None:
-                raise ValueError("'of' and 'faces' belong to surface regions")
+            if self.of is not None or self.faces is not None or self.box is not None:
+                raise ValueError("'of', 'faces' and 'box' belong to surface regions")
         else:
-            if not self.of:
-                raise ValueError("a surface region needs 'of' (a list of obstacle names)")
+            if not self.of and self.box is None:
+                raise ValueError("a surface region needs 'of' (a list of obstacle names) or 'box'")
+            if self.of and self.box is not None:
+                raise ValueError("give either 'of' or 'box' for a surface region, not both")
             if self.heights is not None:
                 raise ValueError("'heights' belongs to volume regions")
         return self
@@ -223,12 +270,37 @@ class Camera(_Strict):
 
 
 class Mount(_Strict):
-    kind: Literal["ceiling_grid"]
+    """``ceiling_grid``: a grid below the ceiling, yaw absolute. ``wall``: along the walls
+    (the footprint's edges, or the given ``walls`` segments) at ``height``, facing inward;
+    yaw is relative to the inward normal (default -60..60 step 30)."""
+
+    kind: Literal["ceiling_grid", "wall"]
     camera: str
     spacing: PositiveFloat = 1.0
     offset_below_ceiling: Annotated[float, Field(ge=0, allow_inf_nan=False)] = 0.1
     wall_clearance: Annotated[float, Field(ge=0, allow_inf_nan=False)] = 0.05
-    yaw_deg: Angles = AngleRange(start=0, stop=330, step=30)
+    height: Finite | None = None  # wall: mount height above the floor (m)
+    walls: list[tuple[Point2, Point2]] | None = None  # wall: segments [[x0, y0], [x1, y1]] (default: footprint edges)
+    yaw_deg: Angles = AngleRange(start=0, stop=330, step=30)  # wall default: -60..60 step 30 (relative)
+
+    @model_validator(mode="before")
+    @classmethod
+    def _wall_yaw_default(cls, data: Any) -> Any:
+        if isinstance(data, dict) and data.get("kind") == "wall" and "yaw_deg" not in data:
+            data = {**data, "yaw_deg": [-60.0, -30.0, 0.0, 30.0, 60.0]}
+        return data
+
+    @model_validator(mode="after")
+    def _kind_keys(self) -> "Mount":
+        if self.kind == "wall" and self.height is None:
+            raise scene_error("height", "a wall mount needs 'height' (metres above the floor)")
+        if self.kind == "ceiling_grid" and (self.height is not None or self.walls is not None):
+            raise scene_error("height" if self.height is not None else "walls", "belongs to wall mounts")
+        return self
+
+    def yaw_values(self) -> list[float]:
+        """Yaw angles (degrees); relative to the inward wall normal for wall mounts."""
+        return angle_values(self.yaw_deg)
     pitch_deg: Angles = [30.0, 45.0, 60.0]
     roll_deg: Angles = [0.0]
 
@@ -250,6 +322,7 @@ class SceneSpec(_Strict):
     cameras: list[Camera] = Field(min_length=1)
     mounts: list[Mount] = Field(min_length=1)
     placement: Placement = Placement()
+    free_space: FreeSpaceSpec = FreeSpaceSpec()
 
     @model_validator(mode="after")
     def _references(self) -> "SceneSpec":
@@ -288,6 +361,8 @@ class SceneSpec(_Strict):
             if m.camera not in camera_names:
                 raise scene_error(f"mounts[{i}].camera", f"unknown camera '{m.camera}'"
                                   f"{_did_you_mean(m.camera, camera_names)}; expected one of {_names(camera_names)}")
+            if m.kind == "wall" and not 0 < (m.height or 0) < H:
+                raise scene_error(f"mounts[{i}].height", f"{m.height} m is outside the room; expected (0, {H}) m")
             off = getattr(m, "offset_below_ceiling", None)
             if off is not None and off >= H:
                 raise scene_error(f"mounts[{i}].offset_below_ceiling",

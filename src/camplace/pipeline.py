@@ -69,7 +69,7 @@ def prepare(scene: str | Path | SceneSpec, progress: Progress | None = None,
         progress = _stoppable(progress, should_stop)
     t = time.perf_counter()
     _stage(progress, "scene")
-    sc = build_scene(spec, base_dir, source)
+    sc = build_scene(spec, base_dir, source, progress=progress)
     timings["scene"] = time.perf_counter() - t
     t = time.perf_counter()
     _stage(progress, "targets")

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 import shapely
@@ -16,6 +17,9 @@ from shapely.geometry import Polygon
 
 from camplace.config import SceneSpec
 from camplace.errors import InputError
+
+if TYPE_CHECKING:
+    from camplace.freespace import FreeSpace
 
 MAX_GRID_BYTES = 4 * 1024**3  # refuse dense grids larger than this (bool = 1 byte/cell)
 
@@ -64,6 +68,9 @@ class Scene:
     occupancy: OccupancyGrid
     base_dir: Path | None = None
     info: dict = field(default_factory=dict)
+    free_space: "FreeSpace | None" = None  # walkable free space from scans / OctoMaps (issue 5)
+    points: np.ndarray | None = None  # (N, 3) cleaned scan points (scene frame), for surface targets
+    viewpoints: np.ndarray | None = None  # (K, 3) scanner positions (scene frame)
 
     @property
     def polygon(self) -> Polygon:
@@ -91,8 +98,10 @@ def _validate_footprint(spec: SceneSpec, source: str) -> Polygon:
     return poly
 
 
-def build_scene(spec: SceneSpec, base_dir: Path | None = None, source: str = "<scene>") -> Scene:
-    """Build the occupancy grid of a validated scene spec."""
+def build_scene(spec: SceneSpec, base_dir: Path | None = None, source: str = "<scene>",
+                progress=None) -> Scene:
+    """Build the occupancy grid of a validated scene spec (file obstacles read through
+    camplace.loaders; free space derived when a scan or OctoMap is present)."""
     poly = _validate_footprint(spec, source)
     need = estimate_grid_bytes(spec)
     if need > MAX_GRID_BYTES:
@@ -114,16 +123,29 @@ def build_scene(spec: SceneSpec, base_dir: Path | None = None, source: str = "<s
     occ[:, :, (zs < 0) | (zs > spec.room.height)] = True  # floor and ceiling slabs
 
     boxes: dict[str, tuple[np.ndarray, np.ndarray]] = {}
+    loaded = []
     for i, ob in enumerate(spec.obstacles):
         if ob.box is None:
-            raise InputError(
-                f"{source}: obstacles[{i}] ('{ob.name}'): only 'box' obstacles are supported by this version"
-            )
+            from camplace.loaders.obstacles import add_obstacle
+
+            loaded.append(add_obstacle(occ, grid.origin, res, ob, i, base_dir, source, progress))
+            continue
         bmin, bmax = np.asarray(ob.box.min, float), np.asarray(ob.box.max, float)
         boxes[ob.name] = (bmin, bmax)
-        rasterize_box(grid, bmin, bmax)
-    return Scene(spec.name, spec, fp, float(spec.room.height), boxes, grid, base_dir,
-                 {"grid_shape": shape, "grid_cells": int(np.prod(shape)), "occupied_cells": int(occ.sum())})
+        if ob.occludes:
+            rasterize_box(grid, bmin, bmax)
+    info = {"grid_shape": shape, "grid_cells": int(np.prod(shape)), "occupied_cells": int(occ.sum()),
+            "grid_bytes": int(np.prod(shape))}
+    free_space = points = viewpoints = None
+    if loaded:
+        from camplace.freespace import scene_free_space
+
+        info["obstacle_files"] = {ob.name: lo.report for ob, lo in zip([o for o in spec.obstacles if o.box is None],
+                                                                       loaded)}
+        free_space, points, viewpoints = scene_free_space(grid, spec, loaded, progress)
+        info["free_space"] = free_space.info if free_space is not None else None
+    return Scene(spec.name, spec, fp, float(spec.room.height), boxes, grid, base_dir, info,
+                 free_space, points, viewpoints)
 
 
 def rasterize_box(grid: OccupancyGrid, bmin: np.ndarray, bmax: np.ndarray) -> None:

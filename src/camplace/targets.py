@@ -57,7 +57,10 @@ def volume_targets(scene: Scene, region: TargetRegion) -> np.ndarray:
     xy = np.c_[gx[inside], gy[inside]]
     layers = [np.c_[xy, np.full(len(xy), float(h))] for h in region.heights or []]
     pts = np.concatenate(layers) if layers else np.zeros((0, 3))
-    return pts[~scene.occupancy.is_occupied(pts)]
+    pts = pts[~scene.occupancy.is_occupied(pts)]
+    if getattr(scene, "free_space", None) is not None:  # scans / OctoMaps: observed walkable space only
+        pts = pts[scene.free_space.contains(pts)]
+    return pts
 
 
 def surface_targets(scene: Scene, region: TargetRegion) -> tuple[np.ndarray, np.ndarray]:
@@ -95,6 +98,12 @@ def surface_targets(scene: Scene, region: TargetRegion) -> tuple[np.ndarray, np.
     if not pos:
         return np.zeros((0, 3)), np.zeros((0, 3))
     p, n = np.concatenate(pos), np.concatenate(nrm)
+    labels = {o.name for o in scene.spec.obstacles if not o.occludes}
+    if labels & set(region.of or []):  # labelled boxes on a scan: step out of the scanned shell
+        from camplace.freespace import snap_outward
+
+        p, keep = snap_outward(scene.occupancy, p, n)
+        return p[keep], n[keep]
     outside = p + n * 0.75 * scene.occupancy.resolution
     keep = ~scene.occupancy.is_occupied(outside)
     return p[keep], n[keep]
@@ -107,6 +116,10 @@ def build_targets(scene: Scene) -> Targets:
         if region.kind == "volume":
             p = volume_targets(scene, region)
             n = np.zeros_like(p)
+        elif region.box is not None:
+            from camplace.freespace import scan_surface_targets
+
+            p, n = scan_surface_targets(scene, region.box.min, region.box.max)
         else:
             p, n = surface_targets(scene, region)
         pos.append(p)
