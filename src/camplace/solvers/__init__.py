@@ -13,6 +13,7 @@ from camplace.problem import PlacementProblem
 from camplace.solvers.base import Placement
 from camplace.solvers.greedy import solve_greedy
 from camplace.solvers.horster import solve_horster
+from camplace.solvers.min_cameras import solve_min_cameras
 from camplace.solvers.mip import solve_mip
 from camplace.solvers.paper_mip import solve_paper_mip
 from camplace.solvers.zhao import solve_zhao
@@ -23,6 +24,7 @@ SOLVERS: dict[str, Callable[..., Placement]] = {
     "paper-mip": solve_paper_mip,
     "zhao": solve_zhao,
     "horster": solve_horster,
+    "min-cameras": solve_min_cameras,
 }
 
 

@@ -41,10 +41,37 @@ class MilpArrays:
         return self.A.shape
 
 
+_BANNER_DONE = False
+
+
+def new_highs() -> highspy.Highs:
+    """A silent highspy.Highs. HiGHS prints a banner on stdout the first time one is
+    made in a process; library code must not print, so that first one is made with
+    file descriptor 1 pointed at /dev/null."""
+    global _BANNER_DONE
+    if _BANNER_DONE:
+        h = highspy.Highs()
+    else:
+        import os
+        import sys
+
+        sys.stdout.flush()
+        saved = os.dup(1)
+        try:
+            with open(os.devnull, "w") as null:
+                os.dup2(null.fileno(), 1)
+                h = highspy.Highs()
+        finally:
+            os.dup2(saved, 1)
+            os.close(saved)
+        _BANNER_DONE = True
+    h.setOptionValue("output_flag", False)
+    return h
+
+
 def highs_from_arrays(m: MilpArrays, *, integer: bool = True) -> highspy.Highs:
     """A silent highspy.Highs holding the model (integer=False: its LP relaxation)."""
-    h = highspy.Highs()
-    h.setOptionValue("output_flag", False)
+    h = new_highs()
     A = sp.csc_matrix(m.A, dtype=np.float64)
     A.sort_indices()
     n_row, n_col = A.shape
@@ -87,7 +114,7 @@ class HighsOutcome:
 def run_highs(h: highspy.Highs, *, time_limit_s: float | None = None, threads: int | None = None, seed: int = 0,
               should_stop: ShouldStop | None = None, on_incumbent: OnIncumbent | None = None,
               start: np.ndarray | None = None, mip_rel_gap: float | None = None,
-              verbose: bool = False) -> HighsOutcome:
+              verbose: bool = False, options: dict | None = None) -> HighsOutcome:
     """Solve with HiGHS; should_stop is polled from the MIP / simplex / IPM interrupt
     callbacks; on_incumbent(objective, dual bound) fires on every improving solution."""
     if time_limit_s is not None:
@@ -97,6 +124,8 @@ def run_highs(h: highspy.Highs, *, time_limit_s: float | None = None, threads: i
     h.setOptionValue("random_seed", int(seed))
     if mip_rel_gap is not None:
         h.setOptionValue("mip_rel_gap", float(mip_rel_gap))
+    for key, value in (options or {}).items():
+        h.setOptionValue(key, value)
     if verbose:
         h.setOptionValue("output_flag", True)
     flag = {"stop": False}

@@ -1,0 +1,150 @@
+"""`min-cameras`: the paper's future work — the fewest cameras (or the least total
+camera price) whose coverage cost is at most a target.
+
+    min  Σ_i p_i x_i            (p_i = 1: count; p_i = camera_costs: price)
+    s.t. Σ_i V_ij x_i + Σ_k u_jk >= Γ_j,   Σ_j w_j Σ_k (2k − 1) u_jk <= target,
+         Σ_{i at l} x_i <= 1,  [Σ_i cost_i x_i <= money_budget],  x binary, u ∈ [0, 1]
+
+(the tight model of camplace.solvers.mip with cost and budget swapped). target
+defaults to 0 (every Γ_j met); coverage_gap=ε sets target = ε · Σ_j w_j Γ_j²
+(paper eq. 8); max_cost sets it directly. The problem's camera budget N_s is
+ignored (that is the unknown here). When the target cannot be reached at all (e.g.
+a target seen from fewer than Γ_j locations), the solver first finds the least
+reachable cost with every location available (the `mip` solver) and then the fewest
+cameras reaching it; info['target_unreachable'] says so.
+
+The MIP's dual bound gives a proven lower bound on the count (rounded up when the
+prices are integral): info['lower_bound'], info['proven_minimal'].
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import replace
+
+import numpy as np
+
+from camplace.problem import PlacementProblem
+from camplace.solvers.base import OnIncumbent, Placement, ProgressFn, ShouldStop, stopped
+from camplace.solvers.highs_util import INF, highs_from_arrays, run_highs
+from camplace.solvers.mip import tight_model_arrays, tight_start
+import scipy.sparse as sp
+
+
+def location_degree(problem: PlacementProblem) -> np.ndarray:
+    """(N_p,) int64: number of distinct locations with a candidate seeing each target."""
+    V = sp.coo_matrix(problem.V)
+    _, loc = np.unique(problem.location_ids, return_inverse=True)
+    pairs = np.unique(np.stack([V.col, loc[V.row]], axis=1), axis=0) if V.nnz else np.zeros((0, 2), np.int64)
+    return np.bincount(pairs[:, 0], minlength=problem.n_targets).astype(np.int64)
+
+
+def _greedy_start(problem: PlacementProblem, target: float) -> np.ndarray | None:
+    """Shortest prefix of the greedy order (no budget) whose cost is <= target, or None."""
+    from camplace.solvers.greedy import solve_greedy
+
+    n_loc = len(np.unique(problem.location_ids))
+    g = solve_greedy(replace(problem, budget=n_loc))
+    order = g.info["order"]
+    V = problem.V
+    cov = np.zeros(problem.n_targets, np.int64)
+    short = np.maximum(problem.gamma - cov, 0).astype(np.float64)
+    cost = float(np.dot(problem.weights, short * short))
+    if cost <= target + 1e-9:
+        return np.zeros(0, np.int64)
+    for n, i in enumerate(order):
+        cov[V.indices[V.indptr[i]:V.indptr[i + 1]]] += 1
+        short = np.maximum(problem.gamma - cov, 0).astype(np.float64)
+        cost = float(np.dot(problem.weights, short * short))
+        if cost <= target + 1e-9:
+            return np.sort(np.array(order[:n + 1], np.int64))
+    return None
+
+
+def solve_min_cameras(problem: PlacementProblem, *, time_limit_s: float | None = None, threads: int | None = None,
+                      seed: int = 0, should_stop: ShouldStop | None = None, progress: ProgressFn | None = None,
+                      on_incumbent: OnIncumbent | None = None, coverage_gap: float | None = None,
+                      max_cost: float | None = None, minimize: str | None = None, verbose: bool = False,
+                      **_: object) -> Placement:
+    """Fewest cameras (minimize='count') or least price (minimize='price', the default
+    when the problem has non-uniform camera_costs) with cost <= target (module docstring)."""
+    t0 = time.perf_counter()
+    target = 0.0
+    if max_cost is not None:
+        target = float(max_cost)
+    elif coverage_gap is not None:
+        target = float(coverage_gap) * problem.normalizer
+    prices = problem.costs
+    if minimize is None:
+        minimize = "price" if problem.camera_costs is not None and np.ptp(prices) > 0 else "count"
+    if minimize == "count":
+        prices = np.ones(problem.n_candidates)
+    info: dict = {"target_cost": target, "minimize": minimize}
+    # Reachability: cheap certificate of unreachability, else try.
+    deg = location_degree(problem)
+    floor = float(np.dot(problem.weights, np.maximum(problem.gamma - deg, 0).astype(float) ** 2))
+    unreachable = floor > target + 1e-9
+    end = None if time_limit_s is None else t0 + time_limit_s
+    if unreachable:
+        from camplace.solvers.mip import solve_mip
+
+        n_loc = len(np.unique(problem.location_ids))
+        left = None if end is None else max(0.01, 0.5 * (end - time.perf_counter()))
+        best = solve_mip(replace(problem, budget=n_loc), time_limit_s=left, threads=threads, seed=seed,
+                         should_stop=should_stop)
+        info.update(target_unreachable=True, requested_target_cost=target, cost_floor=floor,
+                    least_reachable_cost=best.objective, least_reachable_bound=best.bound)
+        target = best.objective
+        info["target_cost"] = target
+    start = _greedy_start(problem, target)
+    arrays, layout = tight_model_arrays(problem)
+    n_t = len(layout.cover_targets)
+    n_x = layout.n_x
+    u_cost = arrays.c[n_x:].copy()
+    arrays.c = np.concatenate([prices, np.zeros(len(u_cost))])
+    arrays.row_upper[n_t] = INF  # the camera budget row: not a constraint here
+    if target <= 1e-9:
+        arrays.col_upper[n_x:] = 0.0
+    else:
+        row = sp.csr_matrix(np.concatenate([np.zeros(n_x), u_cost]).reshape(1, -1))
+        arrays.A = sp.vstack([arrays.A, row], format="csc")
+        arrays.row_lower = np.append(arrays.row_lower, -INF)
+        arrays.row_upper = np.append(arrays.row_upper, target)
+    h = highs_from_arrays(arrays)
+    if stopped(should_stop):
+        sel = start if start is not None else np.zeros(0, np.int64)
+        return Placement(sel, problem.cost(sel), None, "interrupted", "min-cameras", time.perf_counter() - t0, info)
+    left = None if end is None else max(0.01, end - time.perf_counter())
+    start_cols = None if start is None else tight_start(problem, layout, start)
+    if start_cols is not None and target <= 1e-9:
+        start_cols[n_x:] = 0.0
+    integral = bool(np.all(np.abs(prices - np.round(prices)) < 1e-9))
+    out = run_highs(h, time_limit_s=left, threads=threads, seed=seed, should_stop=should_stop,
+                    start=start_cols, verbose=verbose, options={"mip_abs_gap": 0.999} if integral else None)
+    sel = start
+    if out.values is not None:
+        cand = np.nonzero(out.values[:n_x] > 0.5)[0].astype(np.int64)
+        if problem.cost(cand) <= target + 1e-6 and (sel is None or prices[cand].sum() <= prices[sel].sum()):
+            sel = cand
+    if sel is None:
+        from camplace.errors import InputError
+
+        raise InputError(f"min-cameras: no placement with cost <= {target:g} found (HiGHS: {out.model_status})")
+    value = float(prices[sel].sum())
+    bound = out.bound if out.bound is not None else 0.0
+    lower = math.ceil(bound - 1e-6) if integral else bound
+    lower = min(lower, value)
+    status = out.status if out.status in ("optimal", "time_limit", "interrupted") else "feasible"
+    if lower >= value - 1e-6:
+        status = "optimal"
+    info.update(cameras=int(len(sel)), camera_price=value, lower_bound=lower,
+                proven_minimal=bool(lower >= value - 1e-6), highs_status=out.model_status, nodes=out.nodes,
+                warm_start_cameras=None if start is None else int(len(start)))
+    cost = problem.cost(sel)
+    if on_incumbent:
+        on_incumbent(cost, None)
+    return Placement(np.sort(sel), cost, None, status, "min-cameras", time.perf_counter() - t0, info)
+
+
+solve_min_cameras.ignores_budget = True  # type: ignore[attr-defined]
