@@ -158,7 +158,7 @@ class DaskExecutor:
                                       key=f"camplace-chunk-{run}-{k}") for k, t in enumerate(tasks)]
         index = {f.key: k for k, f in enumerate(futures)}
         try:
-            for fut in dask_as_completed(futures):
+            for fut in dask_as_completed(futures, loop=self.client.loop):
                 k = index[fut.key]
                 yield k, fut.result()
                 fut.release()
