@@ -117,6 +117,69 @@ def _stoppable(progress: Progress | None, should_stop: Callable[[], bool]) -> Pr
     return cb
 
 
+STOP_GRACE_S = 2.0  # seconds a solver gets to honour should_stop() before the pipeline stops waiting
+
+
+def solve_stoppable(problem: PlacementProblem, solver: str, *, log: list | None = None,
+                    grace_s: float = STOP_GRACE_S, **options) -> Placement:
+    """``solve(problem, solver, **options)`` that always comes back soon after
+    ``options['should_stop']()`` turns true.
+
+    The solver runs in a worker thread (HiGHS and numba release the GIL); this thread
+    polls should_stop(). A solver that does not return within ``grace_s`` after the stop
+    request (e.g. HiGHS inside a root LP, which polls no callback) is left behind and
+    the greedy placement (+ 1-swap) is returned instead, with status 'interrupted' and
+    the best lower bound the solver reported through on_incumbent (or None)."""
+    import threading
+    from dataclasses import replace
+
+    should_stop = options.get("should_stop")
+    if should_stop is None:
+        return solve(problem, solver, **options)
+    bound: dict[str, float | None] = {"bound": None}
+    user_cb = options.get("on_incumbent")
+
+    def on_incumbent(objective: float, b: float | None) -> None:
+        if b is not None and np.isfinite(b):
+            bound["bound"] = b if bound["bound"] is None else max(bound["bound"], b)
+        if user_cb is not None:
+            user_cb(objective, b)
+
+    options["on_incumbent"] = on_incumbent
+    out: dict = {}
+
+    def work() -> None:
+        try:
+            out["placement"] = solve(problem, solver, **options)
+        except BaseException as err:  # noqa: BLE001 - handed to the calling thread
+            out["error"] = err
+
+    th = threading.Thread(target=work, name=f"camplace-solve-{solver}", daemon=True)
+    th.start()
+    asked = None
+    while th.is_alive():
+        th.join(0.05)
+        if asked is None and should_stop():
+            asked = time.perf_counter()
+        if asked is not None and time.perf_counter() - asked > grace_s:
+            break
+    if "error" in out:
+        raise out["error"]
+    if "placement" in out:
+        return out["placement"]
+    fallback_opts = {k: v for k, v in options.items() if k not in ("should_stop", "progress", "on_incumbent")}
+    fallback_opts["time_limit_s"] = 5.0
+    g = solve(problem, "greedy", local_search=True, **{k: v for k, v in fallback_opts.items() if k != "local_search"})
+    b = bound["bound"]
+    if b is not None and b > g.objective:  # cannot happen for a valid bound; never report one above the cost
+        b = None
+    if log is not None:
+        log.append(f"warning: solver '{solver}' did not stop within {grace_s:g} s of the interrupt (inside a phase "
+                   f"that polls nothing); wrote the greedy + 1-swap placement instead")
+    info = dict(g.info, interrupted_solver=solver, fallback="greedy+1-swap")
+    return replace(g, status="interrupted", bound=b, solver=solver, info=info)
+
+
 def check_solver_name(name: str, key: str) -> None:
     """InputError naming ``key`` (e.g. '--solver' or 'scene.yaml: placement.solver') for an unknown solver."""
     from camplace.config import _did_you_mean
@@ -165,7 +228,7 @@ def run(scene: str | Path | SceneSpec, budget: int | None = None, solver: str | 
     problem = problem_from_visibility(vis, budget)
     t = time.perf_counter()
     _stage(progress, "solve")
-    placement = solve(problem, solver, **solver_options)
+    placement = solve_stoppable(problem, solver, log=log, **solver_options)
     timings["solve"] = time.perf_counter() - t
     t = time.perf_counter()
     metrics = compute_metrics(problem, placement.selected, vis.targets.region_ids, vis.targets.region_names)

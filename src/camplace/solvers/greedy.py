@@ -158,11 +158,20 @@ def swap_local_search(problem: PlacementProblem, selected: list[int], *, end: fl
 
 def solve_greedy(problem: PlacementProblem, *, time_limit_s: float | None = None, threads: int | None = None,
                  seed: int = 0, should_stop: ShouldStop | None = None, progress: ProgressFn | None = None,
-                 on_incumbent: OnIncumbent | None = None, local_search: bool = False, **_: object) -> Placement:
+                 on_incumbent: OnIncumbent | None = None, local_search: bool = False, cost_scaled: bool = True,
+                 **_: object) -> Placement:
     """Add the candidate with the largest cost drop until the budget is spent or no
     candidate lowers the cost; one camera per location (and within the money budget,
     if any). Ties go to the lowest id. local_search=True then runs 1-swap descent
-    (:func:`swap_local_search`). Status 'heuristic', or 'interrupted' / 'time_limit'."""
+    (:func:`swap_local_search`). Status 'heuristic', or 'interrupted' / 'time_limit'.
+    With a money budget and cost_scaled=True: the best of cost-scaled and plain greedy
+    (camplace.solvers.catalogue)."""
+    if cost_scaled and problem.money_budget is not None:
+        from camplace.solvers.catalogue import solve_catalogue_greedy
+
+        return solve_catalogue_greedy(problem, time_limit_s=time_limit_s, threads=threads, seed=seed,
+                                      should_stop=should_stop, progress=progress, on_incumbent=on_incumbent,
+                                      local_search=local_search)
     t0 = time.perf_counter()
     end = deadline(time_limit_s)
     selected, cov, evaluations, cut = lazy_greedy(problem, lambda c: marginal_gains(problem, c),
