@@ -172,7 +172,20 @@ def _run(scene: str, budget: Optional[int], solver: Optional[str], out: Optional
     if stop():
         console.print(f"[yellow]interrupted: wrote the best placement found so far (status "
                       f"'{result.placement.status}') to {escape(str(out_dir))}[/yellow]")
+        _exit_if_solver_left_running(130)
         raise typer.Exit(130)
+
+
+def _exit_if_solver_left_running(code: int) -> None:
+    """A solver thread that ignored the interrupt (camplace.pipeline.solve_stoppable) may
+    still run native code; interpreter shutdown under it can abort the process. The
+    outputs are written (atomically, fsynced), so leave at once with ``code``."""
+    import threading
+
+    if any(t.is_alive() and t.name.startswith("camplace-solve-") for t in threading.enumerate()):
+        sys.stdout.flush()
+        sys.stderr.flush()
+        os._exit(code)
 
 
 _TIME_LIMIT_OPT = typer.Option(None, "--time-limit", help="Solver time limit in seconds (default: the scene's "
@@ -233,7 +246,9 @@ def CamplaceInputErrorProxy(msg: str) -> CamplaceError:  # noqa: N802 - reads li
 def main() -> None:
     """Entry point: run the app, turning CamplaceError into one line + exit code."""
     try:
-        app(standalone_mode=False)
+        rc = app(standalone_mode=False)  # typer.Exit(code) comes back as the return value here
+        if isinstance(rc, int) and not isinstance(rc, bool) and rc != 0:
+            sys.exit(rc)
     except CamplaceError as err:
         if _state["debug"]:
             raise

@@ -128,7 +128,7 @@ def solve_stoppable(problem: PlacementProblem, solver: str, *, log: list | None 
     The solver runs in a worker thread (HiGHS and numba release the GIL); this thread
     polls should_stop(). A solver that does not return within ``grace_s`` after the stop
     request (e.g. HiGHS inside a root LP, which polls no callback) is left behind and
-    the greedy placement (+ 1-swap) is returned instead, with status 'interrupted' and
+    the greedy placement is returned instead, with status 'interrupted' and
     the best lower bound the solver reported through on_incumbent (or None)."""
     import threading
     from dataclasses import replace
@@ -169,14 +169,14 @@ def solve_stoppable(problem: PlacementProblem, solver: str, *, log: list | None 
         return out["placement"]
     fallback_opts = {k: v for k, v in options.items() if k not in ("should_stop", "progress", "on_incumbent")}
     fallback_opts["time_limit_s"] = 5.0
-    g = solve(problem, "greedy", local_search=True, **{k: v for k, v in fallback_opts.items() if k != "local_search"})
+    g = solve(problem, "greedy", **{k: v for k, v in fallback_opts.items() if k != "local_search"})
     b = bound["bound"]
     if b is not None and b > g.objective:  # cannot happen for a valid bound; never report one above the cost
         b = None
     if log is not None:
         log.append(f"warning: solver '{solver}' did not stop within {grace_s:g} s of the interrupt (inside a phase "
-                   f"that polls nothing); wrote the greedy + 1-swap placement instead")
-    info = dict(g.info, interrupted_solver=solver, fallback="greedy+1-swap")
+                   f"that polls nothing); wrote the greedy placement instead")
+    info = dict(g.info, interrupted_solver=solver, fallback="greedy")
     return replace(g, status="interrupted", bound=b, solver=solver, info=info)
 
 
