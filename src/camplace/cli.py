@@ -22,14 +22,20 @@ from camplace.errors import CamplaceError
 app = typer.Typer(add_completion=False, no_args_is_help=True,
                   help="camplace: choose where to mount cameras so every place gets the coverage it needs.")
 console = Console(stderr=True)
-_state = {"debug": False, "quiet": False}
+_state = {"debug": False, "quiet": False, "verbose": False, "json": False}
 
 
 @app.callback()
 def _main(debug: bool = typer.Option(False, "--debug", help="Show Python tracebacks on errors."),
-          quiet: bool = typer.Option(False, "--quiet", "-q", help="Only errors and the output paths.")) -> None:
+          quiet: bool = typer.Option(False, "--quiet", "-q", help="Only errors and the output paths."),
+          verbose: bool = typer.Option(False, "--verbose", "-v", help="Also show stage details, solver "
+                                       "information and every file written."),
+          json_out: bool = typer.Option(False, "--json", help="Print a JSON summary on stdout (for scripts); "
+                                        "progress and messages stay on stderr.")) -> None:
     _state["debug"] = debug
     _state["quiet"] = quiet
+    _state["verbose"] = verbose and not quiet
+    _state["json"] = json_out
 
 
 class _StopFlag:
@@ -70,6 +76,17 @@ class _RichProgress:
         self.stop = stop
         self.told_stop = False
 
+    def incumbent(self, objective: float, bound: float | None = None) -> None:
+        """on_incumbent callback of the solvers: show the best cost, bound and gap so far."""
+        text = f"best {objective:.6g}"
+        if bound is not None:
+            gap = 0.0 if objective <= 0 else max(0.0, (objective - bound) / objective)
+            text += f"  bound {bound:.6g}  gap {100 * gap:.2f} %"
+        if "solve" in self.tasks:
+            self.progress.update(self.tasks["solve"], description=f"solve  {text}")
+        if _state["verbose"]:
+            console.print(f"[dim]incumbent: {text}[/dim]", highlight=False)
+
     def __call__(self, stage: str, done: int, total: int) -> None:
         if self.stop is not None and self.stop() and not self.told_stop:
             self.told_stop = True
@@ -78,29 +95,63 @@ class _RichProgress:
         if stage not in self.tasks:
             if not console.is_terminal and not _state["quiet"]:
                 console.print(f"stage: {stage}", highlight=False)
-            self.tasks[stage] = self.progress.add_task(stage, total=total)
+            # 'solve' runs until the solver returns: an open bar (incumbents update its text)
+            self.tasks[stage] = self.progress.add_task(stage, total=None if stage == "solve" else total)
+        if stage == "solve":
+            return
         self.progress.update(self.tasks[stage], completed=done, total=total)
         if done == 0 and total == 1:
             self.progress.update(self.tasks[stage], completed=1)
 
 
 def _progress() -> Progress:
+    """Rich progress bars on stderr (stage, bar, done/total, elapsed, ETA); off with --quiet."""
     return Progress(TextColumn("[bold]{task.description:<11}"), BarColumn(), TextColumn("{task.completed}/{task.total}"),
                     TimeElapsedColumn(), TimeRemainingColumn(), console=console, transient=True,
                     disable=_state["quiet"])
 
 
+def _json_summary(result, out_dir: Path, paths: dict) -> dict:
+    """The --json summary: headline figures of the placement and where the files are."""
+    p, m = result.placement, result.metrics
+    return {"scene": result.scene.name, "solver": p.solver, "status": p.status, "budget": int(result.problem.budget),
+            "n_cameras": int(len(p.selected)), "cost": float(p.objective),
+            "bound": None if p.bound is None else float(p.bound), "gap": p.gap,
+            "coverage_gap": m.coverage_gap, "non_triangulatable_pct": m.non_triangulatable_pct,
+            "coverage_histogram": m.coverage_histogram, "regions": m.regions,
+            "timings_s": {k: round(float(v), 4) for k, v in result.timings_s.items()},
+            "out_dir": str(out_dir), "files": {k: str(v) for k, v in sorted(paths.items())}}
+
+
 def _summary(result, out_dir: Path, repeatable: bool = False) -> None:
     from camplace.report import write_outputs
 
+    import time
+
     p, m = result.placement, result.metrics
+    t0 = time.perf_counter()
     paths = write_outputs(out_dir, result.scene.name, result.visibility, p, result.problem.budget, m,
-                          result.timings_s, repeatable=repeatable)
+                          result.timings_s, repeatable=repeatable, scene=result.scene)
+    result.timings_s["report"] = time.perf_counter() - t0
     for line in result.log:
         if line.startswith("warning:"):
             console.print(f"[yellow]{escape(line)}[/yellow]", soft_wrap=True)
         elif not _state["quiet"]:
             console.print(f"[dim]{escape(line)}[/dim]")
+    if _state["verbose"]:
+        for k, v in p.info.items():
+            if isinstance(v, (int, float, str, bool)) or v is None:
+                console.print(f"[dim]solver {escape(str(k))}: {escape(str(v))}[/dim]")
+        groups: dict[str, list[str]] = {}
+        for name in sorted(paths):
+            groups.setdefault(name.split("/")[0] + "/" if "/" in name else name, []).append(name)
+        for key, names in groups.items():
+            where = out_dir / key if key.endswith("/") else paths[key]
+            more = f" ({len(names)} files)" if key.endswith("/") else ""
+            console.print(f"[dim]wrote {escape(str(where))}{more}[/dim]")
+    if _state["json"]:
+        typer.echo(json.dumps(_json_summary(result, out_dir, paths), indent=2))
+        return
     if _state["quiet"]:
         typer.echo(str(out_dir))
         return
@@ -116,6 +167,8 @@ def _summary(result, out_dir: Path, repeatable: bool = False) -> None:
                                      f"non-tri {r['non_triangulatable_pct']:.1f} %")
     t.add_row("timings (s)", ", ".join(f"{k} {v:.2f}" for k, v in result.timings_s.items()))
     t.add_row("outputs", str(out_dir))
+    if "report.html" in paths:
+        t.add_row("report", str(paths["report.html"]))
     Console().print(t)
 
 
@@ -164,7 +217,8 @@ def _run(scene: str, budget: Optional[int], solver: Optional[str], out: Optional
     stop = _StopFlag()
     with stop.installed():  # first Ctrl-C: finish with the best placement so far; second: abort
         with _progress() as prog:
-            result = run(scene, budget=budget, solver=solver, progress=_RichProgress(prog, stop),
+            bars = _RichProgress(prog, stop)
+            result = run(scene, budget=budget, solver=solver, progress=bars, on_incumbent=bars.incumbent,
                          time_limit_s=time_limit, should_stop=stop, require_feasible=require_feasible,
                          max_memory_bytes=None if max_memory_gb is None else int(max_memory_gb * 1024**3), **scale)
         out_dir = out or Path("camplace-out") / result.scene.name
@@ -210,21 +264,233 @@ def demo(out: Optional[Path] = typer.Option(None, "--out", help="Output folder (
          **_scale_options(workers, scheduler, cache, no_cache))
 
 
+_CLOUD_OPT = typer.Option(None, "--cloud", help="Build the scene from this scan alone (PLY, PCD, XYZ/CSV, LAS/LAZ).")
+_SAVE_SCENE_OPT = typer.Option(None, "--save-scene", help="With --cloud: also write the scene built from the scan (YAML).")
+_UP_OPT = typer.Option("+z", "--up", help="With --cloud: the scan's up axis (+z; phone scans are often +y).")
+_NO_LEVEL_OPT = typer.Option(False, "--no-level-floor", help="With --cloud: keep the scan's frame (no RANSAC floor levelling).")
+_CROP_OPT = typer.Option(None, "--crop", help="With --cloud: keep points in the box 'xmin,ymin,zmin,xmax,ymax,zmax' (m, levelled frame).")
+_DOWNSAMPLE_OPT = typer.Option(0.02, "--downsample", help="With --cloud: voxel downsampling edge (m, 0 = off).")
+_HEIGHTS_OPT = typer.Option("0.5,1.0,1.5", "--heights", help="With --cloud: walkable target heights (m, comma-separated).")
+_COVERAGE_OPT = typer.Option(2, "--coverage", min=0, help="With --cloud: cameras required per walkable target.")
+_WALL_MOUNTS_OPT = typer.Option(None, "--wall-mounts", help="With --cloud: also mount on the walls at this height (m).")
+
+
 @app.command("run")
-def run_cmd(scene: str = typer.Argument(..., help="Scene YAML file or built-in name (demo, standard-store, store-a, warehouse[:AREA_M2])."),
+def run_cmd(scene: Optional[str] = typer.Argument(None, help="Scene YAML file or built-in name (demo, standard-store, store-a, warehouse[:AREA_M2]); or give --cloud."),
+            cloud: Optional[Path] = _CLOUD_OPT, save_scene: Optional[Path] = _SAVE_SCENE_OPT, up: str = _UP_OPT,
+            no_level_floor: bool = _NO_LEVEL_OPT, crop: Optional[str] = _CROP_OPT,
+            downsample: float = _DOWNSAMPLE_OPT, heights: str = _HEIGHTS_OPT, coverage: int = _COVERAGE_OPT,
+            wall_mounts: Optional[float] = _WALL_MOUNTS_OPT,
             budget: Optional[int] = typer.Option(None, "--budget", help="Number of cameras N_s (default: the scene's)."),
             solver: Optional[str] = typer.Option(None, "--solver", help="Solver (default: the scene's)."),
             out: Optional[Path] = typer.Option(None, "--out", help="Output folder (default camplace-out/<scene>)."),
             workers: int = _WORKERS_OPT, scheduler: Optional[str] = _SCHEDULER_OPT,
             cache: Optional[Path] = _CACHE_OPT, no_cache: bool = _NO_CACHE_OPT,
             time_limit: Optional[float] = _TIME_LIMIT_OPT, require_feasible: bool = _REQUIRE_FEASIBLE_OPT,
-            max_memory_gb: Optional[float] = _MAX_MEMORY_OPT, repeatable: bool = _REPEATABLE_OPT) -> None:
+            max_memory_gb: Optional[float] = _MAX_MEMORY_OPT, repeatable: bool = _REPEATABLE_OPT,
+            visibility: str = typer.Option("voxel", "--visibility",
+                                           help="Visibility mode: voxel (fast, centre test) or pixel (per-pixel rays)."),
+            stride: Optional[int] = typer.Option(None, "--stride", help="Pixel mode: one ray per STRIDE x STRIDE pixels."),
+            probe: Optional[float] = typer.Option(None, "--probe", help="Pixel mode: part of the voxel a ray must cross "
+                                                                         "(1 = any part, the paper's rule; 0 = centre)."),
+            local_search: bool = typer.Option(False, "--local-search", help="Greedy: 1-swap local search afterwards."),
+            threads: Optional[int] = typer.Option(None, "--threads", min=1, help="Solver threads (MIP solvers).")) -> None:
     """Run the whole pipeline on a scene and write placement.json, metrics.json, visibility.npz.
 
     Ctrl-C during the solve writes the best placement found so far (status 'interrupted',
-    exit code 130); a second Ctrl-C aborts without writing."""
+    exit code 130); a second Ctrl-C aborts without writing.
+
+    With --cloud SCAN (PLY/PCD/XYZ/CSV/LAS/LAZ) the scene is built from the scan alone:
+    floor levelled to z = 0, ceiling and footprint detected, walkable volume targets at
+    --heights, a 1 m ceiling grid (and wall mounts with --wall-mounts), the default camera
+    (docs/scan-to-mount-list.md); --save-scene writes that scene as YAML to edit."""
+    if cloud is not None:
+        scene = _scene_from_cloud(scene, cloud, save_scene, up, no_level_floor, crop, downsample, heights,
+                                  coverage, wall_mounts, budget)
+    elif scene is None:
+        raise CamplaceInputErrorProxy("run: give a scene (YAML file or built-in name) or --cloud SCAN")
     _run(scene, budget, solver, out, time_limit, require_feasible, max_memory_gb, repeatable,
-         **_scale_options(workers, scheduler, cache, no_cache))
+         **_scale_options(workers, scheduler, cache, no_cache), visibility_mode=visibility, stride=stride, probe=probe,
+         **({"local_search": True} if local_search else {}), **({"threads": threads} if threads else {}))
+
+
+@app.command()
+def bench(scene: str = typer.Argument(..., help="Scene YAML file or built-in name."),
+          budgets: str = typer.Option("20,30,40,50,60,80", "--budgets", help="Comma-separated camera budgets N_s."),
+          methods: str = typer.Option(",".join(("greedy", "mip", "paper-mip", "zhao", "horster")), "--methods",
+                                      help="Comma-separated solvers (greedy+ls = greedy with 1-swap)."),
+          time_limit: float = typer.Option(60.0, "--time-limit", help="Time limit per solver run, seconds."),
+          threads: Optional[int] = typer.Option(None, "--threads", min=1, help="Solver threads."),
+          targets: str = typer.Option("volume", "--targets", help="volume (the paper's walkable grid) or all."),
+          out: Optional[Path] = typer.Option(None, "--out", help="Output folder (default camplace-out/bench-<scene>).")) -> None:
+    """The paper's experiments: every method at every budget on the same V; writes bench.csv,
+    bench.md (beside the paper's Tables I/II) and bench.png (gap and % non-triangulatable)."""
+    from camplace.bench import parse_budgets, run_bench, write_bench
+
+    _check_options(None, time_limit, None, out)
+    budget_list = parse_budgets(budgets)
+    method_list = [m.strip() for m in methods.split(",") if m.strip()]
+    out_dir = out or Path("camplace-out") / f"bench-{Path(scene).stem}"
+    stop = _StopFlag()
+    with stop.installed(), _progress() as prog:
+        name, info, rows = run_bench(scene, budget_list, method_list, time_limit_s=time_limit, threads=threads,
+                                     targets=targets, progress=_RichProgress(prog, stop), should_stop=stop,
+                                     on_row=lambda rows: write_bench(out_dir, Path(scene).stem, {}, rows))
+    paths = write_bench(out_dir, name, info, rows)
+    if not _state["quiet"]:
+        typer.echo((out_dir / "bench.md").read_text())
+    for p in paths.values():
+        console.print(f"wrote {escape(str(p))}", highlight=False)
+
+
+@app.command("evaluate")
+def evaluate_cmd(scene: str = typer.Argument(..., help="Scene YAML file or built-in name."),
+                 placement: Path = typer.Argument(..., help="placement.json, or a mount-list CSV with header "
+                                                  "id,x,y,z,yaw,pitch,roll,lens (by camplace, by hand or another tool)."),
+                 out: Optional[Path] = typer.Option(None, "--out", help="Output folder (default "
+                                                    "camplace-out/<scene>-evaluated)."),
+                 workers: int = _WORKERS_OPT, scheduler: Optional[str] = _SCHEDULER_OPT,
+                 max_memory_gb: Optional[float] = _MAX_MEMORY_OPT, repeatable: bool = _REPEATABLE_OPT) -> None:
+    """Score a given placement on a scene with the same metrics as a run.
+
+    The poses are raycast afresh (they need not be grid candidates) and written as a run
+    with solver 'file': placement.json, metrics.json, visibility.npz (row i = pose i),
+    placement.csv, report.html, figures and exports."""
+    from camplace.evaluate import evaluate
+
+    _check_options(None, None, max_memory_gb, out)
+    repeatable = repeatable or os.environ.get("CAMPLACE_REPEATABLE", "") not in ("", "0")
+    with _progress() as prog:
+        result = evaluate(scene, placement, progress=_RichProgress(prog), workers=workers, scheduler=scheduler or None,
+                          max_memory_bytes=None if max_memory_gb is None else int(max_memory_gb * 1024**3))
+    _summary(result, out or Path("camplace-out") / f"{result.scene.name}-evaluated", repeatable)
+
+
+@app.command("compare-visibility")
+def compare_visibility_cmd(
+        scene: str = typer.Argument(..., help="Scene YAML file or built-in name."),
+        stride: Optional[int] = typer.Option(None, "--stride", help="Pixel mode: one ray per STRIDE x STRIDE pixels "
+                                                                    "(default: camplace.visibility_pixel.DEFAULT_STRIDE)."),
+        probe: float = typer.Option(0.0, "--probe", help="Pixel mode probe: 0 = target centre in a ray's footprint "
+                                                         "(like voxel mode), 1 = any part of the voxel (the paper)."),
+        budget: Optional[int] = typer.Option(None, "--budget", help="N_s for the coverage-gap comparison (default: the scene's)."),
+        json_out: Optional[Path] = typer.Option(None, "--json", help="Also write the figures to this JSON file.")) -> None:
+    """Agreement of voxel and pixel visibility: shared V entries and the effect on the coverage gap."""
+    from camplace.compare import compare_visibility
+    from camplace.files import atomic_write_json
+
+    with _progress() as prog:
+        a = compare_visibility(scene, stride=stride, probe=probe, budget=budget, progress=_RichProgress(prog))
+    if json_out is not None:
+        atomic_write_json(json_out, a.to_dict())
+    t = Table(title=f"voxel vs pixel visibility - {a.scene} (stride {a.stride}, probe {a.probe:g})", show_header=False)
+    t.add_row("V entries", f"voxel {a.nnz_voxel}, pixel {a.nnz_pixel}, shared {a.shared}")
+    t.add_row("agreement", f"Jaccard {100 * a.jaccard:.2f} %, voxel in pixel {100 * a.voxel_in_pixel:.2f} %, "
+                           f"pixel in voxel {100 * a.pixel_in_voxel:.2f} %")
+    for name, r in a.regions.items():
+        t.add_row(f"  region {name}", f"Jaccard {100 * r['jaccard']:.2f} % ({r['nnz_voxel']} / {r['nnz_pixel']})")
+    for solved, row in a.gap.items():
+        t.add_row(f"gap, {a.solver} on {solved} V", ", ".join(f"scored on {k}: {v:.4f}" for k, v in row.items()))
+    t.add_row("time (s)", f"voxel {a.seconds['voxel']:.2f}, pixel {a.seconds['pixel']:.2f} "
+                          f"({a.rays} rays, {a.rays_per_s / 1e6:.2f} M rays/s)")
+    Console().print(t)
+
+
+@app.command()
+def render(scene: str = typer.Argument(..., help="Scene YAML file or built-in name."),
+           camera: int = typer.Option(..., "--camera", help="Candidate id (row of V), or with --placement the "
+                                                            "index of the camera in that file."),
+           placement: Optional[Path] = typer.Option(None, "--placement", help="placement.json or mount-list CSV."),
+           out: Optional[Path] = typer.Option(None, "--out", help="PNG to write (default camplace-out/<scene>/view-<ID>.png)."),
+           width: int = typer.Option(480, "--width", help="Rendered image width in pixels (same field of view).")) -> None:
+    """Draw the synthetic image a camera sees (depth-shaded, obstacles coloured, covered targets) and its footprint."""
+    from camplace.render import render_camera
+
+    if width < 2:
+        raise CamplaceInputErrorProxy(f"--width: expected at least 2 pixels, got {width}")
+    if out is None:
+        from camplace.builtin import resolve_scene
+
+        out = Path("camplace-out") / resolve_scene(scene)[0].name / f"view-{camera}.png"
+    path, _, info = render_camera(scene, camera, placement, out, width)
+    if not _state["quiet"]:
+        console.print(f"[dim]{info['camera']} at {info['position']}, covers {info['covered']} targets[/dim]")
+    typer.echo(str(path))
+
+
+def _floats(text: str, option: str, n: int | None = None) -> list[float]:
+    try:
+        vals = [float(v) for v in text.replace(";", ",").split(",") if v.strip()]
+    except ValueError:
+        raise CamplaceInputErrorProxy(f"{option}: expected comma-separated numbers, got '{text}'") from None
+    if n is not None and len(vals) != n:
+        raise CamplaceInputErrorProxy(f"{option}: expected {n} comma-separated numbers, got '{text}'")
+    return vals
+
+
+def _scene_from_cloud(scene, cloud, save_scene, up, no_level_floor, crop, downsample, heights, coverage,
+                      wall_mounts, budget):
+    from camplace.config import parse_scene
+    from camplace.freespace import scene_from_cloud
+
+    if scene is not None:
+        raise CamplaceInputErrorProxy("run: give either a scene or --cloud, not both")
+    if up not in ("+x", "-x", "+y", "-y", "+z", "-z"):
+        raise CamplaceInputErrorProxy(f"--up: expected one of +x -x +y -y +z -z, got '{up}'")
+    box = _floats(crop, "--crop", 6) if crop else None
+    data, rep = scene_from_cloud(
+        str(cloud), level_floor=not no_level_floor, up=up, crop=(box[:3], box[3:]) if box else None,
+        downsample=downsample or None, heights=_floats(heights, "--heights"), coverage=coverage,
+        budget=budget if budget is not None else 20, wall_mount_height=wall_mounts)
+    if not _state["quiet"]:
+        console.print(f"[dim]scan: {rep['points']:,} points after clean-up; floor levelled, ceiling "
+                      f"{rep['height_m']} m above it, footprint {rep['floor_area_m2']} m² "
+                      f"({rep['footprint_vertices']} corners), {rep['viewpoints']} scanner viewpoint(s)[/dim]")
+    if save_scene is not None:
+        import yaml
+
+        from camplace.files import atomic_write_text
+
+        atomic_write_text(save_scene, "# camplace scene built from a scan (camplace run --cloud); edit and rerun\n"
+                          + yaml.safe_dump(data, sort_keys=False, default_flow_style=None))
+        console.print(f"[dim]wrote {escape(str(save_scene))}[/dim]")
+    return parse_scene(data, f"--cloud {cloud}")
+
+
+@app.command()
+def scan(scene: str = typer.Argument(..., help="Built-in scene name or YAML file with box obstacles."),
+         out: Path = typer.Option(..., "--out", help="Output: .ply, .pcd, .xyz, .csv, .las or .laz (point cloud); "
+                                                     ".obj, .stl, .glb, .off (mesh of the boxes); .bt or .ot (OctoMap)."),
+         noise: float = typer.Option(0.01, "--noise", min=0.0, help="Range noise (standard deviation, m)."),
+         step: float = typer.Option(0.4, "--step", min=0.05, help="Angular step of the scanner (degrees)."),
+         viewpoints: Optional[int] = typer.Option(None, "--viewpoints", min=1,
+                                                  help="Scanner positions (default: enough to see 99 % of the floor)."),
+         height: float = typer.Option(1.6, "--height", help="Scanner height above the floor (m)."),
+         seed: int = typer.Option(0, "--seed", help="Noise seed.")) -> None:
+    """Write a synthetic scan of a box scene (rays from a few viewpoints, range noise,
+    occlusion), or export the scene as a mesh / OctoMap - test data with no outside files."""
+    from camplace.builtin import resolve_scene
+    from camplace.loaders.pointcloud import write_point_cloud
+    from camplace.scene import build_scene
+    from camplace.synthetic_scan import export_mesh, export_octomap, scan_cli_summary, scan_scene
+
+    spec, base, src = resolve_scene(scene)
+    sc = build_scene(spec, base, src)
+    suf = out.suffix.lower()
+    if suf in (".obj", ".stl", ".glb", ".off"):
+        export_mesh(sc, out)
+        what = "mesh of the occluding boxes"
+    elif suf in (".bt", ".ot"):
+        export_octomap(sc, out)
+        what = f"OctoMap of the occupancy grid ({sc.occupancy.resolution} m)"
+    else:
+        cloud = scan_scene(sc, n_viewpoints=viewpoints, height=height, step_deg=step, noise=noise, seed=seed)
+        write_point_cloud(out, cloud.points, cloud.viewpoints)
+        what = scan_cli_summary(cloud)
+    if _state["quiet"]:
+        typer.echo(str(out))
+    else:
+        console.print(f"wrote {escape(str(out))}: {what}")
 
 
 @app.command()

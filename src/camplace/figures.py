@@ -101,51 +101,69 @@ def coverage_slices(view: SceneView, positions: np.ndarray, is_surface: np.ndarr
 def _png(fig) -> bytes:
     from matplotlib.backends.backend_agg import FigureCanvasAgg
 
-    FigureCanvasAgg(fig)
+    if not isinstance(fig.canvas, FigureCanvasAgg):
+        FigureCanvasAgg(fig)
     buf = io.BytesIO()
-    fig.savefig(buf, format="png", dpi=110)
+    fig.savefig(buf, format="png", dpi=110, pil_kwargs={"compress_level": 2})
     return buf.getvalue()
 
 
-def slice_figure_png(sl: CoverageSlice, view: SceneView, cameras: list[dict] = ()) -> bytes:
-    """PNG bytes of one coverage slice (obstacles hatched, cameras as arrows with ids)."""
+def slice_figures_png(slices: list[CoverageSlice], view: SceneView, cameras: list[dict] = ()) -> list[bytes]:
+    """PNG bytes of each coverage slice (obstacles hatched, cameras as arrows with ids).
+
+    One figure is built and only the per-height parts (image, obstacles, legend, title)
+    change between slices: several times faster than a figure per slice."""
     from matplotlib.colors import BoundaryNorm, ListedColormap
     from matplotlib.figure import Figure
     from matplotlib.patches import Patch, Polygon, Rectangle
 
+    if not slices:
+        return []
     v = view.voxel_size
     fp = np.asarray(view.footprint, float)
     w, h = np.ptp(fp[:, 0]), np.ptp(fp[:, 1])
     fig = Figure(figsize=(min(12.0, 2.0 + 7.5 * w / max(w, h)) + 1.8, min(10.0, 1.2 + 7.5 * h / max(w, h))))
     ax = fig.add_subplot(1, 1, 1)
-    cls = np.where(np.isnan(sl.coverage), np.nan, np.minimum(sl.coverage, 3))
     cmap = ListedColormap([c for _, c in COVERAGE_CLASSES]).with_extremes(bad=(0.0, 0.0, 0.0, 0.0))
-    ax.imshow(np.ma.masked_invalid(cls), origin="lower", cmap=cmap, norm=BoundaryNorm([-0.5, 0.5, 1.5, 2.5, 3.5], 4),
-              extent=(sl.x[0] - v / 2, sl.x[-1] + v / 2, sl.y[0] - v / 2, sl.y[-1] + v / 2), interpolation="nearest")
+    sl0 = slices[0]
+    im = ax.imshow(np.ma.masked_invalid(sl0.coverage), origin="lower", cmap=cmap,
+                   norm=BoundaryNorm([-0.5, 0.5, 1.5, 2.5, 3.5], 4), interpolation="nearest",
+                   extent=(sl0.x[0] - v / 2, sl0.x[-1] + v / 2, sl0.y[0] - v / 2, sl0.y[-1] + v / 2))
     ax.add_patch(Polygon(fp, closed=True, fill=False, edgecolor="black", linewidth=1.2))
-    for _, x0, y0, x1, y1 in sl.boxes:
-        ax.add_patch(Rectangle((x0, y0), x1 - x0, y1 - y0, facecolor="#bdbdbd", edgecolor="#555555", hatch="//",
-                               linewidth=0.8))
     if cameras:
         pos = np.array([c["position"] for c in cameras], float)
         fwd = np.array([np.asarray(c["rotation"], float)[:2, 2] for c in cameras])
         fwd /= np.maximum(np.linalg.norm(fwd, axis=1, keepdims=True), 1e-9)
         ax.quiver(pos[:, 0], pos[:, 1], fwd[:, 0], fwd[:, 1], angles="xy", scale_units="xy",
-                  scale=1.0 / (0.06 * max(w, h)), width=0.003, color="black")
-        ax.plot(pos[:, 0], pos[:, 1], "o", color="black", markersize=3)
+                  scale=1.0 / (0.06 * max(w, h)), width=0.003, color="black", zorder=3)
+        ax.plot(pos[:, 0], pos[:, 1], "o", color="black", markersize=3, zorder=3)
         for cam, (x, y) in zip(cameras, pos[:, :2]):
             ax.text(x, y, f" {cam.get('candidate_id', '')}", fontsize=6, color="black", va="bottom", clip_on=False)
-    counts = np.bincount(cls[~np.isnan(cls)].astype(np.int64), minlength=4)
-    ax.legend(handles=[Patch(color=c, label=f"{lab}: {n}") for (lab, c), n in zip(COVERAGE_CLASSES, counts)],
-              title="cameras seeing", loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8, title_fontsize=8)
     ax.set_xlim(fp[:, 0].min() - 0.2, fp[:, 0].max() + 0.2)
     ax.set_ylim(fp[:, 1].min() - 0.2, fp[:, 1].max() + 0.2)
     ax.set_aspect("equal")
     ax.set_xlabel("x (m)")
     ax.set_ylabel("y (m)")
-    ax.set_title(f"{view.name}: coverage at z = {sl.height:.2f} m")
     fig.subplots_adjust(left=0.07, right=0.80, bottom=0.08, top=0.93)
-    return _png(fig)
+    out = []
+    for sl in slices:
+        cls = np.where(np.isnan(sl.coverage), np.nan, np.minimum(sl.coverage, 3))
+        im.set_data(np.ma.masked_invalid(cls))
+        boxes = [ax.add_patch(Rectangle((x0, y0), x1 - x0, y1 - y0, facecolor="#bdbdbd", edgecolor="#555555",
+                                        hatch="//", linewidth=0.8, zorder=2)) for _, x0, y0, x1, y1 in sl.boxes]
+        counts = np.bincount(cls[~np.isnan(cls)].astype(np.int64), minlength=4)
+        ax.legend(handles=[Patch(color=c, label=f"{lab}: {n}") for (lab, c), n in zip(COVERAGE_CLASSES, counts)],
+                  title="cameras seeing", loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8, title_fontsize=8)
+        ax.set_title(f"{view.name}: coverage at z = {sl.height:.2f} m")
+        out.append(_png(fig))
+        for b in boxes:
+            b.remove()
+    return out
+
+
+def slice_figure_png(sl: CoverageSlice, view: SceneView, cameras: list[dict] = ()) -> bytes:
+    """PNG bytes of one coverage slice."""
+    return slice_figures_png([sl], view, cameras)[0]
 
 
 def histogram_figure_png(histograms: dict[str, dict[str, int]], gammas: dict[str, int] | None = None,
@@ -191,9 +209,8 @@ def write_figures(out_dir: str | Path, view: SceneView, positions: np.ndarray, i
     for stale in out.glob("coverage_slice_z*m.png"):  # heights of an earlier run into the same folder
         if stale.name not in names:
             stale.unlink()
-    for s in slices:
-        paths[slice_png_name(s.height)] = atomic_write_bytes(out / slice_png_name(s.height),
-                                                             slice_figure_png(s, view, cameras))
+    for s, png in zip(slices, slice_figures_png(slices, view, cameras)):
+        paths[slice_png_name(s.height)] = atomic_write_bytes(out / slice_png_name(s.height), png)
     paths["coverage_histogram.png"] = atomic_write_bytes(
         out / "coverage_histogram.png", histogram_figure_png(histograms, gammas, f"{view.name}: coverage histogram"))
     return paths

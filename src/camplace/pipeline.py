@@ -23,7 +23,7 @@ from camplace.metrics import Metrics, compute_metrics
 from camplace.problem import PlacementProblem
 from camplace.scene import Scene, build_scene
 from camplace.solvers import Placement, solve
-from camplace.targets import build_targets
+from camplace.targets import Targets, build_targets
 from camplace.distributed import make_executor
 from camplace.visibility import Visibility, compute_visibility, drop_blind_candidates
 
@@ -49,8 +49,13 @@ def _stage(progress: Progress | None, name: str) -> None:
 def prepare(scene: str | Path | SceneSpec, progress: Progress | None = None,
             timings: dict | None = None, log: list | None = None, *, should_stop: Callable[[], bool] | None = None,
             max_memory_bytes: int | None = None, require_feasible: bool = False, workers: int = 1,
-            scheduler: str | None = None, cache_dir: str | Path | None = None) -> tuple[Scene, Visibility]:
+            scheduler: str | None = None, cache_dir: str | Path | None = None, visibility_mode: str = "voxel",
+            stride: int | None = None, probe: float | None = None) -> tuple[Scene, Visibility]:
     """Scene, targets, candidates and visibility (blind candidates dropped).
+
+    ``visibility_mode``: ``voxel`` (default, centre test per target) or ``pixel`` (the
+    paper's per-pixel raycasting, camplace.visibility_pixel, one ray per ``stride`` x
+    ``stride`` pixels, ``probe`` = part of the voxel a ray must cross).
 
     Visibility chunks run on a Dask cluster when ``scheduler`` (``tcp://host:port``, or
     env CAMPLACE_SCHEDULER) is given, on ``workers`` local processes when > 1, else
@@ -63,27 +68,25 @@ def prepare(scene: str | Path | SceneSpec, progress: Progress | None = None,
     ``should_stop()`` polled between visibility chunks raises camplace.errors.Interrupted."""
     timings = {} if timings is None else timings
     log = [] if log is None else log
-    spec, base_dir, source = resolve_scene(scene)
-    check_resources(spec, source, max_memory_bytes)
     if should_stop is not None:
         progress = _stoppable(progress, should_stop)
-    t = time.perf_counter()
-    _stage(progress, "scene")
-    sc = build_scene(spec, base_dir, source, progress=progress)
-    timings["scene"] = time.perf_counter() - t
-    t = time.perf_counter()
-    _stage(progress, "targets")
-    targets = build_targets(sc)
-    timings["targets"] = time.perf_counter() - t
+    sc, targets, cameras, source = scene_inputs(scene, progress, timings, max_memory_bytes)
     t = time.perf_counter()
     _stage(progress, "candidates")
-    cameras: dict[str, CameraModel] = {c.name: camera_from_spec(c) for c in spec.cameras}
     cands = build_candidates(sc, cameras)
     timings["candidates"] = time.perf_counter() - t
     t = time.perf_counter()
-    with make_executor(workers, scheduler) as executor:
-        vis = compute_visibility(sc.occupancy, targets, cands, progress=progress, executor=executor,
-                                 cache_dir=cache_dir)
+    if visibility_mode == "pixel":
+        from camplace.visibility_pixel import DEFAULT_PROBE, compute_pixel_visibility
+
+        vis = compute_pixel_visibility(sc.occupancy, targets, cands, sc.spec.voxel_size, stride=stride,
+                                       probe=DEFAULT_PROBE if probe is None else probe, progress=progress)
+    elif visibility_mode == "voxel":
+        with make_executor(workers, scheduler) as executor:
+            vis = compute_visibility(sc.occupancy, targets, cands, progress=progress, executor=executor,
+                                     cache_dir=cache_dir)
+    else:
+        raise InputError(f"visibility mode: expected 'voxel' or 'pixel', got {visibility_mode!r}")
     vis = drop_blind_candidates(vis)
     timings["visibility"] = time.perf_counter() - t
     log.append(f"candidates: {cands.info['generated']} generated, {cands.info['dropped_inside_obstacle']} inside "
@@ -105,6 +108,26 @@ def prepare(scene: str | Path | SceneSpec, progress: Progress | None = None,
             raise InputError(f"{source}: targets: {msg} (--require-feasible)")
         log.append(f"warning: {msg}")
     return sc, vis
+
+
+def scene_inputs(scene: str | Path | SceneSpec, progress: Progress | None = None, timings: dict | None = None,
+                 max_memory_bytes: int | None = None) -> tuple[Scene, Targets, dict[str, CameraModel], str]:
+    """The stages before candidates: the scene (occupancy), its targets, its camera
+    models by name and the scene's source label (for messages); shared by ``prepare``
+    and camplace.evaluate."""
+    timings = {} if timings is None else timings
+    spec, base_dir, source = resolve_scene(scene)
+    check_resources(spec, source, max_memory_bytes)
+    t = time.perf_counter()
+    _stage(progress, "scene")
+    sc = build_scene(spec, base_dir, source, progress=progress)
+    timings["scene"] = time.perf_counter() - t
+    t = time.perf_counter()
+    _stage(progress, "targets")
+    targets = build_targets(sc)
+    timings["targets"] = time.perf_counter() - t
+    cameras: dict[str, CameraModel] = {c.name: camera_from_spec(c, base_dir) for c in spec.cameras}
+    return sc, targets, cameras, source
 
 
 def _stoppable(progress: Progress | None, should_stop: Callable[[], bool]) -> Progress:
@@ -200,7 +223,8 @@ def run(scene: str | Path | SceneSpec, budget: int | None = None, solver: str | 
         progress: Progress | None = None, *, time_limit_s: float | None = None,
         should_stop: Callable[[], bool] | None = None, max_memory_bytes: int | None = None,
         require_feasible: bool = False, workers: int = 1, scheduler: str | None = None,
-        cache_dir: str | Path | None = None, **solver_options) -> RunResult:
+        cache_dir: str | Path | None = None, visibility_mode: str = "voxel", stride: int | None = None,
+        probe: float | None = None, **solver_options) -> RunResult:
     """Run every stage on a scene (built-in name, YAML path or spec).
 
     budget / solver / time_limit_s default to the scene's ``placement`` keys. The solver
@@ -219,12 +243,15 @@ def run(scene: str | Path | SceneSpec, budget: int | None = None, solver: str | 
     if time_limit_s is not None and not (time_limit_s > 0 and np.isfinite(time_limit_s)):
         raise InputError(f"time limit: expected a positive number of seconds, got {time_limit_s!r}")
     sc, vis = prepare(scene, progress, timings, log, should_stop=should_stop, max_memory_bytes=max_memory_bytes,
-                      require_feasible=require_feasible, workers=workers, scheduler=scheduler, cache_dir=cache_dir)
+                      require_feasible=require_feasible, workers=workers, scheduler=scheduler, cache_dir=cache_dir,
+                      visibility_mode=visibility_mode, stride=stride, probe=probe)
     budget = sc.spec.placement.budget if budget is None else budget
     solver = sc.spec.placement.solver if solver is None else solver
     solver_options.setdefault("time_limit_s", sc.spec.placement.time_limit_s if time_limit_s is None else time_limit_s)
     if should_stop is not None:
         solver_options.setdefault("should_stop", should_stop)
+    if progress is not None:
+        solver_options.setdefault("progress", progress)  # solver stages (greedy, tabu, mip, ...) as bars
     problem = problem_from_visibility(vis, budget)
     t = time.perf_counter()
     _stage(progress, "solve")
