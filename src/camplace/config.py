@@ -669,16 +669,53 @@ def parse_scene(data: Any, source: str = "<scene>") -> SceneSpec:
         raise InputError(format_validation_error(err, source, SceneSpec)) from None
 
 
+class _UniqueKeyLoader(yaml.SafeLoader):
+    """yaml.SafeLoader that refuses a key given twice in one mapping (PyYAML keeps the last)."""
+
+
+def _construct_unique_mapping(loader: _UniqueKeyLoader, node: yaml.MappingNode, deep: bool = False) -> dict:
+    seen: dict[Any, int] = {}
+    for key_node, _ in node.value:
+        key = loader.construct_object(key_node, deep=deep)
+        try:
+            if key in seen:
+                raise yaml.constructor.ConstructorError(
+                    None, None, f"key '{key}' appears twice in one mapping (first on line {seen[key] + 1})",
+                    key_node.start_mark)
+            seen[key] = key_node.start_mark.line
+        except TypeError:  # unhashable key: let the default constructor complain
+            pass
+    return loader.construct_mapping(node, deep=deep)
+
+
+_UniqueKeyLoader.add_constructor(yaml.resolver.BaseResolver.DEFAULT_MAPPING_TAG, _construct_unique_mapping)
+
+
+def load_yaml_text(text: str, source: str) -> Any:
+    """Parse YAML (duplicate keys refused); errors are one line with line and column."""
+    try:
+        return yaml.load(text, Loader=_UniqueKeyLoader)  # noqa: S506 - a SafeLoader subclass
+    except yaml.YAMLError as err:
+        mark = getattr(err, "problem_mark", None)
+        problem = getattr(err, "problem", None) or str(err).strip().splitlines()[0]
+        where = f" at line {mark.line + 1}, column {mark.column + 1}" if mark is not None else ""
+        raise InputError(f"{source}: not valid YAML{where}: {problem}") from None
+
+
 def load_scene_file(path: str | Path) -> SceneSpec:
     """Read and validate a YAML scene file."""
     p = Path(path)
+    if p.is_dir():
+        raise InputError(f"{p}: is a folder; expected a YAML scene file")
     if not p.is_file():
         raise InputError(f"{p}: scene file not found")
     try:
-        data = yaml.safe_load(p.read_text())
-    except (yaml.YAMLError, UnicodeDecodeError) as err:
-        first = str(err).strip().splitlines()[0] if str(err).strip() else type(err).__name__
-        raise InputError(f"{p}: not valid YAML: {first}") from None
+        text = p.read_text(encoding="utf-8")
+    except UnicodeDecodeError:
+        raise InputError(f"{p}: not a text file (not UTF-8); expected a YAML scene file") from None
+    except OSError as err:
+        raise InputError(f"{p}: cannot read the scene file ({err.strerror})") from None
+    data = load_yaml_text(text, str(p))
     if data is None:
         raise InputError(f"{p}: the file is empty; expected a YAML mapping of scene keys")
     spec = parse_scene(data, str(p))

@@ -86,11 +86,14 @@ def check_grid_memory(shape: tuple[int, ...], bytes_per_cell: float, what: str, 
 def detect_floor_ceiling(points: np.ndarray, bin_m: float = 0.02, min_share: float = 0.2) -> dict:
     """Heights of the floor and ceiling of a z-up cloud (N, 3).
 
-    A horizontal plane is a peak of the z histogram. The floor is the lowest peak holding
+    A horizontal plane is a peak of the z histogram (of the cloud thinned to one point
+    per 5 cm voxel, so that counts follow area, not nearness to the scanner). The floor is the lowest peak holding
     at least ``min_share`` of the largest peak's points (in the lower half of the z
     range), the ceiling the highest such peak in the upper half (None if no peak there).
     Returns {"floor_z", "ceiling_z", "z_range"} in metres."""
-    z = np.asarray(points, float)[:, 2]
+    from camplace.loaders.pointcloud import voxel_downsample
+
+    z = voxel_downsample(np.asarray(points, float), 0.05)[:, 2]  # even density: counts ~ plane area
     lo, hi = np.quantile(z, 0.001), np.quantile(z, 0.999)
     if hi - lo < 4 * bin_m:
         return {"floor_z": float(lo), "ceiling_z": None, "z_range": [float(lo), float(hi)]}
@@ -227,7 +230,7 @@ def _ball(r: int) -> np.ndarray:
 
 
 def compute_free_space(occupied: np.ndarray, origin: np.ndarray, res: float, observed: np.ndarray | None = None,
-                       clearance: float = 0.1, floor_z: float = 0.0, connected_to_floor: bool = True,
+                       clearance: float = 0.05, floor_z: float = 0.0, connected_to_floor: bool = True,
                        min_floor_share: float = 0.5) -> FreeSpace:
     """Walkable free space of an occupancy grid.
 
@@ -320,6 +323,11 @@ def scene_free_space(grid, spec, loaded: list, progress=None):
         info["octomap_free_leaves"] = int(sum(len(lo.free_lo) for lo in free_leaves))
     fs = compute_free_space(occ, origin, res, observed, spec.free_space.clearance, 0.0,
                             spec.free_space.connected_to_floor)
+    if observed is not None and spec.free_space.unobserved_occludes:
+        # what no scanner saw (inside shelves, behind holes of a sparse shell) blocks sight lines
+        unseen = ~ndimage.binary_dilation(observed, structure=np.ones((3, 3, 3), bool))
+        info["unobserved_cells_occluding"] = int((unseen & ~occ).sum())
+        occ |= unseen
     if points is not None and len(points) > 100:
         info["scan_levels"] = detect_floor_ceiling(points)
     if observed is None:
@@ -378,3 +386,125 @@ def scan_surface_targets(scene, lo, hi) -> tuple[np.ndarray, np.ndarray]:
     nrm = np.where((score < 0)[:, None], -nrm, nrm)
     pos, keep = snap_outward(g, pos, nrm)
     return pos[keep], nrm[keep]
+
+
+# ------------------------------------------------------------------ a scene from just a scan
+
+DEFAULT_CAMERA = {"name": "wide", "model": "pinhole", "resolution": [1780, 720], "fov_deg": [71, 36],
+                  "max_range": 5.0}
+
+
+def scene_from_cloud(path: str, *, name: str | None = None, level_floor: bool = True, up: str = "+z",
+                     scale: float = 1.0, rotate_deg=(0.0, 0.0, 0.0), translate=(0.0, 0.0, 0.0),
+                     crop: tuple | None = None, downsample: float | None = 0.02,
+                     remove_outliers: bool = True, viewpoints: list | None = None,
+                     footprint: list | None = None, heights=(0.5, 1.0, 1.5), coverage: int = 2,
+                     budget: int = 20, wall_mount_height: float | None = None,
+                     progress=None) -> tuple[dict, dict]:
+    """A scene (as a scene-file mapping) from just a scan, with defaults: the scan levelled
+    (floor plane -> z = 0), floor and ceiling detected, footprint from the scan's wall band
+    (or given), walkable ``kind: volume`` targets at ``heights`` with ``coverage``, a 1 m
+    ceiling grid 0.1 m below the detected ceiling (wall mounts too with
+    ``wall_mount_height``), the default 71°x36° camera.
+
+    Returns (scene mapping, report: what was detected). The cloud path is stored
+    absolute, so the mapping can be used as is or saved next to anything."""
+    from pathlib import Path
+
+    from camplace.config import parse_scene
+    from camplace.loaders.obstacles import load_cloud_obstacle
+
+    p = Path(path).expanduser().resolve()
+    entry: dict = {"name": "scan", "point_cloud": str(p)}
+    tf: dict = {}
+    if downsample:
+        entry["downsample"] = float(downsample)
+    if remove_outliers:
+        entry["remove_outliers"] = {"neighbors": 16, "std_ratio": 2.0}
+    if viewpoints:
+        entry["viewpoints"] = [[float(v) for v in vp] for vp in viewpoints]
+
+    def _obstacle():
+        from camplace.config import Obstacle
+
+        e = dict(entry)
+        if tf:
+            e["transform"] = dict(tf)
+        if crop is not None:
+            e["crop"] = {"min": list(crop[0]), "max": list(crop[1])}
+        return Obstacle.model_validate(e)
+
+    # 1. the frame: user transform, then (optionally) the floor plane levelled, then the
+    # floor moved to z = 0 - folded into one explicit transform, so the scene is reproducible
+    from scipy.spatial.transform import Rotation
+
+    from camplace.loaders.cleanup import apply_matrix, level_floor_matrix, rigid_matrix
+    from camplace.loaders.pointcloud import load_point_cloud
+
+    try:
+        raw = load_point_cloud(p, downsample=0.05, progress=progress)
+    except InputError as err:
+        raise InputError(f"--cloud: {err}") from None
+    m = rigid_matrix(scale, rotate_deg, translate)
+    q = apply_matrix(raw.points, m)
+    level_info: dict = {}
+    if level_floor:
+        try:
+            ml, level_info = level_floor_matrix(q, up)
+        except ValueError:
+            raise InputError(f"--cloud {p}: no floor plane within 30° of '{up}' up; give --up or --no-level-floor") from None
+        m = ml @ m
+        q = apply_matrix(raw.points, m)
+    floor = detect_floor_ceiling(q)["floor_z"]
+    m[2, 3] -= floor
+    tf = {}
+    if scale != 1.0:
+        tf["scale"] = float(scale)
+    rot = m[:3, :3] / float(scale)
+    eul = Rotation.from_matrix(rot).as_euler("xyz", degrees=True)
+    if np.any(np.abs(eul) > 1e-6):
+        tf["rotate_deg"] = [round(float(v), 6) for v in eul]
+    if np.any(np.abs(m[:3, 3]) > 1e-9):
+        tf["translate"] = [round(float(v), 6) for v in m[:3, 3]]
+    # 2. the cleaned cloud in that frame (cached: building the scene reuses it)
+    cloud, steps = load_cloud_obstacle(_obstacle(), None, f"--cloud {p}", progress)
+    if level_info:
+        steps = [{"step": "level_floor", **level_info}, *steps]
+    levels = detect_floor_ceiling(cloud.points)
+    pts = cloud.points
+    ceiling = levels["ceiling_z"]
+    height = float(ceiling) if ceiling is not None else float(np.quantile(pts[:, 2], 0.999)) + 0.05
+    height = round(height, 3)
+    if height <= 0.5:
+        raise InputError(f"--cloud {p}: the scan is only {height:.2f} m high above its floor; is it z-up? "
+                         "(try --up +y for phone scans, or --no-level-floor)")
+    fp = np.asarray(footprint, float) if footprint is not None else auto_footprint(pts, 0.0, ceiling)
+    hs = [float(h) for h in heights if 0 < h < height - 0.1]
+    if not hs:
+        raise InputError(f"--cloud {p}: no target height below the detected ceiling ({height} m)")
+    mounts = [{"kind": "ceiling_grid", "camera": "wide", "spacing": 1.0, "offset_below_ceiling": 0.1,
+               "yaw_deg": {"start": 0, "stop": 330, "step": 30}, "pitch_deg": [30, 45, 60]}]
+    if wall_mount_height is not None:
+        mounts.append({"kind": "wall", "camera": "wide", "height": float(wall_mount_height), "spacing": 1.0,
+                       "pitch_deg": [20, 35, 50]})
+    e = dict(entry)
+    if tf:
+        e["transform"] = tf
+    if crop is not None:
+        e["crop"] = {"min": [float(v) for v in crop[0]], "max": [float(v) for v in crop[1]]}
+    data = {
+        "name": name or p.stem,
+        "voxel_size": 0.25,
+        "occupancy_resolution": 0.05,
+        "room": {"footprint": [[round(float(x), 3), round(float(y), 3)] for x, y in fp], "height": height},
+        "obstacles": [e],
+        "targets": [{"name": "walkable", "kind": "volume", "heights": hs, "coverage": int(coverage)}],
+        "cameras": [dict(DEFAULT_CAMERA)],
+        "mounts": mounts,
+        "placement": {"budget": int(budget), "solver": "greedy"},
+    }
+    parse_scene(data, f"--cloud {p}")  # validate now: errors name the option, not a YAML file
+    area = float(abs(np.dot(fp[:, 0], np.roll(fp[:, 1], 1)) - np.dot(fp[:, 1], np.roll(fp[:, 0], 1))) / 2)
+    report = {"points": len(pts), "cleanup": steps, "floor_z_in_file_frame": floor, "transform": tf, "ceiling_z": ceiling, "height_m": height,
+              "footprint_vertices": len(fp), "floor_area_m2": round(area, 2), "viewpoints": len(cloud.viewpoints)}
+    return data, report

@@ -23,6 +23,7 @@ from camplace.errors import InputError
 from camplace.loaders import Progress
 from camplace.loaders.pointcloud import PointCloud
 from camplace.scene import Scene
+from camplace.visibility import segment_clear
 
 
 @numba.njit(cache=True, parallel=True)
@@ -93,34 +94,61 @@ def scan_directions(step_deg: float) -> np.ndarray:
     return np.c_[(np.cos(E) * np.cos(A)).ravel(), (np.cos(E) * np.sin(A)).ravel(), np.sin(E).ravel()]
 
 
-def default_viewpoints(scene: Scene, count: int = 6, height: float = 1.6, clearance: float = 0.4) -> np.ndarray:
-    """``count`` scanner positions (K, 3) spread over the free floor (farthest-point
-    sampling of a 0.5 m lattice, starting nearest the footprint's centroid)."""
+@numba.njit(cache=True, parallel=True)
+def _seen_matrix(occ, origin, res, a, b):
+    """(len(a), len(b)) bool: segment a_i -> b_j meets no occupied cell."""
+    out = np.zeros((a.shape[0], b.shape[0]), np.bool_)
+    for i in numba.prange(a.shape[0]):
+        for j in range(b.shape[0]):
+            out[i, j] = segment_clear(occ, origin[0], origin[1], origin[2], res,
+                                      a[i, 0], a[i, 1], a[i, 2], b[j, 0], b[j, 1], b[j, 2])
+    return out
+
+
+def default_viewpoints(scene: Scene, count: int | None = None, height: float = 1.6, clearance: float = 0.4,
+                       floor_share: float = 0.99, max_count: int = 40) -> np.ndarray:
+    """Scanner positions (K, 3) at ``height`` on free floor, as a survey crew would place
+    them: greedily, each one seeing the most still-unseen floor (a 0.5 m lattice of points
+    0.5 m above the floor), until ``floor_share`` of it is seen (or ``count`` / ``max_count``
+    positions)."""
     poly = scene.polygon.buffer(-clearance)
     lo, hi = scene.footprint.min(0), scene.footprint.max(0)
     gx, gy = np.meshgrid(np.arange(lo[0] + 0.25, hi[0], 0.5), np.arange(lo[1] + 0.25, hi[1], 0.5), indexing="ij")
     xy = np.c_[gx.ravel(), gy.ravel()]
+    g = scene.occupancy
+    floor = np.c_[xy, np.full(len(xy), 0.5)]
+    floor = floor[~g.is_occupied(floor) & shapely.contains_xy(scene.polygon, floor[:, 0], floor[:, 1])]
     xy = xy[shapely.contains_xy(poly, xy[:, 0], xy[:, 1])]
     for bmin, bmax in scene.boxes.values():
         inside = np.all((xy >= bmin[:2] - clearance) & (xy <= bmax[:2] + clearance), axis=1)
         xy = xy[~inside]
-    if len(xy) == 0:
+    cand = np.c_[xy, np.full(len(xy), float(height))]
+    cand = cand[~g.is_occupied(cand)]
+    if len(cand) == 0 or len(floor) == 0:
         raise InputError(f"scene '{scene.name}': no free floor spot for a scanner viewpoint")
-    c = np.asarray(scene.polygon.centroid.coords[0])
-    chosen = [int(np.argmin(np.linalg.norm(xy - c, axis=1)))]
-    d = np.linalg.norm(xy - xy[chosen[0]], axis=1)
-    while len(chosen) < min(count, len(xy)):
-        k = int(np.argmax(d))
+    seen = _seen_matrix(g.occupied.view(np.uint8), g.origin.astype(np.float64), float(g.resolution),
+                        np.ascontiguousarray(cand), np.ascontiguousarray(floor))
+    covered = np.zeros(len(floor), dtype=bool)
+    chosen: list[int] = []
+    limit = count if count is not None else max_count
+    while len(chosen) < limit:
+        gain = (seen & ~covered).sum(axis=1)
+        k = int(np.argmax(gain))
+        if gain[k] == 0 and count is None:
+            break
         chosen.append(k)
-        d = np.minimum(d, np.linalg.norm(xy - xy[k], axis=1))
-    return np.c_[xy[chosen], np.full(len(chosen), float(height))]
+        covered |= seen[k]
+        if count is None and covered.mean() >= floor_share:
+            break
+    return cand[chosen]
 
 
-def scan_scene(scene: Scene, viewpoints: np.ndarray | None = None, n_viewpoints: int = 6, height: float = 1.6,
-               step_deg: float = 0.25, noise: float = 0.01, max_range: float = 30.0, seed: int = 0,
+def scan_scene(scene: Scene, viewpoints: np.ndarray | None = None, n_viewpoints: int | None = None,
+               height: float = 1.6, step_deg: float = 0.4, noise: float = 0.01, max_range: float = 30.0, seed: int = 0,
                progress: Progress | None = None) -> PointCloud:
     """Scan a box scene: points (N, 3) m of the first hits of every viewpoint's rays,
-    range noise ~ N(0, noise) m along each ray."""
+    range noise ~ N(0, noise) m along each ray. Viewpoints: given (K, 3), else
+    ``n_viewpoints`` chosen by default_viewpoints (None: enough to see 99 % of the floor)."""
     edges, boxes = _box_scene_parts(scene)
     vps = default_viewpoints(scene, n_viewpoints, height) if viewpoints is None else np.asarray(viewpoints, float)
     dirs = scan_directions(step_deg)

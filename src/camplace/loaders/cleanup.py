@@ -92,11 +92,13 @@ def level_floor_matrix(points: np.ndarray, up: str = "+z", threshold: float = 0.
     """4x4 rigid transform making the dominant floor plane z = 0 with +z up.
 
     The floor is the largest plane (RANSAC) whose normal is within 30° of ``up``, among
-    the lowest 40 % of points along ``up`` (so the ceiling is not taken)."""
+    the lowest 40 % of points along ``up`` (so the ceiling is not taken), on the cloud
+    thinned to one point per 0.1 m voxel so that large planes win over dense near ones."""
     hint = np.asarray(UP_AXES[up], float)
-    h = points @ hint
-    low = points[h <= np.quantile(h, 0.4)]
-    n, d, _ = ransac_plane(low, threshold, normal_hint=hint, seed=seed)
+    even = voxel_downsample(points, 0.1)  # even density: a plane's count ~ its area, not its nearness
+    h = even @ hint
+    low = even[h <= np.quantile(h, 0.4)]
+    n, d, _ = ransac_plane(low, max(threshold, 0.05), iterations=500, normal_hint=hint, seed=seed)
     z = np.array([0.0, 0.0, 1.0])
     rot, _ = Rotation.align_vectors([z], [n])
     R = rot.as_matrix()
