@@ -294,7 +294,15 @@ def run_cmd(scene: Optional[str] = typer.Argument(None, help="Scene YAML file or
             probe: Optional[float] = typer.Option(None, "--probe", help="Pixel mode: part of the voxel a ray must cross "
                                                                          "(1 = any part, the paper's rule; 0 = centre)."),
             local_search: bool = typer.Option(False, "--local-search", help="Greedy: 1-swap local search afterwards."),
-            threads: Optional[int] = typer.Option(None, "--threads", min=1, help="Solver threads (MIP solvers).")) -> None:
+            threads: Optional[int] = typer.Option(None, "--threads", min=1, help="Solver threads (MIP solvers)."),
+            refine: bool = typer.Option(False, "--refine", help="Move each camera off the grid (continuous pose search)."),
+            refine_time: float = typer.Option(60.0, "--refine-time", help="Seconds for --refine."),
+            adaptive: int = typer.Option(0, "--adaptive", help="Rounds of finer candidates around the placement."),
+            robust: int = typer.Option(0, "--robust", help="1: best worst case over any single camera failure."),
+            money_budget: Optional[float] = typer.Option(None, "--money-budget",
+                                                         help="Total camera price limit (default: the scene's)."),
+            tri_angle: str = typer.Option("20,160", "--tri-angle",
+                                          help="MIN,MAX degrees at which two rays triangulate well.")) -> None:
     """Run the whole pipeline on a scene and write placement.json, metrics.json, visibility.npz.
 
     Ctrl-C during the solve writes the best placement found so far (status 'interrupted',
@@ -311,7 +319,27 @@ def run_cmd(scene: Optional[str] = typer.Argument(None, help="Scene YAML file or
         raise CamplaceInputErrorProxy("run: give a scene (YAML file or built-in name) or --cloud SCAN")
     _run(scene, budget, solver, out, time_limit, require_feasible, max_memory_gb, repeatable,
          **_scale_options(workers, scheduler, cache, no_cache), visibility_mode=visibility, stride=stride, probe=probe,
-         **({"local_search": True} if local_search else {}), **({"threads": threads} if threads else {}))
+         **({"local_search": True} if local_search else {}), **({"threads": threads} if threads else {}),
+         **_beyond_grid_options(refine, refine_time, adaptive, robust, money_budget, tri_angle))
+
+
+def _beyond_grid_options(refine: bool, refine_time: float, adaptive: int, robust: int,
+                         money_budget: Optional[float], tri_angle: str) -> dict:
+    """run() keyword arguments of the issue-10 options (only those given)."""
+    try:
+        lo, hi = (float(v) for v in tri_angle.split(","))
+    except ValueError:
+        raise CamplaceInputErrorProxy(f"--tri-angle: expected MIN,MAX degrees, got '{tri_angle}'") from None
+    out: dict = {"triangulation_deg": (lo, hi)}
+    if refine:
+        out.update(refine=True, refine_time_s=refine_time)
+    if adaptive:
+        out["adaptive"] = adaptive
+    if robust:
+        out["robust"] = robust
+    if money_budget is not None:
+        out["money_budget"] = money_budget
+    return out
 
 
 @app.command()

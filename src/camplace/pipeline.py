@@ -213,10 +213,54 @@ def check_solver_name(name: str, key: str) -> None:
                          f"{', '.join(sorted(SOLVERS))}")
 
 
-def problem_from_visibility(vis: Visibility, budget: int) -> PlacementProblem:
+def problem_from_visibility(vis: Visibility, budget: int, money_budget: float | None = None) -> PlacementProblem:
     t = vis.targets
     return PlacementProblem(vis.V, t.gamma, t.weights, int(budget), vis.candidates.location_ids,
-                            np.array([vis.candidates.cameras[c].cost for c in vis.candidates.camera_ids]))
+                            np.array([vis.candidates.cameras[c].cost for c in vis.candidates.camera_ids]),
+                            money_budget)
+
+
+def improve_placement(sc: Scene, vis: Visibility, problem: PlacementProblem, placement: Placement, *,
+                      refine: bool = False, refine_time_s: float = 60.0, adaptive: int = 0, robust: int = 0,
+                      time_limit_s: float | None = None, should_stop: Callable[[], bool] | None = None,
+                      progress: Progress | None = None,
+                      log: list | None = None) -> tuple[Visibility, PlacementProblem, Placement]:
+    """Beyond the grid (issue 10), after the discrete solve: ``robust`` = 1 swaps toward the
+    best worst case over single camera failures (camplace.robust); ``adaptive`` rounds of
+    finer candidates (camplace.adaptive), then ``refine`` moves each camera off the grid
+    (camplace.refine). Adaptive and refine append rows to V, so the returned visibility /
+    problem replace the grid ones (the placement stays a selection of V rows)."""
+    log = [] if log is None else log
+    if robust not in (0, 1):
+        raise InputError(f"--robust: expected 0 or 1 (single camera failures), got {robust}")
+    if robust and (refine or adaptive):
+        raise InputError("--robust 1 cannot be combined with --refine / --adaptive (they optimise the nominal cost)")
+    if adaptive < 0:
+        raise InputError(f"--adaptive: expected a non-negative number of rounds, got {adaptive}")
+    if robust:
+        from camplace.robust import robust_placement
+
+        rr = robust_placement(problem, placement, time_limit_s=time_limit_s or 60.0, should_stop=should_stop)
+        placement = rr.placement
+        log.append(f"robust: nominal {rr.nominal['cost']:.6g} -> {rr.robust['cost']:.6g}, worst single failure "
+                   f"{rr.nominal['worst_case_cost']:.6g} -> {rr.robust['worst_case_cost']:.6g}"
+                   + ("" if rr.bound is None else f" (lower bound {rr.bound:.6g})"))
+    if adaptive:
+        from camplace.adaptive import adaptive_rounds
+
+        ar = adaptive_rounds(sc, vis, problem, placement, rounds=adaptive, time_limit_s=time_limit_s or 120.0,
+                             progress=progress)
+        vis, problem, placement = ar.visibility, ar.problem, ar.placement
+        for h in ar.rounds:
+            log.append(f"adaptive round {h['round']}: {h['candidates']} candidates, cost {h['cost']:.6g}")
+    if refine:
+        from camplace.refine import refine_placement
+
+        rf = refine_placement(sc, vis, problem, placement, time_limit_s=refine_time_s, progress=progress)
+        vis, problem, placement = rf.visibility, rf.problem, rf.placement
+        log.append(f"refine: cost {rf.grid_cost:.6g} -> {rf.refined_cost:.6g} ({rf.info['moved']} cameras moved, "
+                   f"{rf.info['trials']} trial poses, {rf.info['seconds']:.1f} s)")
+    return vis, problem, placement
 
 
 def run(scene: str | Path | SceneSpec, budget: int | None = None, solver: str | None = None,
@@ -224,7 +268,9 @@ def run(scene: str | Path | SceneSpec, budget: int | None = None, solver: str | 
         should_stop: Callable[[], bool] | None = None, max_memory_bytes: int | None = None,
         require_feasible: bool = False, workers: int = 1, scheduler: str | None = None,
         cache_dir: str | Path | None = None, visibility_mode: str = "voxel", stride: int | None = None,
-        probe: float | None = None, **solver_options) -> RunResult:
+        probe: float | None = None, money_budget: float | None = None, refine: bool = False,
+        refine_time_s: float = 60.0, adaptive: int = 0, robust: int = 0,
+        triangulation_deg: tuple[float, float] = (20.0, 160.0), **solver_options) -> RunResult:
     """Run every stage on a scene (built-in name, YAML path or spec).
 
     budget / solver / time_limit_s default to the scene's ``placement`` keys. The solver
@@ -252,12 +298,26 @@ def run(scene: str | Path | SceneSpec, budget: int | None = None, solver: str | 
         solver_options.setdefault("should_stop", should_stop)
     if progress is not None:
         solver_options.setdefault("progress", progress)  # solver stages (greedy, tabu, mip, ...) as bars
-    problem = problem_from_visibility(vis, budget)
+    money = sc.spec.placement.money_budget if money_budget is None else money_budget
+    if money is not None and not (money >= 0 and np.isfinite(money)):
+        raise InputError(f"money budget: expected a non-negative number, got {money!r}")
+    problem = problem_from_visibility(vis, budget, money)
     t = time.perf_counter()
     _stage(progress, "solve")
     placement = solve_stoppable(problem, solver, log=log, **solver_options)
     timings["solve"] = time.perf_counter() - t
+    if refine or adaptive or robust:
+        t = time.perf_counter()
+        vis, problem, placement = improve_placement(
+            sc, vis, problem, placement, refine=refine, refine_time_s=refine_time_s, adaptive=adaptive,
+            robust=robust, time_limit_s=time_limit_s, should_stop=should_stop, progress=progress, log=log)
+        timings["beyond_grid"] = time.perf_counter() - t
     t = time.perf_counter()
-    metrics = compute_metrics(problem, placement.selected, vis.targets.region_ids, vis.targets.region_names)
+    from camplace.triangulation import well_triangulated_of_selection
+
+    well = well_triangulated_of_selection(vis.V, vis.candidates.positions, vis.targets.positions,
+                                          placement.selected, *triangulation_deg)
+    metrics = compute_metrics(problem, placement.selected, vis.targets.region_ids, vis.targets.region_names,
+                              well_triangulated=well)
     timings["metrics"] = time.perf_counter() - t
     return RunResult(sc, vis, problem, placement, metrics, timings, log)

@@ -51,6 +51,7 @@ def placement_dict(scene_name: str, placement: Placement, budget: int, candidate
         "objective": float(placement.objective),
         "bound": None if placement.bound is None else float(placement.bound),
         "gap": placement.gap,
+        **{k: placement.info[k] for k in ("refine", "adaptive", "robust") if k in placement.info},  # issue 10
         "n_cameras": int(len(placement.selected)),
         "cameras": camera_entries(candidates, placement.selected),
     }
