@@ -109,16 +109,22 @@ class CameraModel:
                  distortion: tuple[float, ...] = (), max_range: float = 5.0, cost: float = 1.0,
                  max_fov_deg: float | None = None) -> "CameraModel":
         """Focal lengths from the full fields of view (degrees) and the resolution (pixels),
-        principal point at the image centre. Fisheye: equidistant (f = half-size / half-angle)."""
+        principal point at the image centre: the image edges on the axes sit at the
+        (distorted) half angles. Fisheye without distortion: f = half-size / half-angle."""
         w, h = int(resolution[0]), int(resolution[1])
+        d = np.zeros(8)
+        d[:len(distortion)] = distortion
+        hx, hy = math.radians(fov_deg[0]) / 2.0, math.radians(fov_deg[1]) / 2.0
         if model == "fisheye":
-            fx = (w / 2.0) / (math.radians(fov_deg[0]) / 2.0)
-            fy = (h / 2.0) / (math.radians(fov_deg[1]) / 2.0)
+            # the image edge on each axis sits at the distorted angle of the half field of view
+            fx = (w / 2.0) / float(_fisheye_theta_d(np.array(hx), d))
+            fy = (h / 2.0) / float(_fisheye_theta_d(np.array(hy), d))
             if not distortion:
                 distortion = (0.0, 0.0, 0.0, 0.0)
         else:
-            fx = (w / 2.0) / math.tan(math.radians(fov_deg[0]) / 2.0)
-            fy = (h / 2.0) / math.tan(math.radians(fov_deg[1]) / 2.0)
+            rx, ry = math.tan(hx), math.tan(hy)
+            fx = (w / 2.0) / float(_opencv_distort(np.array(rx), np.array(0.0), d)[0])
+            fy = (h / 2.0) / float(_opencv_distort(np.array(0.0), np.array(ry), d)[1])
             if model == "opencv" and not distortion:
                 distortion = (0.0, 0.0, 0.0, 0.0, 0.0)
         return cls(name, model, w, h, fx, fy, (w - 1) / 2.0, (h - 1) / 2.0, float(max_range),

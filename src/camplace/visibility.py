@@ -21,6 +21,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from camplace.cameras import project_nb, px_per_m_nb
+from camplace.quality import target_min_px
 from camplace.candidates import Candidates
 from camplace.scene import OccupancyGrid
 from camplace.targets import Targets
@@ -148,7 +149,7 @@ def _cell_near(grid, cx: int, cy: int, px: float, py: float, rng: float) -> bool
 
 @numba.njit(cache=True, parallel=True)
 def _visibility_kernel(occ, origin, res, cam_pos, cam_rot, cam_ids, cam_params,
-                       tpos, tnrm, tcos, grid, cell_start, cell_tids):
+                       tpos, tnrm, tcos, grid, cell_start, cell_tids, tpx):
     """CSR (indptr, indices) of V for a chunk of candidates, indices ascending per row.
 
     Targets are bucketed in an xy grid (``grid`` = [x0, y0, cell, nx, ny], CSR
@@ -171,7 +172,7 @@ def _visibility_kernel(occ, origin, res, cam_pos, cam_rot, cam_ids, cam_params,
                 for q in range(cell_start[cell], cell_start[cell + 1]):
                     j = cell_tids[q]
                     if _passes_view(cam_pos[i], cam_rot[i], params, tpos[j, 0], tpos[j, 1], tpos[j, 2],
-                                    tnrm[j, 0], tnrm[j, 1], tnrm[j, 2], tcos[j]):
+                                    tnrm[j, 0], tnrm[j, 1], tnrm[j, 2], tcos[j], tpx[j]):
                         k += 1
         counts[i] = k
     offs = np.zeros(n_c + 1, np.int64)
@@ -194,7 +195,8 @@ def _visibility_kernel(occ, origin, res, cam_pos, cam_rot, cam_ids, cam_params,
                 for q in range(cell_start[cell], cell_start[cell + 1]):
                     j = cell_tids[q]
                     nx_, ny_, nz_ = tnrm[j, 0], tnrm[j, 1], tnrm[j, 2]
-                    if not _passes_view(p, cam_rot[i], params, tpos[j, 0], tpos[j, 1], tpos[j, 2], nx_, ny_, nz_, tcos[j]):
+                    if not _passes_view(p, cam_rot[i], params, tpos[j, 0], tpos[j, 1], tpos[j, 2], nx_, ny_, nz_, tcos[j],
+                                        tpx[j]):
                         continue
                     ex = tpos[j, 0] + nx_ * off_len
                     ey = tpos[j, 1] + ny_ * off_len
@@ -282,7 +284,7 @@ def _block_arrays(occupancy: OccupancyGrid, targets: Targets, candidates: Candid
         np.ascontiguousarray(candidates.camera_ids[start:stop], dtype=np.int64), params,
         np.ascontiguousarray(targets.positions, dtype=np.float64),
         np.ascontiguousarray(targets.normals, dtype=np.float64), target_cos_limits(targets),
-        grid.params, grid.cell_start, grid.cell_tids)
+        grid.params, grid.cell_start, grid.cell_tids, target_min_px(targets))
     return indptr, indices
 
 
