@@ -1,8 +1,9 @@
 """Triangle meshes (OBJ, PLY, STL, OFF, GLB/glTF via trimesh): read, voxelize into an
 occupancy grid, and write boxes as a mesh (for round trips of box scenes).
 
-Surfaces are voxelized by sampling every triangle on a barycentric lattice finer than
-half a cell, so no cell the surface crosses is missed; ``solid=True`` also fills the
+Surfaces are voxelized conservatively (a barycentric lattice of quarter-cell steps,
+each point marking the cells within a quarter cell), so no cell the surface crosses is
+missed; ``solid=True`` also fills the
 cells enclosed by the surface (closed meshes).
 """
 
@@ -54,28 +55,40 @@ def load_mesh(path: str | Path) -> Mesh:
 
 @numba.njit(cache=True)
 def _mark_triangles(tri, occ, ox, oy, oz, res):
-    """Mark (in place) the cells of occ touched by a fine sampling of each triangle."""
+    """Mark (in place) every cell of occ that a triangle of ``tri`` (T, 3, 3) may touch.
+
+    Each triangle is sampled on a barycentric lattice with steps <= res / 4; every point
+    of the triangle is then within res / 4 of a lattice point, so marking, for each lattice
+    point, all cells within res / 4 (L-inf) of it is conservative: no crossed cell is missed
+    (cells up to a quarter cell away may be marked too)."""
     nx, ny, nz = occ.shape
     marked = 0
+    d = 0.25 + 1e-6
     for t in range(tri.shape[0]):
         a, b, c = tri[t, 0], tri[t, 1], tri[t, 2]
         e1 = b - a
         e2 = c - a
         lmax = max(np.sqrt((e1 ** 2).sum()), np.sqrt((e2 ** 2).sum()), np.sqrt(((c - b) ** 2).sum()))
-        n = int(np.ceil(lmax / (0.5 * res))) + 1
+        n = max(int(np.ceil(lmax / (0.25 * res))), 1)
         for i in range(n + 1):
             for j in range(n + 1 - i):
                 u = i / n
                 v = j / n
-                x = a[0] + u * e1[0] + v * e2[0]
-                y = a[1] + u * e1[1] + v * e2[1]
-                z = a[2] + u * e1[2] + v * e2[2]
-                ix = int(np.floor((x - ox) / res))
-                iy = int(np.floor((y - oy) / res))
-                iz = int(np.floor((z - oz) / res))
-                if 0 <= ix < nx and 0 <= iy < ny and 0 <= iz < nz and not occ[ix, iy, iz]:
-                    occ[ix, iy, iz] = True
-                    marked += 1
+                fx = (a[0] + u * e1[0] + v * e2[0] - ox) / res
+                fy = (a[1] + u * e1[1] + v * e2[1] - oy) / res
+                fz = (a[2] + u * e1[2] + v * e2[2] - oz) / res
+                x0 = int(np.floor(fx - d))
+                x1 = int(np.floor(fx + d))
+                y0 = int(np.floor(fy - d))
+                y1 = int(np.floor(fy + d))
+                z0 = int(np.floor(fz - d))
+                z1 = int(np.floor(fz + d))
+                for ix in range(max(x0, 0), min(x1, nx - 1) + 1):
+                    for iy in range(max(y0, 0), min(y1, ny - 1) + 1):
+                        for iz in range(max(z0, 0), min(z1, nz - 1) + 1):
+                            if not occ[ix, iy, iz]:
+                                occ[ix, iy, iz] = True
+                                marked += 1
     return marked
 
 
