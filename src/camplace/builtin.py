@@ -15,7 +15,7 @@ import yaml
 from camplace.config import SceneSpec, load_scene_file, parse_scene
 from camplace.errors import InputError
 
-BUILTIN_SCENES = ("demo", "standard-store", "store-a", "warehouse")
+BUILTIN_SCENES = ("demo", "standard-store", "store-a", "warehouse", "catalogue-store")
 PROCEDURAL_SCENES = ("warehouse",)  # generated in code; ``warehouse:AREA`` picks the size
 
 # --- procedural warehouse (issue 7: site scale) -------------------------------------

@@ -522,6 +522,28 @@ def scan(scene: str = typer.Argument(..., help="Built-in scene name or YAML file
 
 
 @app.command()
+def essential(folder: Path = typer.Argument(..., help="Output folder of camplace run / evaluate."),
+              top: Optional[int] = typer.Option(None, "--top", min=1, help="Show only the TOP most essential cameras.")) -> None:
+    """Rank a placement's cameras by the cost added if each one fails (most essential first)."""
+    from camplace.robust import essential_from_folder
+
+    ranking, summary = essential_from_folder(folder)
+    shown = ranking[:top] if top else ranking
+    if _state["json"]:
+        typer.echo(json.dumps({"summary": summary, "cameras": shown}, indent=2))
+        return
+    t = Table(title=f"essential cameras - cost {summary['cost']:.6g}, worst single failure "
+                    f"{summary['worst_case_cost']:.6g}")
+    for col in ("rank", "candidate", "camera", "position (m)", "yaw / pitch (deg)", "added cost", "cost if it fails"):
+        t.add_column(col)
+    for r in shown:
+        pos = ", ".join(f"{v:.2f}" for v in r["position"] or [])
+        t.add_row(str(r["rank"]), str(r["candidate_id"]), str(r["camera"]), pos,
+                  f"{r['yaw_deg']:.1f} / {r['pitch_deg']:.1f}", f"{r['added_cost']:.6g}", f"{r['cost_if_fails']:.6g}")
+    Console().print(t)
+
+
+@app.command()
 def scenes(show: Optional[str] = typer.Option(None, "--show", help="Print the YAML of this built-in scene.")) -> None:
     """List the built-in scenes (or print one as a scene-file example)."""
     if show:

@@ -260,5 +260,43 @@ def robust_placement(problem: PlacementProblem, nominal: Placement, *, time_limi
     return RobustResult(p, nom, rob, bound, info)
 
 
-__all__ = ["RobustResult", "essential_cameras", "removal_losses", "robust_bound", "robust_placement",
+def essential_from_folder(out_dir) -> tuple[list[dict], dict]:
+    """``essential_cameras`` for a run's output folder (visibility.npz + placement.json):
+    (ranking with each camera's candidate_id, position and type, summary dict)."""
+    import json
+    from pathlib import Path
+
+    from camplace.errors import InputError
+    from camplace.instance import load_problem_npz
+
+    out = Path(out_dir)
+    for name in ("visibility.npz", "placement.json"):
+        if not (out / name).is_file():
+            raise InputError(f"{out}: {name} not found (expected the output folder of camplace run / evaluate)")
+    try:
+        pdict = json.loads((out / "placement.json").read_text())
+        cams = pdict["cameras"]
+        ids = [c["candidate_id"] for c in cams]
+    except (ValueError, KeyError, TypeError) as err:
+        raise InputError(f"{out / 'placement.json'}: not a camplace placement ({err})") from None
+    if any(i is None for i in ids):
+        raise InputError(f"{out / 'placement.json'}: some cameras are not rows of V (candidate_id null); "
+                         "score the placement with `camplace evaluate` first")
+    problem, _ = load_problem_npz(out / "visibility.npz", len(ids))
+    sel = np.asarray(ids, np.int64)
+    if len(sel) and (sel.min() < 0 or sel.max() >= problem.n_candidates):
+        raise InputError(f"{out / 'placement.json'}: candidate_id outside the rows of visibility.npz")
+    ranking = essential_cameras(problem, sel)
+    by_id = {int(c["candidate_id"]): c for c in cams}
+    for r in ranking:
+        c = by_id[r["candidate_id"]]
+        r.update(position=c.get("position"), yaw_deg=c.get("yaw_deg"), pitch_deg=c.get("pitch_deg"),
+                 camera=c.get("camera"))
+    w, who = worst_case(problem, sel)
+    cost = problem.cost(sel)
+    return ranking, {"cost": cost, "worst_case_cost": w, "worst_failure_candidate": who,
+                     "coverage_gap": cost / problem.normalizer if problem.normalizer > 0 else 0.0}
+
+
+__all__ = ["RobustResult", "essential_from_folder", "essential_cameras", "removal_losses", "robust_bound", "robust_placement",
            "robust_search", "worst_case"]

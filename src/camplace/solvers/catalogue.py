@@ -73,4 +73,45 @@ def solve_catalogue_greedy(problem: PlacementProblem, *, time_limit_s: float | N
     return Placement(sel, problem.cost(sel), None, status, "greedy", time.perf_counter() - t0, info)
 
 
-__all__ = ["cost_scaled_greedy", "solve_catalogue_greedy"]
+def repair_to_money_budget(problem: PlacementProblem, selected: np.ndarray, *, end: float = float("inf"),
+                           compare_greedy: bool = True) -> np.ndarray:
+    """Make any selection respect the money budget (for solvers whose moves ignore prices):
+    drop the least cost-effective camera (smallest cost rise per unit price) until the
+    total price fits, fill with cost-scaled greedy additions that still fit, then 1-swap
+    descent (which keeps the money budget). A selection that already fits is only
+    improved, never made worse; with compare_greedy the cost-scaled greedy + 1-swap is
+    returned instead when it is better. Returns sorted candidate ids."""
+    sel = [int(i) for i in np.asarray(selected, np.int64)]
+    if problem.money_budget is None:
+        return np.array(sorted(sel), np.int64)
+    price = np.maximum(problem.costs, MIN_PRICE)
+    V = problem.V
+    cov = problem.coverage(np.array(sel, np.int64))
+    while sel and float(problem.costs[sel].sum()) > problem.money_budget + 1e-9:
+        d0 = np.maximum(problem.gamma - cov, 0).astype(np.float64)
+        h = problem.weights * ((d0 + 1) ** 2 - d0 * d0)
+        loss = np.asarray(V[np.array(sel)].astype(np.float64) @ h).ravel() / price[sel]
+        k = int(np.argmin(loss))
+        i = sel.pop(k)
+        cov[V.indices[V.indptr[i]:V.indptr[i + 1]]] -= 1
+    used = set(problem.location_ids[sel].tolist())
+    while len(sel) < problem.budget:
+        left = problem.money_budget - float(problem.costs[sel].sum())
+        g = marginal_gains(problem, cov) / price
+        ok = (problem.costs <= left + 1e-9) & ~np.isin(problem.location_ids, list(used)) & (g > 0)
+        if not ok.any():
+            break
+        j = int(np.argmax(np.where(ok, g, -np.inf)))
+        sel.append(j)
+        used.add(int(problem.location_ids[j]))
+        cov[V.indices[V.indptr[j]:V.indptr[j + 1]]] += 1
+    sel, _, _ = swap_local_search(problem, sel, end=end)
+    out = np.array(sorted(int(i) for i in sel), np.int64)
+    if compare_greedy:  # never worse than the catalogue greedy + 1-swap
+        g = solve_catalogue_greedy(problem, local_search=True).selected
+        if problem.cost(g) < problem.cost(out) - 1e-9:
+            out = g
+    return out
+
+
+__all__ = ["cost_scaled_greedy", "repair_to_money_budget", "solve_catalogue_greedy"]
