@@ -14,6 +14,7 @@ import pytest
 from camplace.errors import InputError
 from camplace.evaluate import evaluate, read_placement
 from camplace.metrics import compute_metrics
+from camplace.pipeline import placement_metrics
 from camplace.report import write_outputs
 
 SHARED_CHECK = __import__("pathlib").Path(__file__).resolve().parents[2] / "shared" / "contract" / "check_run.py"
@@ -79,8 +80,11 @@ def test_hand_edited_csv_reports_the_new_figures(demo_run, demo_out, tmp_path):
     want = compute_metrics(demo_run.problem, np.array(selection), demo_run.visibility.targets.region_ids,
                            demo_run.visibility.targets.region_names).to_dict()
     got = r.metrics.to_dict()
-    for k in ("cost", "coverage_gap", "non_triangulatable_pct", "coverage_histogram", "regions"):
+    for k in ("cost", "coverage_gap", "non_triangulatable_pct", "coverage_histogram"):
         assert got[k] == want[k], k
+    for name, fig in want["regions"].items():
+        assert {k: got["regions"][name][k] for k in fig} == fig
+    assert got == placement_metrics(demo_run.visibility, demo_run.problem, np.array(selection)).to_dict()
     assert got["cost"] != demo_run.metrics.cost  # the edit changed the figures
 
 
@@ -159,3 +163,24 @@ def test_cli_evaluate_json_summary(demo_out, tmp_path):
     bad = subprocess.run([sys.executable, "-m", "camplace.cli", "evaluate", "demo", str(tmp_path / "nope.csv")],
                          capture_output=True, text=True, timeout=300)
     assert bad.returncode == 2 and "placement file not found" in bad.stderr and "Traceback" not in bad.stderr
+
+
+def test_cli_run_quiet_verbose_json(tmp_path):
+    """--json: one JSON document on stdout; --quiet: only the folder; --verbose: files listed."""
+    from typer.testing import CliRunner
+
+    from camplace.cli import app
+
+    runner = CliRunner()
+    out = tmp_path / "run"
+    res = runner.invoke(app, ["--json", "run", "demo", "--out", str(out), "--no-cache"])
+    assert res.exit_code == 0, res.output
+    summary = json.loads(res.stdout)
+    m = json.loads((out / "metrics.json").read_text())
+    assert summary["cost"] == m["cost"] and summary["n_cameras"] == summary["budget"] == 6
+    assert summary["files"]["report.html"] == str(out / "report.html") and "report" in summary["timings_s"]
+    res = runner.invoke(app, ["--quiet", "run", "demo", "--out", str(out), "--no-cache"])
+    assert res.exit_code == 0 and res.stdout.strip() == str(out)
+    res = runner.invoke(app, ["--verbose", "run", "demo", "--out", str(out), "--no-cache"])
+    assert res.exit_code == 0
+    assert "report.html" in res.output and "opencv" in res.output

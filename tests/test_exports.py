@@ -52,10 +52,12 @@ def test_quaternion_round_trip(yaw, pitch, roll):
 
 
 def _cameras():
-    dist = dict(INTR, distortion=[-0.12, 0.034, 1e-05, -2e-4, 0.0012])
+    dist = dict(INTR, model="opencv", distortion=[-0.12, 0.034, 1e-05, -2e-4, 0.0012])
+    fish = dict(INTR, model="fisheye", distortion=[0.01, -0.002, 3e-4, -1e-5])
     return [_cam(6, [1.0, 2.0, 2.9], (60.0, 30.0, 0.0)),
             _cam(42, [3.3, 0.1 + 0.2, 2.9000000000000004], (137.25, 45.0, 5.5)),
-            _cam(7, [0.5, 4.75, 2.5], (315.0, 60.0, -3.0), intr=dist, name="distorted")]
+            _cam(7, [0.5, 4.75, 2.5], (315.0, 60.0, -3.0), intr=dist, name="distorted"),
+            _cam(8, [0.25, 1.75, 2.5], (10.0, 89.0, 0.0), intr=fish, name="fish")]
 
 
 def test_opencv_yaml_round_trip(tmp_path):
@@ -73,6 +75,7 @@ def test_opencv_yaml_round_trip(tmp_path):
         assert np.allclose(d["position"], cam["position"], atol=1e-9, rtol=0)
         assert np.allclose(d["rotation"], cam["rotation"], atol=1e-9, rtol=0)
         want = intr.get("distortion", [0.0] * 5)
+        assert d["model"] == intr["model"]
         assert np.allclose(d["dist"], want, atol=1e-12, rtol=0) and len(d["dist"]) == len(want)
         R, t = world_to_camera(cam["rotation"], cam["position"])
         assert np.allclose(d["R"], R, atol=1e-12) and np.allclose(d["t"], t, atol=1e-12)
@@ -92,8 +95,9 @@ def test_colmap_round_trip(tmp_path):
         assert np.allclose(img["position"], cam["position"], atol=1e-9, rtol=0)
         assert np.allclose(img["rotation"], cam["rotation"], atol=1e-9, rtol=0)
         assert str(cam["candidate_id"]) in img["name"]
-    assert imgs[0]["model"] == "PINHOLE" and imgs[2]["model"] == "FULL_OPENCV"
+    assert [i["model"] for i in imgs] == ["PINHOLE", "PINHOLE", "FULL_OPENCV", "OPENCV_FISHEYE"]
     assert np.allclose(imgs[2]["dist"][:5], cams[2]["intrinsics"]["distortion"], atol=1e-12)
+    assert np.allclose(imgs[2]["dist"][5:], 0) and np.allclose(imgs[3]["dist"], cams[3]["intrinsics"]["distortion"])
     # COLMAP puts the centre of the top-left pixel at (0.5, 0.5)
     assert imgs[0]["params"][2] == pytest.approx(INTR["cx"] + 0.5)
 

@@ -304,5 +304,8 @@ if __name__ == "__main__":  # python tests/test_report_html.py REPORT.html OUT.p
         br.wait_for("document.body && document.body.getAttribute('data-plots-ready')", timeout=90)
         br.screenshot(dst)
         print("errors:", br.console_errors())
+        from PIL import Image  # Pillow comes with matplotlib: 256-colour PNG keeps it small
+
+        Image.open(dst).convert("RGB").quantize(256).save(dst, optimize=True)
     finally:
         br.close()

@@ -112,14 +112,13 @@ def _progress() -> Progress:
 
 
 def _json_summary(result, out_dir: Path, paths: dict) -> dict:
-    """The --json summary: headline figures of the placement and where the files are."""
-    p, m = result.placement, result.metrics
+    """The --json summary: the placement's headline figures, every metrics.json figure as
+    written, and where the files are."""
+    p = result.placement
+    metrics = json.loads(Path(paths["metrics.json"]).read_text())
     return {"scene": result.scene.name, "solver": p.solver, "status": p.status, "budget": int(result.problem.budget),
-            "n_cameras": int(len(p.selected)), "cost": float(p.objective),
-            "bound": None if p.bound is None else float(p.bound), "gap": p.gap,
-            "coverage_gap": m.coverage_gap, "non_triangulatable_pct": m.non_triangulatable_pct,
-            "coverage_histogram": m.coverage_histogram, "regions": m.regions,
-            "timings_s": {k: round(float(v), 4) for k, v in result.timings_s.items()},
+            "n_cameras": int(len(p.selected)), "objective": float(p.objective),
+            "bound": None if p.bound is None else float(p.bound), "gap": p.gap, **metrics,
             "out_dir": str(out_dir), "files": {k: str(v) for k, v in sorted(paths.items())}}
 
 
@@ -365,7 +364,12 @@ def bench(scene: str = typer.Argument(..., help="Scene YAML file or built-in nam
                                      targets=targets, progress=_RichProgress(prog, stop), should_stop=stop,
                                      on_row=lambda rows: write_bench(out_dir, Path(scene).stem, {}, rows))
     paths = write_bench(out_dir, name, info, rows)
-    if not _state["quiet"]:
+    if _state["json"]:
+        from dataclasses import asdict
+
+        typer.echo(json.dumps({"scene": name, "rows": [asdict(r) for r in rows], "out_dir": str(out_dir),
+                               "files": {k: str(v) for k, v in paths.items()}}, indent=2, default=str))
+    elif not _state["quiet"]:
         typer.echo((out_dir / "bench.md").read_text())
     for p in paths.values():
         console.print(f"wrote {escape(str(p))}", highlight=False)

@@ -200,8 +200,7 @@ def evaluate(scene: str | Path | SceneSpec, placement: str | Path | Poses, progr
     Every pose is raycast afresh (no cache) and selected; the Placement has solver
     'file', status 'feasible', budget = number of poses, bound None."""
     from camplace.distributed import make_executor
-    from camplace.metrics import compute_metrics
-    from camplace.pipeline import RunResult, problem_from_visibility, scene_inputs
+    from camplace.pipeline import RunResult, placement_metrics, problem_from_visibility, scene_inputs
     from camplace.solvers.base import Placement
     from camplace.visibility import compute_visibility
 
@@ -222,7 +221,7 @@ def evaluate(scene: str | Path | SceneSpec, placement: str | Path | Poses, progr
     timings["solve"] = 0.0
     t = time.perf_counter()
     cost = problem.cost(selected)
-    metrics = compute_metrics(problem, selected, targets.region_ids, targets.region_names)
+    metrics = placement_metrics(vis, problem, selected)
     timings["metrics"] = time.perf_counter() - t
     seen = np.diff(vis.V.indptr)
     inside = sc.occupancy.is_occupied(cands.positions)

@@ -313,11 +313,18 @@ def run(scene: str | Path | SceneSpec, budget: int | None = None, solver: str | 
             robust=robust, time_limit_s=time_limit_s, should_stop=should_stop, progress=progress, log=log)
         timings["beyond_grid"] = time.perf_counter() - t
     t = time.perf_counter()
+    metrics = placement_metrics(vis, problem, placement.selected, triangulation_deg)
+    timings["metrics"] = time.perf_counter() - t
+    return RunResult(sc, vis, problem, placement, metrics, timings, log)
+
+
+def placement_metrics(vis: Visibility, problem: PlacementProblem, selected: np.ndarray,
+                      triangulation_deg: tuple[float, float] = (20.0, 160.0)) -> Metrics:
+    """Every metric of a selection (rows of vis.V), per region too; shared by ``run`` and
+    camplace.evaluate so both score a placement the same way."""
     from camplace.triangulation import well_triangulated_of_selection
 
     well = well_triangulated_of_selection(vis.V, vis.candidates.positions, vis.targets.positions,
-                                          placement.selected, *triangulation_deg)
-    metrics = compute_metrics(problem, placement.selected, vis.targets.region_ids, vis.targets.region_names,
-                              well_triangulated=well)
-    timings["metrics"] = time.perf_counter() - t
-    return RunResult(sc, vis, problem, placement, metrics, timings, log)
+                                          selected, *triangulation_deg)
+    return compute_metrics(problem, selected, vis.targets.region_ids, vis.targets.region_names,
+                           well_triangulated=well)

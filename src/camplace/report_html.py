@@ -134,14 +134,31 @@ def frustum_depth(view: SceneView) -> float:
     return float(np.clip(0.08 * max(np.ptp(fp[:, 0]), np.ptp(fp[:, 1]), view.height), 0.3, 1.5))
 
 
-def frustum_corners(cam: dict, depth: float) -> np.ndarray:
-    """(5, 3) world points: camera centre and the 4 image corners at ``depth`` (m), pinhole."""
-    intr = cam["intrinsics"]
+def _corner_rays(intr: dict) -> np.ndarray:
+    """(4, 3) camera-frame rays through the image corners, z = 1 where possible; through the
+    lens model (camplace.cameras) so distorted and fisheye lenses get their true extent."""
     W, H = intr["width"], intr["height"]
+    uv = np.array([[-0.5, -0.5], [W - 0.5, -0.5], [W - 0.5, H - 0.5], [-0.5, H - 0.5]])
+    pinhole = np.c_[(uv[:, 0] - intr["cx"]) / intr["fx"], (uv[:, 1] - intr["cy"]) / intr["fy"], np.ones(4)]
+    if intr.get("model", "pinhole") == "pinhole" or not intr.get("distortion"):
+        return pinhole
+    try:
+        from camplace.cameras import CameraModel
+
+        cam = CameraModel("frustum", intr["model"], int(W), int(H), intr["fx"], intr["fy"], intr["cx"], intr["cy"],
+                          distortion=tuple(intr.get("distortion", ())))
+        rays = np.asarray(cam.unproject(uv), float)
+    except Exception:  # noqa: BLE001 - a lens this version cannot invert: draw the pinhole extent
+        return pinhole
+    z = rays[:, 2:3]
+    return np.where(z > 0.2, rays / np.maximum(z, 1e-9), rays * 1.5)  # very wide lenses: unit-ish rays
+
+
+def frustum_corners(cam: dict, depth: float) -> np.ndarray:
+    """(5, 3) world points: camera centre and the 4 image corners at ``depth`` (m)."""
     R = np.asarray(cam["rotation"], float)
     C = np.asarray(cam["position"], float)
-    uv = np.array([[-0.5, -0.5], [W - 0.5, -0.5], [W - 0.5, H - 0.5], [-0.5, H - 0.5]])
-    d = np.c_[(uv[:, 0] - intr["cx"]) / intr["fx"], (uv[:, 1] - intr["cy"]) / intr["fy"], np.ones(4)] * depth
+    d = _corner_rays(cam["intrinsics"]) * depth
     return np.vstack([C, C + d @ R.T])
 
 
@@ -183,7 +200,7 @@ def view3d_figure(view: SceneView, positions: np.ndarray, coverage: np.ndarray, 
               "legend": {"itemsizing": "constant", "x": 0.0, "y": 1.0, "bgcolor": "rgba(255,255,255,0.8)"},
               "scene": {"aspectmode": "data", "xaxis": {**axis, "title": {"text": "x (m)"}},
                         "yaxis": {**axis, "title": {"text": "y (m)"}}, "zaxis": {**axis, "title": {"text": "z (m)"}},
-                        "camera": {"eye": {"x": -1.15, "y": -1.55, "z": 1.2}}}}
+                        "camera": {"eye": {"x": -1.3, "y": -1.75, "z": 1.35}}}}
     return {"data": data, "layout": layout}, shown
 
 
