@@ -61,7 +61,7 @@ def main() -> None:
                          "delta": m.coverage_gap - gap0, "seconds": secs, "targets": len(r.visibility.targets),
                          "note": extra, "file_bytes": Path(path).stat().st_size})
     print(f"scene {a.scene}, budget {a.budget}, solver {a.solver}, scan step {a.step} deg, "
-          f"{a.viewpoints} viewpoints, noise {a.noise} m")
+          f"{a.viewpoints or 'auto'} viewpoints, noise {a.noise} m")
     print(f"{'route':<20} {'gap (own scene)':>15} {'gap on box scene':>17} {'delta':>8} {'run s':>7}  note")
     for r in rows:
         print(f"{r['route']:<20} {r['gap']:>15.4f} {r['gap_on_box']:>17.4f} {r.get('delta', 0.0):>+8.4f} "
