@@ -356,6 +356,9 @@ class SceneSpec(_Strict):
                                       f"{h} m is outside the room; expected a height in (0, {H}) m")
                 if h in (t.heights or [])[:k]:
                     raise scene_error(f"targets[{i}].heights[{k}]", f"duplicate height {h} m")
+        if self.targets and all(t.coverage == 0 for t in self.targets):
+            raise scene_error("targets", "every region has coverage 0, so there is nothing to place cameras for; "
+                                         "expected at least one region with coverage >= 1")
         camera_names = [c.name for c in self.cameras]
         for i, m in enumerate(self.mounts):
             if m.camera not in camera_names:
