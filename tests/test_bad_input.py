@@ -98,6 +98,7 @@ CASES = [
     ("coverage-negative", mutate(("targets.0.coverage", -1)), [], ["targets[0].coverage", "greater than or equal to 0"]),
     ("coverage-fraction", mutate(("targets.0.coverage", 1.5)), [], ["targets[0].coverage", "integer", "1.5"]),
     ("coverage-bool", mutate(("targets.0.coverage", True)), [], ["targets[0].coverage", "integer"]),
+    ("coverage-all-zero", mutate(("targets.0.coverage", 0)), [], ["targets", "every region has coverage 0"]),
     ("fov-180", mutate(("cameras.0.fov_deg", [180, 70])), [], ["cameras[0].fov_deg", "180"]),
     ("fov-zero", mutate(("cameras.0.fov_deg", [0, 70])), [], ["cameras[0].fov_deg[0]", "greater than 0"]),
     ("fov-negative", mutate(("cameras.0.fov_deg", [90, -5])), [], ["cameras[0].fov_deg[1]", "greater than 0"]),
