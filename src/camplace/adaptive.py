@@ -115,7 +115,9 @@ def finer_poses(scene: Scene, vis: Visibility, selected: np.ndarray, level: int)
     poses = np.concatenate(out)
     poses[:, 3] %= 360.0
     camera_ids = np.concatenate(cids)
-    have = np.c_[cands.positions, cands.angles_deg % np.array([360.0, 1e9, 1e9]), cands.camera_ids]
+    ang = cands.angles_deg.copy()
+    ang[:, 0] %= 360.0
+    have = np.c_[cands.positions, ang, cands.camera_ids]
     key = lambda a: [tuple(r) for r in np.round(a * 1000).astype(np.int64).tolist()]  # noqa: E731
     seen = set(key(have))
     keep = []

@@ -34,8 +34,7 @@ def removal_losses(problem: PlacementProblem, selected: np.ndarray, cov: np.ndar
     if len(sel) == 0:
         return np.zeros(0)
     c = problem.coverage(sel) if cov is None else cov
-    d0 = np.maximum(problem.gamma - c, 0).astype(np.float64)
-    h = problem.weights * ((d0 + 1) ** 2 - d0 * d0)
+    h = _h(problem.gamma, problem.weights, c)
     return np.asarray(problem.V[sel].astype(np.float64) @ h).ravel()
 
 
@@ -88,7 +87,8 @@ def _figures(problem: PlacementProblem, sel: np.ndarray) -> dict:
 def _h(gamma: np.ndarray, w: np.ndarray, c: np.ndarray) -> np.ndarray:
     """Per-target cost of losing one view: w (max(Γ − c + 1, 0)² − max(Γ − c, 0)²)."""
     d0 = np.maximum(gamma - c, 0).astype(np.float64)
-    return w * ((d0 + 1) ** 2 - d0 * d0)
+    d1 = np.maximum(gamma - c + 1, 0).astype(np.float64)
+    return w * (d1 * d1 - d0 * d0)
 
 
 def _sq(gamma: np.ndarray, w: np.ndarray, c: np.ndarray) -> np.ndarray:

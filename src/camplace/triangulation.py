@@ -33,8 +33,8 @@ def ray_angle_deg(target: np.ndarray, cam_a: np.ndarray, cam_b: np.ndarray) -> n
     180° = cameras on opposite sides of the target on one line."""
     ua = np.asarray(target, float) - np.asarray(cam_a, float)
     ub = np.asarray(target, float) - np.asarray(cam_b, float)
-    c = np.einsum("...i,...i->...", ua, ub) / (np.linalg.norm(ua, axis=-1) * np.linalg.norm(ub, axis=-1))
-    return np.degrees(np.arccos(np.clip(c, -1.0, 1.0)))
+    cross = np.linalg.norm(np.cross(ua, ub), axis=-1)
+    return np.degrees(np.arctan2(cross, np.einsum("...i,...i->...", ua, ub)))  # atan2: exact near 0 and 180
 
 
 def _check_range(min_deg: float, max_deg: float) -> tuple[float, float]:

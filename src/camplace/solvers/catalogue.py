@@ -89,7 +89,8 @@ def repair_to_money_budget(problem: PlacementProblem, selected: np.ndarray, *, e
     cov = problem.coverage(np.array(sel, np.int64))
     while sel and float(problem.costs[sel].sum()) > problem.money_budget + 1e-9:
         d0 = np.maximum(problem.gamma - cov, 0).astype(np.float64)
-        h = problem.weights * ((d0 + 1) ** 2 - d0 * d0)
+        d1 = np.maximum(problem.gamma - cov + 1, 0).astype(np.float64)
+        h = problem.weights * (d1 * d1 - d0 * d0)
         loss = np.asarray(V[np.array(sel)].astype(np.float64) @ h).ravel() / price[sel]
         k = int(np.argmin(loss))
         i = sel.pop(k)

@@ -1,0 +1,118 @@
+"""Robustness to a single camera failure: losses and worst case against brute force,
+exact swap scores, the robust search never worsening the worst case, `essential`."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+import scipy.sparse as sp
+
+from camplace.problem import PlacementProblem
+from camplace.robust import (_SwapScorer, essential_cameras, essential_from_folder, removal_losses, robust_placement,
+                             robust_search, worst_case)
+from camplace.solvers.base import Placement
+from camplace.solvers.greedy import solve_greedy
+
+
+def _random_problem(seed: int, n_g: int = 40, n_p: int = 80, budget: int = 6, money: float | None = None):
+    rng = np.random.default_rng(seed)
+    V = sp.csr_matrix((rng.random((n_g, n_p)) < 0.15).astype(np.uint8))
+    return PlacementProblem(V, rng.integers(0, 4, n_p), rng.uniform(0.5, 2, n_p), budget, rng.integers(0, n_g // 2, n_g),
+                            rng.choice([1.0, 2.0], n_g), money)
+
+
+def _brute_losses(problem, sel):
+    base = problem.cost(sel)
+    return np.array([problem.cost(np.delete(sel, k)) - base for k in range(len(sel))])
+
+
+@pytest.mark.parametrize("seed", range(5))
+def test_losses_and_worst_case_match_brute_force(seed):
+    prob = _random_problem(seed)
+    sel = solve_greedy(prob).selected
+    assert np.allclose(removal_losses(prob, sel), _brute_losses(prob, sel))
+    w, who = worst_case(prob, sel)
+    assert w == pytest.approx(max(prob.cost(np.delete(sel, k)) for k in range(len(sel))))
+    assert prob.cost(sel[sel != who]) == pytest.approx(w)
+    ranking = essential_cameras(prob, sel)
+    added = [r["added_cost"] for r in ranking]
+    assert added == sorted(added, reverse=True)
+    assert sorted(r["candidate_id"] for r in ranking) == sorted(sel.tolist())
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_swap_scores_are_exact(seed):
+    prob = _random_problem(seed)
+    sel = [int(i) for i in solve_greedy(prob).selected]
+    cov = prob.coverage(np.array(sel))
+    sc = _SwapScorer(prob, sel, cov)
+    rng = np.random.default_rng(seed)
+    for _ in range(30):
+        a = sel[rng.integers(len(sel))] if rng.random() < 0.8 else None
+        b = int(rng.integers(prob.n_candidates))
+        if b in sel:
+            continue
+        s2 = np.array([i for i in sel if i != a] + [b])
+        worst = max(prob.cost(np.delete(s2, k)) for k in range(len(s2)))
+        got = sc.score(a, b)
+        assert got[1] == pytest.approx(prob.cost(s2))
+        assert got[0] == pytest.approx(worst)
+
+
+@pytest.mark.parametrize("money", [None, 7.0])
+def test_robust_search_never_raises_the_worst_case(money):
+    prob = _random_problem(11, money=money)
+    nominal = solve_greedy(prob, local_search=True)
+    res = robust_placement(prob, nominal, time_limit_s=10.0, bound_time_s=2.0)
+    prob.check_feasible(res.placement.selected)
+    assert res.robust["worst_case_cost"] <= res.nominal["worst_case_cost"] + 1e-9
+    assert res.info["nominal_cost_given_up"] == pytest.approx(res.robust["cost"] - res.nominal["cost"])
+    assert res.placement.objective == pytest.approx(prob.cost(res.placement.selected))
+    if res.bound is not None:
+        assert res.bound <= res.robust["worst_case_cost"] + 1e-9
+
+
+def test_robust_bound_is_below_brute_force_optimum():
+    import itertools
+
+    prob = _random_problem(3, n_g=10, n_p=20, budget=3)
+    best = np.inf
+    for c in itertools.combinations(range(prob.n_candidates), 3):
+        s = np.array(c)
+        try:
+            prob.check_feasible(s)
+        except ValueError:
+            continue
+        best = min(best, worst_case(prob, s)[0])
+    res = robust_placement(prob, solve_greedy(prob), time_limit_s=5.0, bound_time_s=1.0)
+    assert res.robust["worst_case_cost"] >= best - 1e-9
+    if res.bound is not None:
+        assert res.bound <= best + 1e-6
+
+
+def test_essential_on_a_run_folder(demo_out):
+    ranking, summary = essential_from_folder(demo_out)
+    assert len(ranking) >= 1 and ranking[0]["rank"] == 1
+    assert summary["worst_case_cost"] == pytest.approx(ranking[0]["cost_if_fails"])
+    out = subprocess.run([sys.executable, "-m", "camplace.cli", "essential", str(demo_out), "--top", "2"],
+                         capture_output=True, text=True)
+    assert out.returncode == 0, out.stderr
+    assert "essential cameras" in out.stdout
+    bad = subprocess.run([sys.executable, "-m", "camplace.cli", "essential", str(demo_out / "nope")],
+                         capture_output=True, text=True)
+    assert bad.returncode == 2 and "not found" in bad.stderr
+
+
+def test_robust_with_refine_is_refused():
+    from camplace.errors import InputError
+    from camplace.pipeline import improve_placement
+
+    prob = _random_problem(1)
+    p = Placement(np.zeros(0, np.int64), prob.cost(np.zeros(0, np.int64)), None, "heuristic", "x", 0.0)
+    with pytest.raises(InputError):
+        improve_placement(None, None, prob, p, refine=True, robust=1)
+    with pytest.raises(InputError):
+        improve_placement(None, None, prob, p, robust=2)
