@@ -236,6 +236,16 @@ def test_report_figures_match_the_run(report_dir, demo_run):
     assert sorted(vals) == sorted(cov[vol & np.isclose(z, heights[0])].tolist())
 
 
+def test_report_shows_camera_views(report_dir, demo_run):
+    out, _ = report_dir
+    text = (out / "report.html").read_text()
+    n_views = text.count("<img src='data:image/jpeg;base64,")
+    skipped = re.search(r"(\d+) more views not rendered", text)
+    assert n_views >= 1 and n_views + (int(skipped.group(1)) if skipped else 0) == len(demo_run.placement.selected)
+    for i in demo_run.placement.selected[:n_views]:
+        assert f"alt='view of camera {i}'" in text
+
+
 def test_report_pngs_and_exports_written(report_dir, demo_run):
     out, _ = report_dir
     heights = sorted({h for r in demo_run.scene.spec.targets if r.kind == "volume" for h in r.heights})
@@ -288,6 +298,8 @@ def test_report_renders_in_headless_chromium(report_dir):
                 assert r["images"] >= 1, (name, r)  # the heatmap image
             if name == "histogram":
                 assert r["bars"] >= 1, r
+        views = b.evaluate("Array.from(document.querySelectorAll('.views img')).map(i => i.complete && i.naturalWidth)")
+        assert views and all(w == 240 for w in views), views  # every camera view decoded
         errors = b.console_errors()
         assert errors == [], errors
         remote = [u for u in b.requested_urls() if not u.startswith(("file:", "data:", "blob:", "about:"))]

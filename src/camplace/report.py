@@ -51,6 +51,7 @@ def placement_dict(scene_name: str, placement: Placement, budget: int, candidate
         "objective": float(placement.objective),
         "bound": None if placement.bound is None else float(placement.bound),
         "gap": placement.gap,
+        **{k: str(placement.info[k]) for k in ("incumbent_method", "bound_method") if k in placement.info},
         **{k: placement.info[k] for k in ("refine", "adaptive", "robust") if k in placement.info},  # issue 10
         "n_cameras": int(len(placement.selected)),
         "cameras": camera_entries(candidates, placement.selected),
@@ -105,7 +106,7 @@ def write_outputs(out_dir: str | Path, scene_name: str, vis: Visibility, placeme
         cov = np.bincount(vis.V[sel].indices, minlength=vis.V.shape[1]).astype(np.int64)
         m = dict(metrics.to_dict(), timings_s={k: round(float(v), 4) for k, v in timings.items()})
         report_paths = write_report(out, vis.targets, cov, pdict, m, SceneView.from_scene(scene) if scene else None,
-                                    n_candidates=int(vis.V.shape[0]))
+                                    n_candidates=int(vis.V.shape[0]), scene=scene, vis=vis, selected=sel)
     batch = AtomicBatch()  # the contract files replace the old ones together, only once all are written
     paths = {
         "visibility.npz": batch.stage_savez(out / "visibility.npz", **visibility_arrays(vis)),

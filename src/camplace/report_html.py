@@ -260,6 +260,68 @@ def histogram_figure(histograms: dict[str, dict[str, int]], gammas: dict[str, in
     return {"data": data, "layout": layout}
 
 
+# ----------------------------------------------------------------------------- camera views
+VIEW_WIDTH = 240  # pixels of each rendered camera view in the report
+VIEW_BUDGET_S = 1.0  # rendering stops after this many seconds (the rest: `camplace render`)
+
+
+def camera_views(scene, vis, selected: np.ndarray, width: int = VIEW_WIDTH,
+                 budget_s: float = VIEW_BUDGET_S) -> tuple[list[dict], int]:
+    """What each selected camera sees (camplace.render: rays through its lens model into
+    the occupancy grid), with the targets it covers as dots coloured by their coverage
+    class. Returns ([{id, caption, uri}], number not rendered within ``budget_s``)."""
+    import base64
+    import io
+
+    from PIL import Image
+
+    from camplace.render import covered_pixels, label_grid, render_view
+
+    t0 = time.perf_counter()
+    sel = np.asarray(selected, np.int64)
+    cov = np.bincount(vis.V[sel].indices, minlength=vis.V.shape[1]) if len(sel) else np.zeros(vis.V.shape[1], int)
+    cls = coverage_class(cov)
+    colours = np.array([[int(c[1:3], 16), int(c[3:5], 16), int(c[5:7], 16)] for _, c in COVERAGE_CLASSES], np.uint8)
+    labels = label_grid(scene)
+    c = vis.candidates
+    out = []
+    for n, i in enumerate(sel):
+        if out and time.perf_counter() - t0 > budget_s:
+            return out, len(sel) - n
+        cam = c.cameras[int(c.camera_ids[i])]
+        rv = render_view(scene, cam, c.positions[i], c.rotations[i], width, labels)
+        grey = np.clip(rv.rgb, 0, 1) @ np.array([0.299, 0.587, 0.114])  # grey scene: the coloured dots stand out
+        img = np.repeat((40 + 200 * grey)[:, :, None], 3, axis=2).astype(np.uint8)
+        seen = vis.V.indices[vis.V.indptr[i]:vis.V.indptr[i + 1]]
+        uv, ok = covered_pixels(cam, c.positions[i], c.rotations[i], vis.targets.positions[seen], rv.scale)
+        h, w = img.shape[:2]
+        px = np.rint(uv[ok]).astype(np.int64)
+        for dx in (0, 1):
+            for dy in (0, 1):
+                x, y = px[:, 0] + dx, px[:, 1] + dy
+                m = (x >= 0) & (x < w) & (y >= 0) & (y < h)
+                img[y[m], x[m]] = colours[cls[seen[ok]][m]]
+        buf = io.BytesIO()
+        Image.fromarray(img).save(buf, format="JPEG", quality=85)
+        yaw, pitch, roll = c.angles_deg[i]
+        out.append({"id": int(i), "uri": "data:image/jpeg;base64," + base64.b64encode(buf.getvalue()).decode(),
+                    "caption": f"camera {int(i)} ({cam.name}): yaw {yaw:.0f}\u00b0, pitch {pitch:.0f}\u00b0, "
+                               f"roll {roll:.0f}\u00b0; sees {len(seen)} targets"})
+    return out, 0
+
+
+def _views_section(views: list[dict] | None, skipped: int) -> str:
+    if views is None:
+        return ""
+    cards = "".join(f"<figure><img src='{v['uri']}' alt='view of camera {v['id']}'>"
+                    f"<figcaption>{html.escape(v['caption'])}</figcaption></figure>" for v in views)
+    more = (f"<p class=note>{skipped} more views not rendered within the report's time budget; "
+            f"<code>camplace render</code> draws any camera.</p>" if skipped else "")
+    return (f"<section><h2>Camera views</h2><p class=note>What each selected camera sees (rays through its "
+            f"lens model into the occupancy grid, in grey, darker beyond range); dots: the targets it covers, "
+            f"coloured by how many selected cameras see them.</p><div class='views'>{cards}</div>{more}</section>")
+
+
 # ----------------------------------------------------------------------------- page
 _CSS = """
 body{font-family:system-ui,-apple-system,Segoe UI,Roboto,sans-serif;margin:0;color:#212121;background:#fafafa}
@@ -271,7 +333,8 @@ td,th{border-bottom:1px solid #eeeeee;padding:4px 10px;text-align:left}th{backgr
 td.num{text-align:right;font-variant-numeric:tabular-nums}.grid{display:flex;flex-wrap:wrap;gap:12px}
 .grid>div{flex:1 1 520px;min-width:420px}.legend span{display:inline-block;margin-right:14px;font-size:13px}
 .legend i{display:inline-block;width:12px;height:12px;margin-right:5px;vertical-align:-1px;border-radius:2px}
-.note{color:#616161;font-size:12px}.top{display:flex;flex-wrap:wrap;gap:14px;align-items:flex-start}
+.note{color:#616161;font-size:12px}.views{display:flex;flex-wrap:wrap;gap:10px}
+.views figure{margin:0;width:244px;font-size:11px;color:#424242}.views img{width:240px;border:1px solid #ccc}.top{display:flex;flex-wrap:wrap;gap:14px;align-items:flex-start}
 .top>section{margin:14px 0 0}.summary{flex:0 0 360px}.view{flex:1 1 700px;min-width:600px}.mounts{max-height:420px;overflow:auto}a{color:#1565c0}
 """
 
@@ -335,7 +398,8 @@ def _json(obj) -> str:
 def render_report(view: SceneView, placement: dict, metrics: dict, positions: np.ndarray, is_surface: np.ndarray,
                   coverage: np.ndarray, gamma: np.ndarray, region_ids: np.ndarray, region_names,
                   region_kinds=(), n_candidates: int | None = None, files: list[str] = (),
-                  slices: list[CoverageSlice] | None = None, max_points: int = MAX_POINTS) -> str:
+                  slices: list[CoverageSlice] | None = None, max_points: int = MAX_POINTS,
+                  views: list[dict] | None = None, views_skipped: int = 0) -> str:
     """The report page as one HTML string (plotly.js embedded).
 
     positions: (N_p, 3) m; is_surface, coverage, gamma, region_ids: (N_p,);
@@ -382,6 +446,7 @@ def render_report(view: SceneView, placement: dict, metrics: dict, positions: np
 <div class="grid">{slice_divs}</div></section>
 <section><h2>Coverage histogram and regions</h2><div class="grid"><div id="histogram" class="plot"></div>
 <div>{_region_table(metrics, kinds, gammas)}</div></div></section>
+{_views_section(views, views_skipped)}
 <section><h2>Mount list</h2>{_mount_table(cameras)}</section>
 <section><h2>Files</h2><p>{links}</p></section>
 </main>
@@ -408,12 +473,15 @@ def render_report(view: SceneView, placement: dict, metrics: dict, positions: np
 
 def write_report(out_dir: str | Path, targets, coverage: np.ndarray, placement: dict, metrics: dict,
                  view: SceneView | None = None, n_candidates: int | None = None,
-                 html_report: bool = True, figures: bool = True, exports: bool = True) -> dict[str, Path]:
+                 html_report: bool = True, figures: bool = True, exports: bool = True,
+                 scene=None, vis=None, selected: np.ndarray | None = None) -> dict[str, Path]:
     """Write exports (opencv/, colmap/), PNG figures and report.html into out_dir.
 
     targets: camplace.targets.Targets (N_p); coverage: (N_p,) achieved coverage of the
-    placement; placement / metrics: the placement.json / metrics.json dicts. Returns
-    file name (relative to out_dir) -> path."""
+    placement; placement / metrics: the placement.json / metrics.json dicts. With
+    ``scene`` (camplace.scene.Scene), ``vis`` (camplace.visibility.Visibility) and
+    ``selected`` (rows of vis.V) the page also shows each camera's rendered view.
+    Returns file name (relative to out_dir) -> path."""
     from camplace.exports import write_exports
     from camplace.figures import write_figures
 
@@ -435,8 +503,11 @@ def write_report(out_dir: str | Path, targets, coverage: np.ndarray, placement: 
     if html_report:
         files = ["placement.csv", "placement.json", "metrics.json", "visibility.npz",
                  *sorted(p for p in paths if p.endswith(".png")), *(["opencv/", "colmap/"] if exports else [])]
+        views, skipped = (None, 0)
+        if scene is not None and vis is not None and selected is not None:
+            views, skipped = camera_views(scene, vis, selected)
         text = render_report(view, placement, metrics, targets.positions, is_surface, coverage, targets.gamma,
                              targets.region_ids, targets.region_names, targets.region_kinds, n_candidates, files,
-                             slices)
+                             slices, views=views, views_skipped=skipped)
         paths["report.html"] = atomic_write_text(out / "report.html", text)
     return paths
