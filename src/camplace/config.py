@@ -370,6 +370,12 @@ class SceneSpec(_Strict):
             if off is not None and off >= H:
                 raise scene_error(f"mounts[{i}].offset_below_ceiling",
                                   f"{off} m is not below the ceiling; expected a value in [0, {H}) m")
+            h = getattr(m, "height", None)
+            if getattr(m, "kind", "") == "wall" and h is not None and not 0 < h < H:
+                raise scene_error(f"mounts[{i}].height", f"{h} m is outside the room; expected a height in (0, {H}) m")
+            for k, seg in enumerate(getattr(m, "walls", None) or []):
+                if math.dist(seg[0], seg[1]) <= 1e-9:
+                    raise scene_error(f"mounts[{i}].walls[{k}]", "zero-length wall segment (both ends equal)")
         return self
 
 
@@ -626,9 +632,9 @@ def estimate_resources(spec: "SceneSpec") -> ResourceEstimate:
             continue
         if getattr(m, "kind", "") == "ceiling_grid":
             pts = float(math.floor(w / spacing) + 1) * float(math.floor(d / spacing) + 1)
-        else:  # wall or other mounts: along the boundary, a few heights
-            perim = sum(math.dist(fp[k], fp[(k + 1) % len(fp)]) for k in range(len(fp)))
-            pts = (perim / spacing + len(fp)) * (math.floor(H / spacing) + 1)
+        else:  # wall or other mounts: along the walls (given segments or the footprint's edges)
+            segs = getattr(m, "walls", None) or [(fp[k], fp[(k + 1) % len(fp)]) for k in range(len(fp))]
+            pts = sum(math.dist(a, b) / spacing + 1 for a, b in segs)
         n = pts * _n_angles(getattr(m, "yaw_deg", 1)) * _n_angles(getattr(m, "pitch_deg", 1)) * \
             _n_angles(getattr(m, "roll_deg", 1))
         items.append((f"mounts[{i}]", "candidates", n, n * BYTES_PER_CANDIDATE))
