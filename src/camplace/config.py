@@ -514,7 +514,7 @@ def format_validation_error(err: ValidationError, source: str, model: type[BaseM
 
 # --- checks that need more than one key: referenced files, memory -------------------------------
 
-FILE_KEYS = ("mesh", "point_cloud", "octomap", "file", "path")  # scene keys that name a file
+FILE_KEYS = ("mesh", "point_cloud", "octomap", "calibration", "file", "path")  # scene keys that name a file
 
 
 def _walk_files(obj: Any, path: str):
