@@ -104,3 +104,22 @@ def test_metrics_report_the_share(demo_run):
     strict = well_triangulated_of_selection(vis.V, vis.candidates.positions, vis.targets.positions,
                                             r.placement.selected, 60.0, 120.0)
     assert strict.sum() <= well.sum()
+
+
+def test_triangulated_greedy_beats_plain_greedy_on_its_own_cost(demo_run):
+    from dataclasses import replace
+
+    from camplace.problem import shortfall_cost
+    from camplace.solvers import solve
+
+    r = demo_run
+    vis = r.visibility
+    prob = replace(r.problem, budget=6)
+    plain = solve(prob, "greedy").selected
+    tri = solve_greedy_triangulated(prob, vis.candidates.positions, vis.targets.positions)
+    prob.check_feasible(tri.selected)
+    eff_plain = effective_coverage(vis.V[plain], vis.candidates.positions[plain], vis.targets.positions)
+    eff_tri = effective_coverage(vis.V[tri.selected], vis.candidates.positions[tri.selected], vis.targets.positions)
+    assert tri.info["triangulated_cost"] == shortfall_cost(prob.gamma, prob.weights, eff_tri)
+    assert tri.info["triangulated_cost"] <= shortfall_cost(prob.gamma, prob.weights, eff_plain)
+    assert tri.objective == prob.cost(tri.selected)

@@ -301,7 +301,10 @@ def run_cmd(scene: Optional[str] = typer.Argument(None, help="Scene YAML file or
             money_budget: Optional[float] = typer.Option(None, "--money-budget",
                                                          help="Total camera price limit (default: the scene's)."),
             tri_angle: str = typer.Option("20,160", "--tri-angle",
-                                          help="MIN,MAX degrees at which two rays triangulate well.")) -> None:
+                                          help="MIN,MAX degrees at which two rays triangulate well."),
+            well_triangulated: bool = typer.Option(False, "--well-triangulated",
+                                                   help="Greedy that counts a camera toward Γ only where it pairs "
+                                                        "with another at a --tri-angle angle.")) -> None:
     """Run the whole pipeline on a scene and write placement.json, metrics.json, visibility.npz.
 
     Ctrl-C during the solve writes the best placement found so far (status 'interrupted',
@@ -319,7 +322,8 @@ def run_cmd(scene: Optional[str] = typer.Argument(None, help="Scene YAML file or
     _run(scene, budget, solver, out, time_limit, require_feasible, max_memory_gb, repeatable,
          **_scale_options(workers, scheduler, cache, no_cache), visibility_mode=visibility, stride=stride, probe=probe,
          **({"local_search": True} if local_search else {}), **({"threads": threads} if threads else {}),
-         **_beyond_grid_options(refine, refine_time, adaptive, robust, money_budget, tri_angle))
+         **_beyond_grid_options(refine, refine_time, adaptive, robust, money_budget, tri_angle),
+         **({"well_triangulated": True} if well_triangulated else {}))
 
 
 def _beyond_grid_options(refine: bool, refine_time: float, adaptive: int, robust: int,

@@ -270,7 +270,8 @@ def run(scene: str | Path | SceneSpec, budget: int | None = None, solver: str | 
         cache_dir: str | Path | None = None, visibility_mode: str = "voxel", stride: int | None = None,
         probe: float | None = None, money_budget: float | None = None, refine: bool = False,
         refine_time_s: float = 60.0, adaptive: int = 0, robust: int = 0,
-        triangulation_deg: tuple[float, float] = (20.0, 160.0), **solver_options) -> RunResult:
+        triangulation_deg: tuple[float, float] = (20.0, 160.0), well_triangulated: bool = False,
+        **solver_options) -> RunResult:
     """Run every stage on a scene (built-in name, YAML path or spec).
 
     budget / solver / time_limit_s default to the scene's ``placement`` keys. The solver
@@ -304,7 +305,14 @@ def run(scene: str | Path | SceneSpec, budget: int | None = None, solver: str | 
     problem = problem_from_visibility(vis, budget, money)
     t = time.perf_counter()
     _stage(progress, "solve")
-    placement = solve_stoppable(problem, solver, log=log, **solver_options)
+    if well_triangulated:  # the greedy with the triangulation requirement (needs geometry: not a registry solver)
+        from camplace.triangulation import solve_greedy_triangulated
+
+        placement = solve_greedy_triangulated(problem, vis.candidates.positions, vis.targets.positions,
+                                              *triangulation_deg)
+        log.append(f"greedy-triangulated: triangulation-aware cost {placement.info['triangulated_cost']:.6g}")
+    else:
+        placement = solve_stoppable(problem, solver, log=log, **solver_options)
     timings["solve"] = time.perf_counter() - t
     if refine or adaptive or robust:
         t = time.perf_counter()

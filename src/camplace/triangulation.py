@@ -98,13 +98,16 @@ def _pair_ok(cp, a, b, t, cos_lo, cos_hi):
 
 
 @numba.njit(cache=True)
-def _effective_after_add(i, indptr, indices, cp, tp, cams_of, n_cams, paired, eff, gamma, w, cos_lo, cos_hi):
-    """Cost drop of adding candidate i: per target j in row i, the new effective count is
-    eff_j + (i pairs with some camera at j) + (cameras at j that had no partner and pair with i)."""
+def _effective_after_add(i, indptr, indices, cp, tp, cams_of, n_cams, paired, eff, gamma, w, cos_lo, cos_hi, half):
+    """Cost drop of adding candidate i on the surrogate coverage e_j + half * (unpaired views
+    at j): per target j in row i, e_j grows by (i pairs with some camera at j) + (cameras at
+    j that had no partner and pair with i). half > 0 lets a first camera in an empty area
+    count for something (a pair needs two cameras, which a one-step greedy cannot see)."""
     gain = 0.0
     for e in range(indptr[i], indptr[i + 1]):
         j = indices[e]
-        if gamma[j] <= eff[j]:
+        c0 = eff[j] + half * (n_cams[j] - eff[j])
+        if gamma[j] <= c0:
             continue
         add = 0
         own = False
@@ -116,10 +119,11 @@ def _effective_after_add(i, indptr, indices, cp, tp, cams_of, n_cams, paired, ef
                     add += 1
         if own:
             add += 1
-        if add:
-            d0 = gamma[j] - eff[j]
-            d1 = max(gamma[j] - eff[j] - add, 0)
-            gain += w[j] * (d0 * d0 - d1 * d1)
+        e1 = eff[j] + add
+        c1 = e1 + half * (n_cams[j] + 1 - e1)
+        d0 = gamma[j] - c0
+        d1 = max(gamma[j] - c1, 0.0)
+        gain += w[j] * (d0 * d0 - d1 * d1)
     return gain
 
 
@@ -166,14 +170,17 @@ def effective_coverage(V_sel: sp.csr_matrix, cam_positions: np.ndarray, target_p
 
 def solve_greedy_triangulated(problem: PlacementProblem, candidate_positions: np.ndarray,
                               target_positions: np.ndarray, min_deg: float = DEFAULT_MIN_DEG,
-                              max_deg: float = DEFAULT_MAX_DEG, **_: object) -> Placement:
+                              max_deg: float = DEFAULT_MAX_DEG, unpaired_weight: float = 0.5,
+                              **_: object) -> Placement:
     """Greedy on the triangulation-aware cost Σ_j w_j max(Γ_j − e_j, 0)², where e_j counts
     only the selected cameras at j that form a pair meeting at an angle in [min_deg, max_deg].
 
     This cost is not submodular (a camera can make an earlier one count), so every step
-    re-evaluates every candidate (numba, O(nnz · coverage) per step). A step whose best
-    gain is 0 adds the candidate with the largest plain-coverage gain instead (it can
-    open pairs later). ``objective`` is the plain cost of the selection; the
+    re-evaluates every candidate (numba, O(nnz · coverage) per step), by its gain on the
+    surrogate coverage e_j + unpaired_weight · (views at j without a partner yet): with
+    weight 0 a lone camera in an empty area gains nothing and the greedy only grows
+    clusters. A step whose best gain is 0 adds the candidate with the largest
+    plain-coverage gain instead. ``objective`` is the plain cost of the selection; the
     triangulation-aware cost is in ``info['triangulated_cost']``."""
     t0 = time.perf_counter()
     cos_lo, cos_hi = _check_range(min_deg, max_deg)
@@ -205,7 +212,8 @@ def solve_greedy_triangulated(problem: PlacementProblem, candidate_positions: np
         cand = np.flatnonzero(allowed)
         if len(cand) == 0:
             break
-        g = _gains_all(cand, indptr, indices, cp, tp, cams_of, n_cams, paired, eff, gamma, w, cos_lo, cos_hi)
+        g = _gains_all(cand, indptr, indices, cp, tp, cams_of, n_cams, paired, eff, gamma, w, cos_lo, cos_hi,
+                       float(unpaired_weight))
         best = int(cand[int(np.argmax(g))])
         if g.max() <= 0:
             plain = marginal_gains(problem, cov)[cand]
@@ -226,11 +234,11 @@ def solve_greedy_triangulated(problem: PlacementProblem, candidate_positions: np
 
 
 @numba.njit(cache=True)
-def _gains_all(cand, indptr, indices, cp, tp, cams_of, n_cams, paired, eff, gamma, w, cos_lo, cos_hi):
+def _gains_all(cand, indptr, indices, cp, tp, cams_of, n_cams, paired, eff, gamma, w, cos_lo, cos_hi, half):
     out = np.zeros(len(cand))
     for k in range(len(cand)):
         out[k] = _effective_after_add(cand[k], indptr, indices, cp, tp, cams_of, n_cams, paired, eff, gamma, w,
-                                      cos_lo, cos_hi)
+                                      cos_lo, cos_hi, half)
     return out
 
 
