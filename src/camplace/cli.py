@@ -79,7 +79,7 @@ class _RichProgress:
     def incumbent(self, objective: float, bound: float | None = None) -> None:
         """on_incumbent callback of the solvers: show the best cost, bound and gap so far."""
         text = f"best {objective:.6g}"
-        if bound is not None:
+        if bound is not None and abs(bound) != float("inf") and bound == bound:
             gap = 0.0 if objective <= 0 else max(0.0, (objective - bound) / objective)
             text += f"  bound {bound:.6g}  gap {100 * gap:.2f} %"
         if "solve" in self.tasks:
