@@ -274,3 +274,60 @@ def test_loaders_of_real_data_name_the_file(tmp_path, monkeypatch, capsys):
     assert code == 2, text
     assert "scan.ply" in text and "Traceback" not in text
     assert not (tmp_path / "o").exists()
+
+
+# ---- placement files (camplace evaluate SCENE PLACEMENT) -------------------------------------
+
+GOOD_CAMERA = {"position": [1.5, 1.5, 2.9], "yaw_deg": 0, "pitch_deg": 45, "roll_deg": 0, "camera": "cam"}
+PLACEMENT_CASES = [
+    ("placement-missing", None, "p.json", ["p.json", "not found"]),
+    ("placement-not-json", "{cameras: [", "p.json", ["p.json", "not valid JSON"]),
+    ("placement-empty-list", '{"cameras": []}', "p.json", ["p.json", "empty"]),
+    ("placement-cameras-not-a-list", '{"cameras": 3}', "p.json", ["p.json", "cameras", "list"]),
+    ("placement-bad-position", '{"cameras": [{"position": [1, 2], "yaw_deg": 0, "pitch_deg": 45}]}', "p.json",
+     ["cameras[0].position", "[x, y, z]"]),
+    ("placement-nan-position", '{"cameras": [{"position": [1, NaN, 2], "yaw_deg": 0, "pitch_deg": 45}]}', "p.json",
+     ["cameras[0].position", "finite"]),
+    ("placement-not-a-rotation", '{"cameras": [{"position": [1, 1, 2], "rotation": [[1,0,0],[0,1,0],[0,0,2]]}]}',
+     "p.json", ["cameras[0].rotation", "not a rotation"]),
+    ("placement-no-orientation", '{"cameras": [{"position": [1, 1, 2]}]}', "p.json", ["cameras[0]", "rotation"]),
+    ("placement-unknown-lens", None, "p.json", ["lens 'tele'", "not a camera of the scene", "cam"]),
+    ("placement-csv-missing-columns", "id,x,y,z\n0,1,1,2\n", "p.csv", ["p.csv", "header lacks", "yaw"]),
+    ("placement-csv-bad-number", "id,x,y,z,yaw,pitch,roll,lens\n0,1,one,2,0,45,0,cam\n", "p.csv",
+     ["p.csv: line 2", "column 'y'", "'one'"]),
+    ("placement-csv-short-row", "id,x,y,z,yaw,pitch,roll,lens\n0,1,1,2,0\n", "p.csv", ["p.csv: line 2", "fields"]),
+    ("placement-wrong-extension", "x", "p.xml", ["p.xml", ".json", ".csv"]),
+]
+
+
+@pytest.mark.parametrize("case_id,text,name,expect", PLACEMENT_CASES, ids=[c[0] for c in PLACEMENT_CASES])
+def test_bad_placement_file_exits_2(case_id, text, name, expect, tmp_path, monkeypatch, capsys):
+    import json
+
+    scene = tmp_path / "scene.yaml"
+    scene.write_text(yaml.safe_dump(BASE))
+    pfile = tmp_path / name
+    if case_id == "placement-unknown-lens":
+        text = json.dumps({"cameras": [dict(GOOD_CAMERA, camera="tele")]})
+    if text is not None:
+        pfile.write_text(text)
+    out = tmp_path / "out"
+    code, msg = run_cli(["evaluate", scene, pfile, "--out", out], monkeypatch, capsys)
+    assert code == 2, msg
+    assert "Traceback" not in msg
+    for s in expect:
+        assert s in msg, f"{s!r} not in message:\n{msg}"
+    assert not out.exists()
+
+
+def test_good_placement_file_is_evaluated(tmp_path, monkeypatch, capsys):
+    import json
+
+    monkeypatch.setattr("camplace.report_html.write_report", lambda *a, **k: {})
+    scene = tmp_path / "scene.yaml"
+    scene.write_text(yaml.safe_dump(BASE))
+    pfile = tmp_path / "p.json"
+    pfile.write_text(json.dumps({"cameras": [GOOD_CAMERA]}))
+    code, msg = run_cli(["evaluate", scene, pfile, "--out", tmp_path / "out"], monkeypatch, capsys)
+    assert code == 0, msg
+    assert json.loads((tmp_path / "out" / "placement.json").read_text())["solver"] == "file"
