@@ -331,3 +331,28 @@ def test_good_placement_file_is_evaluated(tmp_path, monkeypatch, capsys):
     code, msg = run_cli(["evaluate", scene, pfile, "--out", tmp_path / "out"], monkeypatch, capsys)
     assert code == 0, msg
     assert json.loads((tmp_path / "out" / "placement.json").read_text())["solver"] == "file"
+
+
+# ---- referenced data files that are not what they claim (loaders of scans, meshes, OctoMaps) ----
+
+LOADER_CASES = [
+    ("scan.ply", b"", "point_cloud", ["obstacles[0].point_cloud", "scan.ply", "empty"]),
+    ("scan.pcd", b"garbage\x00\x01 data\n", "point_cloud", ["obstacles[0].point_cloud", "scan.pcd", "PCD"]),
+    ("scan.foo", b"1 2 3\n", "point_cloud", ["obstacles[0].point_cloud", "unknown point cloud format '.foo'"]),
+    ("part.obj", b"garbage\n", "mesh", ["obstacles[0].mesh", "part.obj", "no triangles"]),
+    ("map.bt", b"garbage\x00\x01\n", "octomap", ["obstacles[0].octomap", "map.bt", "not an OctoMap"]),
+]
+
+
+@pytest.mark.parametrize("name,data,key,expect", LOADER_CASES, ids=[c[0] for c in LOADER_CASES])
+def test_bad_data_file_exits_2(name, data, key, expect, tmp_path, monkeypatch, capsys):
+    (tmp_path / name).write_bytes(data)
+    path = tmp_path / "scene.yaml"
+    path.write_text(yaml.safe_dump(mutate(("obstacles", [{"name": "x", key: name}]))))
+    out = tmp_path / "out"
+    code, msg = run_cli(["run", path, "--out", out, "--no-cache"], monkeypatch, capsys)
+    assert code == 2, msg
+    assert "Traceback" not in msg
+    for s in expect:
+        assert s in msg, f"{s!r} not in message:\n{msg}"
+    assert not out.exists()
