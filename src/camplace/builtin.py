@@ -130,4 +130,7 @@ def resolve_scene(scene: str | Path | SceneSpec) -> tuple[SceneSpec, Path | None
     p = Path(text)
     if p.suffix.lower() in (".yaml", ".yml") or p.exists():
         return load_scene_file(p), p.resolve().parent, str(p)
-    raise InputError(f"scene '{text}': not a built-in scene ({', '.join(BUILTIN_SCENES)}) nor an existing .yaml file")
+    from camplace.config import _did_you_mean
+
+    raise InputError(f"scene '{text}': not a built-in scene{_did_you_mean(text, list(BUILTIN_SCENES))} "
+                     f"({', '.join(BUILTIN_SCENES)}) nor an existing .yaml file")
