@@ -200,7 +200,7 @@ def test_missing_scene_file_and_unknown_builtin(tmp_path, monkeypatch, capsys):
     code, text = run_cli(["run", tmp_path / "nope.yaml"], monkeypatch, capsys)
     assert code == 2 and "nope.yaml: scene file not found" in text
     code, text = run_cli(["run", "standard-stor"], monkeypatch, capsys)
-    assert code == 2 and "standard-stor" in text and "Traceback" not in text
+    assert code == 2 and "did you mean 'standard-store'" in text and "Traceback" not in text
     code, text = run_cli(["run", tmp_path], monkeypatch, capsys)
     assert code == 2 and "folder" in text
 
