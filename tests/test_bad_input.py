@@ -356,3 +356,30 @@ def test_bad_data_file_exits_2(name, data, key, expect, tmp_path, monkeypatch, c
     for s in expect:
         assert s in msg, f"{s!r} not in message:\n{msg}"
     assert not out.exists()
+
+
+# ---- options of the other commands --------------------------------------------------------------
+
+OPTION_CASES = [
+    ("bench-budgets-not-integers", ["bench", "demo", "--budgets", "a,b"], ["--budgets", "'a,b'"]),
+    ("bench-budgets-negative", ["bench", "demo", "--budgets", "-3"], ["--budgets", "non-negative"]),
+    ("bench-unknown-method", ["bench", "demo", "--budgets", "2", "--methods", "gredy"], ["--methods", "'gredy'"]),
+    ("workers-zero", ["run", "demo", "--workers", "0"], ["--workers"]),
+    ("essential-not-a-run-folder", ["essential", "{tmp}/nothing"], ["visibility.npz not found"]),
+    ("render-camera-out-of-range", ["render", "demo", "--camera", "-1"], ["--camera", "out of range"]),
+    ("scan-unknown-format", ["scan", "demo", "--out", "{tmp}/x.unknownext"], ["'.unknownext'", ".ply"]),
+    ("run-scene-and-cloud", ["run", "demo", "--cloud", "{tmp}/x.ply"], ["either a scene or --cloud"]),
+]
+
+
+@pytest.mark.parametrize("case_id,args,expect", OPTION_CASES, ids=[c[0] for c in OPTION_CASES])
+def test_bad_command_options_exit_2(case_id, args, expect, tmp_path, monkeypatch, capsys):
+    args = [a.replace("{tmp}", str(tmp_path)) for a in args]
+    before = set(tmp_path.iterdir())
+    monkeypatch.chdir(tmp_path)
+    code, msg = run_cli(args, monkeypatch, capsys)
+    assert code == 2, msg
+    assert "Traceback" not in msg
+    for s in expect:
+        assert s in msg, f"{s!r} not in message:\n{msg}"
+    assert set(tmp_path.iterdir()) == before, "nothing may be written"
