@@ -7,10 +7,12 @@ over the selected rows gives all of them: removing i raises the cost by
 Worst case: W(S) = max_i cost(S minus i).
 
 ``robust_search`` (the ``--robust 1`` heuristic) minimises W(S) by best-improvement swap
-local search started from the nominal placement: a move removes one selected camera
+local search started from the nominal placement, continued as a short tabu search
+(least-bad move when none improves, the moved camera tabu for a few passes, best
+selection kept): a move removes one selected camera
 and adds one candidate drawn from a pool ranked by its gain in the current worst
 failure scenario and by its nominal gain; moves are compared lexicographically by
-(W, nominal cost), so W never rises and the robust placement's worst case is <= the
+(W, second and third worst failure costs, nominal cost), so W never rises and the robust placement's worst case is <= the
 nominal placement's. A valid lower bound on the optimal worst case: for any S,
 W(S) >= cost(S minus i) >= OPT(N_s − 1), the optimum with one camera fewer, so any lower
 bound on OPT(N_s − 1) (Lagrangian, ``camplace.solvers.bounds``) bounds the robust
@@ -96,6 +98,19 @@ def _sq(gamma: np.ndarray, w: np.ndarray, c: np.ndarray) -> np.ndarray:
     return w * d * d
 
 
+TOP_M = 3  # moves compare the TOP_M worst failure costs, then the nominal cost (lexicographic)
+
+
+def _better(k1: tuple, k2: tuple, tol: float = 1e-9) -> bool:
+    """Lexicographic k1 < k2 with a tolerance (shorter keys: fewer cameras, compare what exists)."""
+    for x, y in zip(k1, k2):
+        if x < y - tol:
+            return True
+        if x > y + tol:
+            return False
+    return False
+
+
 class _SwapScorer:
     """Exact (worst-case, nominal) cost of every swap from the current selection, each in
     O(|row a| + |row b| + entries of the selected rows on them) via a CSC of the rows."""
@@ -139,13 +154,19 @@ class _SwapScorer:
         if a is not None:
             L[self.pos[a]] = -np.inf
         Lb = float(h_new[inv[len(ra):]].sum())
-        worst = max(float(L.max()) if len(L) else -np.inf, Lb)
-        return base + worst, base
+        allL = np.r_[L[np.isfinite(L)], Lb]
+        top = np.sort(allL)[::-1][:TOP_M]
+        return base + float(top[0]), base, tuple(base + top) + (base,)
 
 
 def robust_search(problem: PlacementProblem, initial: np.ndarray, *, time_limit_s: float | None = 60.0,
-                  pool: int = 24, should_stop=None) -> tuple[np.ndarray, dict]:
-    """Swap local search on (worst single-failure cost, nominal cost), from ``initial``.
+                  pool: int = 24, should_stop=None, max_stall: int = 0, tenure: int = 5) -> tuple[np.ndarray, dict]:
+    """Swap local search on (worst single-failure cost, 2nd and 3rd worst, nominal cost) in
+    lexicographic order, from ``initial``: moves that keep the worst case but lower the next
+    ones cross the plateaus of the max. With max_stall > 0 it goes on as a tabu search:
+    when no move improves, it takes the least bad move (the camera removed may not come
+    back for ``tenure`` passes), up to max_stall passes in a row without improvement, and
+    returns the best selection seen.
     Returns the selection and info (moves, passes, seconds, stopped)."""
     t0 = time.perf_counter()
     V = problem.V
@@ -163,9 +184,12 @@ def robust_search(problem: PlacementProblem, initial: np.ndarray, *, time_limit_
         return np.asarray(Vf @ (w * (d0 * d0 - d1 * d1))).ravel()
 
     sc = _SwapScorer(problem, sel, cov)
-    cur = (sc.base + (float(sc.L.max()) if len(sc.L) else 0.0), sc.base)
-    moves = passes = 0
+    top0 = np.sort(sc.L)[::-1][:TOP_M] if len(sc.L) else np.zeros(1)
+    cur = (sc.base + float(top0[0]), sc.base, tuple(sc.base + top0) + (sc.base,))
+    moves = passes = stall = 0
     stopped = "converged"
+    tabu: dict[int, int] = {}
+    best_key, best_sel = cur[2], sorted(sel)
     while True:
         if time_limit_s is not None and time.perf_counter() - t0 > time_limit_s:
             stopped = "time_limit"
@@ -193,10 +217,13 @@ def robust_search(problem: PlacementProblem, initial: np.ndarray, *, time_limit_
             ranked.extend(same[np.argsort(-g_w[same], kind="stable")[:pool]].tolist())
         ranked = list(dict.fromkeys(ranked))
         best = (cur, None, None)
+        fallback = None  # best non-improving, non-tabu move (tabu phase)
         outs: list[int | None] = list(sel) + ([None] if len(sel) < problem.budget else [])
         for a in outs:
             for b in ranked:
                 if a is not None and b == a:
+                    continue
+                if b in tabu and tabu[b] > passes:
                     continue
                 if used[locs[b]] and (a is None or locs[a] != locs[b]):
                     continue
@@ -204,22 +231,32 @@ def robust_search(problem: PlacementProblem, initial: np.ndarray, *, time_limit_
                         spent - (costs[a] if a is not None else 0.0) + costs[b] > problem.money_budget + 1e-9:
                     continue
                 s2 = sc.score(a, b)
-                if s2[0] < best[0][0] - 1e-9 or (abs(s2[0] - best[0][0]) <= 1e-9 and s2[1] < best[0][1] - 1e-9):
+                if _better(s2[2], best[0][2]):
                     best = (s2, a, b)
+                elif fallback is None or _better(s2[2], fallback[0][2]):
+                    fallback = (s2, a, b)
             if time_limit_s is not None and time.perf_counter() - t0 > time_limit_s:
                 break
         if best[2] is None:
-            break
+            stall += 1
+            if fallback is None or stall > max_stall:
+                break
+            best = fallback  # tabu step: the least bad move; the moved cameras may not return for `tenure` passes
+        else:
+            stall = 0
         cur, a, b = best
         if a is not None:
+            tabu[a] = passes + tenure
             sel.remove(a)
             cov[sc.row(a)] -= 1
         sel.append(b)
         cov[sc.row(b)] += 1
         sc = _SwapScorer(problem, sel, cov)
         moves += 1
-    return np.array(sorted(sel), np.int64), {"moves": moves, "passes": passes, "stopped": stopped,
-                                             "seconds": time.perf_counter() - t0}
+        if _better(cur[2], best_key):
+            best_key, best_sel = cur[2], sorted(sel)
+    return np.array(sorted(best_sel), np.int64), {"moves": moves, "passes": passes, "stopped": stopped,
+                                                  "seconds": time.perf_counter() - t0}
 
 
 def robust_bound(problem: PlacementProblem, coverage_hint: np.ndarray | None = None,
@@ -238,12 +275,13 @@ def robust_bound(problem: PlacementProblem, coverage_hint: np.ndarray | None = N
 
 
 def robust_placement(problem: PlacementProblem, nominal: Placement, *, time_limit_s: float | None = 60.0,
-                     bound_time_s: float = 10.0, pool: int = 24, should_stop=None) -> RobustResult:
+                     bound_time_s: float = 10.0, pool: int = 24, max_stall: int = 20,
+                     should_stop=None) -> RobustResult:
     """The ``--robust 1`` heuristic from the nominal placement, with figures for both
     placements and a lower bound on the optimal worst case."""
     t0 = time.perf_counter()
     sel, info = robust_search(problem, nominal.selected, time_limit_s=time_limit_s, pool=pool,
-                              should_stop=should_stop)
+                              should_stop=should_stop, max_stall=max_stall)
     problem.check_feasible(sel)
     nom, rob = _figures(problem, np.asarray(nominal.selected, np.int64)), _figures(problem, sel)
     bound = None
