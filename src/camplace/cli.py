@@ -582,7 +582,7 @@ def main() -> None:
     except KeyboardInterrupt:
         if _state["debug"]:
             raise
-        console.print("[bold red]interrupted[/bold red] (second Ctrl-C): stopped without writing outputs")
+        console.print("[bold red]interrupted:[/bold red] stopped (Ctrl-C); no new outputs written")
         sys.exit(130)
     except Exception as err:  # click usage errors and the like
         kind = _click_kind(err)
