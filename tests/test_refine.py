@@ -107,3 +107,17 @@ def test_refined_output_keeps_the_contract(demo_run, tmp_path):
     mod = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(mod)
     assert mod.check(tmp_path) == []
+
+
+def test_run_with_refine_and_adaptive_options():
+    from camplace.pipeline import run
+
+    r = run("demo", budget=2, refine=True, refine_time_s=3.0, adaptive=1)
+    p = r.placement
+    assert p.solver.endswith("+adaptive+refine")
+    assert p.info["refine"]["refined_cost"] <= p.info["refine"]["grid_cost"]
+    assert p.info["adaptive"]["rounds"][0]["cost"] == p.info["adaptive"]["grid_cost"]
+    assert p.info["refine"]["grid_cost"] <= p.info["adaptive"]["grid_cost"]
+    assert r.metrics.cost == pytest.approx(p.objective)  # metrics from the extended V
+    assert r.visibility.V.shape[0] == r.problem.n_candidates > 0
+    assert p.info["refine"]["stopped"] in ("converged", "time_limit")
