@@ -58,13 +58,6 @@ def test_dask_local_cluster_equals_local(demo_inputs, local_v):
     _same(vis.V, local_v)
 
 
-def test_process_pool_equals_local(demo_inputs, local_v):
-    sc, t, c = demo_inputs
-    vis = compute_visibility(sc.occupancy, t, c, chunk_size=37, executor=ProcessPoolChunkExecutor(2))
-    assert vis.info["executor"] == "process-pool"
-    _same(vis.V, local_v)
-
-
 def test_make_executor_choice(monkeypatch):
     monkeypatch.delenv(SCHEDULER_ENV, raising=False)
     assert isinstance(make_executor(1), InProcessExecutor)
@@ -79,14 +72,19 @@ def test_make_executor_choice(monkeypatch):
         make_executor(4)  # the environment's scheduler wins over --workers
 
 
-def test_cli_options_reach_the_pipeline(tmp_path, monkeypatch):
-    """--workers 2 --no-cache on the CLI runs the process pool and writes the contract files."""
+def test_cli_workers_process_pool_equals_local(tmp_path, monkeypatch):
+    """`camplace run demo --workers 2 --no-cache` runs the process pool and writes the V of
+    the in-process path."""
     from typer.testing import CliRunner
 
     from camplace.cli import app
+    from camplace.pipeline import prepare
 
     monkeypatch.delenv(SCHEDULER_ENV, raising=False)
     r = CliRunner().invoke(app, ["run", "demo", "--out", str(tmp_path / "o"), "--workers", "2", "--no-cache"])
     assert r.exit_code == 0, r.output
-    assert (tmp_path / "o" / "visibility.npz").is_file()
     assert "process-pool" in r.output
+    with np.load(tmp_path / "o" / "visibility.npz") as z:
+        indptr, indices = z["indptr"], z["indices"]
+    _, vis = prepare("demo")  # in-process
+    assert np.array_equal(indptr, vis.V.indptr) and np.array_equal(indices, vis.V.indices)

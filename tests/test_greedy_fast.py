@@ -68,7 +68,7 @@ def test_same_as_greedy_on_demo():
 def test_small_warehouse_same_as_greedy():
     from camplace.pipeline import prepare, problem_from_visibility
 
-    _, vis = prepare("warehouse:300")
+    _, vis = prepare("warehouse:200")
     p = problem_from_visibility(vis, 30)
     ref, fast = solve(p, "greedy"), solve(p, "greedy-fast")
     assert len(ref.selected) == 30

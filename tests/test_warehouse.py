@@ -67,7 +67,7 @@ def test_yaml_round_trip():
 def test_small_warehouse_pipeline():
     from camplace.pipeline import run
 
-    r = run("warehouse:300", budget=12, solver="greedy-fast")
+    r = run("warehouse:200", budget=12, solver="greedy-fast")
     n_xy = 36  # 12 yaws x 3 pitches per ceiling point
     assert len(r.visibility.candidates) <= r.visibility.candidates.info["generated"]
     assert r.visibility.candidates.info["generated"] % n_xy == 0
