@@ -35,7 +35,7 @@ def _check(prob: PlacementProblem, placement, solver: str) -> None:
 @pytest.mark.parametrize("solver", sorted(SOLVERS))
 def test_every_solver_keeps_the_money_budget(solver):
     prob = _mixed_problem()
-    p = solve(prob, solver, time_limit_s=5.0)
+    p = solve(prob, solver, time_limit_s=2.0)
     _check(prob, p, solver)
     if p.bound is not None:
         assert p.bound <= p.objective + 1e-6
