@@ -161,6 +161,8 @@ def _summary(result, out_dir: Path, repeatable: bool = False) -> None:
     t.add_row("bound", "-" if p.bound is None else f"{p.bound:.6g} (gap {100 * (p.gap or 0):.2f} %)")
     t.add_row("coverage gap (eq. 8)", f"{m.coverage_gap:.4f}")
     t.add_row("non-triangulatable", f"{m.non_triangulatable_pct:.2f} %")
+    if m.well_triangulated_pct is not None:
+        t.add_row("well triangulated", f"{m.well_triangulated_pct:.2f} % (rays meet at a usable angle)")
     for name, r in m.regions.items():
         t.add_row(f"  region {name}", f"{r['targets']} targets, gap {r['coverage_gap']:.4f}, "
                                      f"non-tri {r['non_triangulatable_pct']:.1f} %")
