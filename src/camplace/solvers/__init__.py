@@ -13,6 +13,7 @@ from camplace.problem import PlacementProblem
 from camplace.solvers.base import Placement
 from camplace.solvers.greedy import solve_greedy
 from camplace.solvers.greedy_fast import solve_greedy_fast
+from camplace.solvers.polish import solve_greedy_polish
 from camplace.solvers.horster import solve_horster
 from camplace.solvers.min_cameras import solve_min_cameras
 from camplace.solvers.mip import solve_mip
@@ -22,6 +23,7 @@ from camplace.solvers.zhao import solve_zhao
 SOLVERS: dict[str, Callable[..., Placement]] = {
     "greedy": solve_greedy,
     "greedy-fast": solve_greedy_fast,
+    "greedy-polish": solve_greedy_polish,
     "mip": solve_mip,
     "paper-mip": solve_paper_mip,
     "zhao": solve_zhao,
