@@ -298,11 +298,13 @@ def visibility_cache_key(occupancy: OccupancyGrid, targets: Targets, candidates:
                          mode: str, chunk_size: int) -> str:
     """Content hash of everything V depends on, code version included."""
     from camplace import cameras as _cameras_mod
+    from camplace import quality as _quality_mod
     from camplace import visibility as _vis_mod
     from camplace.cache import code_version, content_key
 
+    mods = (_vis_mod, _cameras_mod, _quality_mod)  # the code that decides V: kernel, lenses, per-target limits
     occ = OccupancyGrid(np.packbits(occupancy.occupied, axis=None), occupancy.origin, occupancy.resolution)
-    return content_key("visibility", code_version(_vis_mod, _cameras_mod), mode, int(chunk_size),
+    return content_key("visibility", code_version(*mods), mode, int(chunk_size),
                        occupancy.occupied.shape, occ, targets, candidates)
 
 
