@@ -229,7 +229,8 @@ def improve_placement(sc: Scene, vis: Visibility, problem: PlacementProblem, pla
     best worst case over single camera failures (camplace.robust); ``adaptive`` rounds of
     finer candidates (camplace.adaptive), then ``refine`` moves each camera off the grid
     (camplace.refine). Adaptive and refine append rows to V, so the returned visibility /
-    problem replace the grid ones (the placement stays a selection of V rows)."""
+    problem replace the grid ones (the placement stays a selection of V rows). time_limit_s
+    caps the robust search (default 60 s) and the adaptive rounds (default 120 s)."""
     log = [] if log is None else log
     if robust not in (0, 1):
         raise InputError(f"--robust: expected 0 or 1 (single camera failures), got {robust}")
@@ -318,7 +319,7 @@ def run(scene: str | Path | SceneSpec, budget: int | None = None, solver: str | 
         t = time.perf_counter()
         vis, problem, placement = improve_placement(
             sc, vis, problem, placement, refine=refine, refine_time_s=refine_time_s, adaptive=adaptive,
-            robust=robust, time_limit_s=time_limit_s, should_stop=should_stop, progress=progress, log=log)
+            robust=robust, should_stop=should_stop, progress=progress, log=log)
         timings["beyond_grid"] = time.perf_counter() - t
     t = time.perf_counter()
     metrics = placement_metrics(vis, problem, placement.selected, triangulation_deg)
