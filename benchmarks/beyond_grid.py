@@ -9,6 +9,9 @@ scored again from scratch by ``camplace.evaluate.evaluate`` (the library behind
 table reports. The robust placement (``--robust 1``) starts from the same incumbent.
 
     python benchmarks/beyond_grid.py --out benchmarks/results/beyond_grid.json
+    python benchmarks/beyond_grid.py --parts robust --out benchmarks/results/beyond_grid_robust.json
+    python benchmarks/beyond_grid.py --parts triangulation --out benchmarks/results/triangulation.md
+    python benchmarks/beyond_grid.py --parts catalogue --tabu-s 30 --out benchmarks/results/catalogue.md
 
 Writes the JSON rows and a markdown table beside it (.md).
 """
@@ -51,8 +54,15 @@ def main() -> None:
     ap.add_argument("--robust-s", type=float, default=60.0)
     ap.add_argument("--out", type=Path, default=Path("benchmarks/results/beyond_grid.json"))
     ap.add_argument("--work", type=Path, default=Path("/tmp/camplace-beyond-grid"))
-    ap.add_argument("--parts", default="grid-moves,robust", help="grid-moves (refine, adaptive) and/or robust")
+    ap.add_argument("--parts", default="grid-moves,robust",
+                    help="grid-moves (refine, adaptive) and/or robust; or alone: triangulation, catalogue")
     a = ap.parse_args()
+    if a.parts in ("triangulation", "catalogue"):
+        text = (triangulation_table(a.scenes.split(","), [int(b) for b in a.budgets.split(",")])
+                if a.parts == "triangulation" else catalogue_table(a.tabu_s))
+        a.out.with_suffix(".md").write_text(text)
+        print(text)
+        return
     rows = []
     for scene in a.scenes.split(","):
         sc, vis = prepare(scene)
@@ -110,6 +120,55 @@ def robust_row(a, problem, grid, row) -> None:
                nominal_gap=rb.nominal["coverage_gap"], nominal_worst_gap=rb.nominal["worst_case_gap"],
                robust_gap=rb.robust["coverage_gap"], robust_worst_gap=rb.robust["worst_case_gap"],
                robust_moves=rb.info["moves"])
+
+
+def triangulation_table(scenes: list[str], budgets: list[int]) -> str:
+    """Plain greedy against the triangulation-aware greedy (--well-triangulated)."""
+    from camplace.problem import shortfall_cost
+    from camplace.triangulation import effective_coverage, solve_greedy_triangulated, well_triangulated_of_selection
+
+    out = ["| scene | N_s | greedy | cost | triangulation-aware cost | well triangulated | non-triangulatable | s |",
+           "|---|---|---|---|---|---|---|---|"]
+    for scene in scenes:
+        sc, vis = prepare(scene)
+        cp, tp = vis.candidates.positions, vis.targets.positions
+        for n in budgets:
+            problem = problem_from_visibility(vis, n)
+            t = time.perf_counter()
+            plain = solve(problem, "greedy")
+            runs = [("plain", plain.selected, time.perf_counter() - t)]
+            t = time.perf_counter()
+            tri = solve_greedy_triangulated(problem, cp, tp)
+            runs.append(("--well-triangulated", tri.selected, time.perf_counter() - t))
+            for name, sel, sec in runs:
+                eff = effective_coverage(vis.V[sel], cp[sel], tp)
+                well = well_triangulated_of_selection(vis.V, cp, tp, sel)
+                cov = problem.coverage(sel)
+                out.append(f"| {scene} | {n} | {name} | {problem.cost(sel):,.0f} | "
+                           f"{shortfall_cost(problem.gamma, problem.weights, eff):,.0f} | {100 * well.mean():.1f} % | "
+                           f"{100 * np.mean(cov < 2):.1f} % | {sec:.1f} |")
+    return "\n".join(out) + "\n"
+
+
+def catalogue_table(time_limit_s: float = 30.0) -> str:
+    """Every registered solver on catalogue-store (money budget 10, at most 14 cameras)."""
+    from camplace.solvers import SOLVERS
+
+    sc, vis = prepare("catalogue-store")
+    problem = problem_from_visibility(vis, sc.spec.placement.budget, sc.spec.placement.money_budget)
+    names = [c.name for c in vis.candidates.cameras]
+    out = ["| solver | cost | bound | cameras | money spent | types | s |", "|---|---|---|---|---|---|---|"]
+    for s in SOLVERS:
+        t = time.perf_counter()
+        p = solve(problem, s, time_limit_s=time_limit_s)
+        sec = time.perf_counter() - t
+        sel = p.selected
+        problem.check_feasible(sel) if not getattr(SOLVERS[s], "ignores_budget", False) else None
+        kinds = [names[c] for c in vis.candidates.camera_ids[sel]]
+        mix = ", ".join(f"{k} {kinds.count(k)}" for k in names if k in kinds)
+        b = "-" if p.bound is None else f"{p.bound:,.0f}"
+        out.append(f"| {s} | {p.objective:,.0f} | {b} | {len(sel)} | {problem.costs[sel].sum():.1f} | {mix} | {sec:.1f} |")
+    return "\n".join(out) + "\n"
 
 
 def markdown(rows: list[dict]) -> str:
