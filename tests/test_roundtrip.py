@@ -68,3 +68,26 @@ def test_cli_run_needs_scene_or_cloud(tmp_path):
 
     r = CliRunner().invoke(app, ["run"])
     assert r.exit_code != 0
+
+
+def test_cli_round_trip_scored_with_camplace_evaluate(tmp_path, demo):
+    """The acceptance through the CLI: scan -> scene file -> run -> camplace evaluate on the box scene."""
+    import json
+
+    import yaml
+
+    from camplace.cli import app
+
+    spec, _, direct = demo
+    cli = CliRunner()
+    r = cli.invoke(app, ["-q", "scan", "demo", "--out", str(tmp_path / "demo.ply"), "--step", "0.5"])
+    assert r.exit_code == 0, r.output
+    rs = roundtrip_spec(spec, "point_cloud", "demo.ply")  # relative to the scene file
+    (tmp_path / "scan.yaml").write_text(yaml.safe_dump(rs.model_dump(mode="json", exclude_defaults=True)))
+    r = cli.invoke(app, ["-q", "run", str(tmp_path / "scan.yaml"), "--out", str(tmp_path / "run")])
+    assert r.exit_code == 0, r.output
+    r = cli.invoke(app, ["-q", "evaluate", "demo", str(tmp_path / "run" / "placement.json"),
+                         "--out", str(tmp_path / "eval")])
+    assert r.exit_code == 0, r.output
+    gap = json.loads((tmp_path / "eval" / "metrics.json").read_text())["coverage_gap"]
+    assert abs(gap - direct.metrics.coverage_gap) <= 0.02
