@@ -78,8 +78,9 @@ def test_free_space_clearance_and_connectivity():
 
 
 def test_memory_check_names_the_numbers():
-    with pytest.raises(InputError, match=r"2000x2000x2000 grid needs .* GiB"):
-        check_grid_memory((2000, 2000, 2000), 7, "test")
+    with pytest.raises(InputError, match=r"2000x2000x2000 grid needs 52.2 GiB .*limit 4.0 GiB"):
+        check_grid_memory((2000, 2000, 2000), 7, "test", limit=4 * 1024**3)
+    assert check_grid_memory((10, 10, 10), 7, "test") == 7000
 
 
 def test_pca_normals_of_a_plane():

@@ -90,3 +90,30 @@ def test_geb079_figures_from_the_data_readme():
     c = om.centres(True)
     assert np.allclose(c.min(0), [-7.96, -7.48, -0.28], atol=0.01)
     assert np.allclose(c.max(0), [30.92, 7.40, 2.76], atol=0.01)
+
+
+from hypothesis import given, settings, strategies as st  # noqa: E402
+
+
+@settings(max_examples=25, deadline=None)
+@given(seed=st.integers(0, 10_000), shift=st.tuples(st.integers(-40, 40), st.integers(-40, 40), st.integers(-5, 5)),
+       share=st.floats(0.0, 1.0), suffix=st.sampled_from(["bt", "ot"]))
+def test_any_grid_survives_the_round_trip(tmp_path_factory, seed, shift, share, suffix):
+    rng = np.random.default_rng(seed)
+    shape = tuple(int(v) for v in rng.integers(1, 12, 3))
+    occ = rng.random(shape) < share
+    free = ~occ & (rng.random(shape) < 0.8)
+    if not (occ.any() or free.any()):
+        free[0, 0, 0] = True
+    res = 0.1
+    origin = np.array(shift) * res
+    f = tmp_path_factory.mktemp("om") / f"g.{suffix}"
+    write_octomap(f, occ, free, origin, res)
+    om = load_octomap(f)
+    # rasterize the leaves back onto the grid: the same cells, occupied and free
+    from camplace.loaders.obstacles import mark_boxes
+
+    back_o, back_f = np.zeros(shape, bool), np.zeros(shape, bool)
+    mark_boxes(back_o, origin, res, om.occupied_lo, om.occupied_size)
+    mark_boxes(back_f, origin, res, om.free_lo, om.free_size)
+    assert np.array_equal(back_o, occ) and np.array_equal(back_f, free)

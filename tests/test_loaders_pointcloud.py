@@ -136,3 +136,12 @@ def test_writers_reject_unknown_suffix(tmp_path, pts):
     write_xyz(tmp_path / "a.xyz", pts)
     write_las(tmp_path / "b.las", pts)
     assert (tmp_path / "a.xyz").stat().st_size > 0 and (tmp_path / "b.las").stat().st_size > 0
+
+
+from hypothesis import given, settings, strategies as st  # noqa: E402
+
+
+@settings(max_examples=50, deadline=None)
+@given(st.binary(min_size=0, max_size=300))
+def test_lzf_literal_stream_round_trip(data):
+    assert lzf_decompress(lzf_compress_literal(data), len(data)) == data

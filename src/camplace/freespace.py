@@ -25,7 +25,6 @@ from scipy import ndimage
 
 from camplace.errors import InputError
 
-MAX_FREE_BYTES = 4 * 1024**3
 
 
 @dataclass(frozen=True)
@@ -70,12 +69,17 @@ def grid_memory_bytes(shape: tuple[int, ...], bytes_per_cell: float) -> int:
     return int(math.prod(int(s) for s in shape) * bytes_per_cell)
 
 
-def check_grid_memory(shape: tuple[int, ...], bytes_per_cell: float, what: str, limit: int = MAX_FREE_BYTES) -> int:
-    """The bytes a grid of ``shape`` needs; InputError with the numbers when over ``limit``."""
+def check_grid_memory(shape: tuple[int, ...], bytes_per_cell: float, what: str, limit: int | None = None) -> int:
+    """The bytes a grid of ``shape`` needs; InputError with the numbers when over ``limit``
+    (default: camplace.config.memory_limit_bytes(), i.e. --max-memory-gb / 80 % of RAM)."""
+    if limit is None:
+        from camplace.config import memory_limit_bytes
+
+        limit = memory_limit_bytes()
     need = grid_memory_bytes(shape, bytes_per_cell)
     if need > limit:
         raise InputError(f"{what}: a {'x'.join(str(int(s)) for s in shape)} grid needs {need / 1024**3:.1f} GiB "
-                         f"({bytes_per_cell:g} bytes/cell; limit {limit / 1024**3:.0f} GiB); use a coarser "
+                         f"({bytes_per_cell:g} bytes/cell; limit {limit / 1024**3:.1f} GiB); use a coarser "
                          "occupancy_resolution or crop the scan")
     return need
 
@@ -304,9 +308,9 @@ def scene_free_space(grid, spec, loaded: list, progress=None):
     if not any(lo.report.get("kind") in ("point_cloud", "octomap") for lo in loaded):
         return None, points, viewpoints
     occ, origin, res = grid.occupied, grid.origin, grid.resolution
-    check_grid_memory(occ.shape, 7, f"scene '{spec.name}': free space")
+    need = check_grid_memory(occ.shape, 7, f"scene '{spec.name}': free space")
     observed = None
-    info: dict = {}
+    info: dict = {"grid_bytes_planned": need}
     if viewpoints is not None:
         surface = occ & ~ndimage.binary_erosion(occ, border_value=1)
         idx = np.argwhere(surface)
