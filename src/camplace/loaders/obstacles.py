@@ -52,13 +52,16 @@ def load_cloud_obstacle(ob, base_dir: Path | None, where: str = "", progress: Pr
            ob.model_dump_json(include={"transform", "crop", "downsample", "remove_outliers", "viewpoints"}))
     if key in _CACHE:
         return _CACHE[key]
+    t = ob.transform
+    # thin while reading (in file units, chunk by chunk), so memory follows the output;
+    # the exact downsampling then runs again in the scene frame below
+    pre = ob.downsample / (t.scale if t else 1.0) if ob.downsample else None
     try:
-        cloud = load_point_cloud(path, progress=progress)
+        cloud = load_point_cloud(path, downsample=pre, progress=progress)
     except InputError as err:
         raise InputError(f"{where}: {err}") from None
     if ob.viewpoints is not None:
         cloud = PointCloud(cloud.points, np.asarray(ob.viewpoints, float).reshape(-1, 3), cloud.info)
-    t = ob.transform
     out = clean_cloud(
         cloud,
         scale=t.scale if t else 1.0, rotate_deg=t.rotate_deg if t else (0, 0, 0),
@@ -176,3 +179,20 @@ def add_obstacle(grid_occ: np.ndarray, origin: np.ndarray, res: float, ob, i: in
         raise InputError(f"{source}: obstacles[{i}]: unknown obstacle kind")
     out.report["cells_marked"] = int(grid_occ.sum()) - before
     return out
+
+
+def describe(name: str, rep: dict) -> str:
+    """One log line for an obstacle file's report: what was read and each clean-up step."""
+    kind = rep.get("kind", "?")
+    if kind == "point_cloud":
+        steps = ", ".join(f"{s['step']} -> {s.get('points', '?'):,}" for s in rep.get("cleanup", []))
+        return (f"obstacle '{name}': point cloud ({rep.get('format')}) {rep.get('points_read', 0):,} points read"
+                + (f"; {steps}" if steps else "") + f"; {rep.get('viewpoints', 0)} viewpoint(s); "
+                f"{rep.get('cells_marked', 0):,} cells marked")
+    if kind == "mesh":
+        return (f"obstacle '{name}': mesh {rep.get('faces', 0):,} triangles"
+                f"{' (solid)' if rep.get('solid') else ''}; {rep.get('cells_marked', 0):,} cells marked"
+                + (f"; {rep['warning']}" if rep.get("warning") else ""))
+    return (f"obstacle '{name}': OctoMap ({rep.get('format')}, {rep.get('resolution')} m) "
+            f"{rep.get('occupied_leaves', 0):,} occupied / {rep.get('free_leaves', 0):,} free leaves; "
+            f"{rep.get('cells_marked', 0):,} cells marked")
