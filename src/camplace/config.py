@@ -148,8 +148,9 @@ class OutlierRemoval(_Strict):
 class FreeSpaceSpec(_Strict):
     """How free space is derived from scans / OctoMaps (volume targets come from it)."""
 
-    clearance: Annotated[float, Field(ge=0, allow_inf_nan=False)] = 0.1  # m from any occupied cell
+    clearance: Annotated[float, Field(ge=0, allow_inf_nan=False)] = 0.05  # m from any occupied cell
     connected_to_floor: bool = True  # keep only free space connected to the main floor area
+    unobserved_occludes: bool = True  # space no scanner saw blocks sight lines (like an obstacle)
 
 
 class Obstacle(_Strict):
