@@ -230,9 +230,10 @@ def slice_figure(sl: CoverageSlice, view: SceneView, cameras: list[dict]) -> dic
     shapes = [{"type": "path", "path": path, "line": {"color": "#000000", "width": 1.5}}]
     for _, x0, y0, x1, y1 in sl.boxes:
         shapes.append({"type": "rect", "x0": x0, "y0": y0, "x1": x1, "y1": y1, "fillcolor": "#9e9e9e",
-                       "opacity": 0.8, "line": {"color": "#424242", "width": 1}})
+                       "opacity": 0.8, "line": {"color": "#424242", "width": 1}, "layer": "below"})
     w, h = np.ptp(fp[:, 0]), np.ptp(fp[:, 1])
-    layout = {"title": {"text": f"coverage at z = {sl.height:.2f} m", "font": {"size": 14}},
+    layout = {"title": {"text": f"coverage at z = {sl.height:.2f} m", "font": {"size": 14}, "x": 0.01,
+                        "xanchor": "left"},
               "height": int(np.clip(80 + 520 * h / max(w, 1e-9), 260, 760)), "margin": {"l": 50, "r": 10, "t": 40, "b": 40},
               "xaxis": {"title": {"text": "x (m)"}, "constrain": "domain"},
               "yaxis": {"title": {"text": "y (m)"}, "scaleanchor": "x", "scaleratio": 1, "constrain": "domain"},
@@ -254,7 +255,8 @@ def histogram_figure(histograms: dict[str, dict[str, int]], gammas: dict[str, in
             shapes.append({"type": "line", "xref": "x", "yref": "paper", "x0": gammas[name] - 0.5,
                            "x1": gammas[name] - 0.5, "y0": 0, "y1": 1, "line": {"color": colour, "dash": "dash"}})
     layout = {"barmode": "stack", "height": 380, "margin": {"l": 60, "r": 10, "t": 40, "b": 50}, "shapes": shapes,
-              "title": {"text": "targets per achieved coverage (dashed: required \u0393)", "font": {"size": 14}},
+              "title": {"text": "targets per achieved coverage (dashed: required \u0393)", "font": {"size": 14},
+                        "x": 0.01, "xanchor": "left"},
               "xaxis": {"title": {"text": "cameras seeing the target"}, "dtick": 1},
               "yaxis": {"title": {"text": "targets"}}}
     return {"data": data, "layout": layout}
