@@ -48,7 +48,9 @@ def _r(a, nd: int = 3) -> list:
 
 
 def _nan_to_none(grid: np.ndarray) -> list:
-    return [[None if np.isnan(v) else int(v) for v in row] for row in grid]
+    """Integer grid for JSON, NaN -> null (heatmap gaps)."""
+    g = np.asarray(grid, float)
+    return np.where(np.isnan(g), None, np.nan_to_num(g).astype(np.int64).astype(object)).tolist()
 
 
 # ----------------------------------------------------------------------------- 3D view
