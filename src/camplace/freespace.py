@@ -120,25 +120,60 @@ def detect_floor_ceiling(points: np.ndarray, bin_m: float = 0.02, min_share: flo
 
 
 def auto_footprint(points: np.ndarray, floor_z: float = 0.0, ceiling_z: float | None = None,
-                   trim: float = 0.005) -> np.ndarray:
-    """A room polygon (K, 2) from a z-up scan: the convex hull of the points in the wall
-    band (0.3 m above the floor to 0.3 m below the ceiling), after trimming the ``trim``
-    share of extreme x and y (stray points through openings)."""
-    from shapely.geometry import MultiPoint
+                   trim: float = 0.005, cell: float = 0.1) -> np.ndarray:
+    """A room polygon (K, 2) from a z-up scan's wall band (0.15 to 0.6 m below the ceiling,
+    where only walls remain; without a ceiling 0.3 m above the floor to 0.3 m below the
+    top), 0.5 % of extreme x and y trimmed (stray points through openings).
+
+    When the walls close a loop (rasterized at ``cell`` m and closed over 2-cell gaps),
+    the polygon is the filled inside of that loop (non-convex rooms keep their shape);
+    otherwise (open walls, no ceiling) the convex hull of the points 0.3 m above the floor
+    to 0.3 m below the ceiling."""
+    from shapely.geometry import MultiPoint, box
+    from shapely.ops import unary_union
 
     p = np.asarray(points, float)
+
+    def _trimmed(b: np.ndarray) -> np.ndarray:
+        if len(b) < 10:
+            b = p
+        lo_, hi_ = np.quantile(b[:, :2], trim, axis=0), np.quantile(b[:, :2], 1 - trim, axis=0)
+        return b[np.all((b[:, :2] >= lo_) & (b[:, :2] <= hi_), axis=1)]
+
     top = ceiling_z if ceiling_z is not None else float(np.quantile(p[:, 2], 0.99))
-    band = p[(p[:, 2] > floor_z + 0.3) & (p[:, 2] < top - 0.3)]
-    if len(band) < 10:
-        band = p
-    lo = np.quantile(band[:, :2], trim, axis=0)
-    hi = np.quantile(band[:, :2], 1 - trim, axis=0)
-    band = band[np.all((band[:, :2] >= lo) & (band[:, :2] <= hi), axis=1)]
-    hull = MultiPoint(band[:, :2]).convex_hull.simplify(0.05)
+    wide = _trimmed(p[(p[:, 2] > floor_z + 0.3) & (p[:, 2] < top - 0.3)])
+    hull = MultiPoint(wide[:, :2]).convex_hull.simplify(0.05)
     if hull.geom_type != "Polygon" or hull.area < 0.5:
         raise InputError("scan: cannot find a room footprint (the wall band of the scan has no area); "
                          "give --footprint or a scene file")
-    return np.asarray(hull.exterior.coords)[:-1]
+    if ceiling_z is None:
+        return np.asarray(hull.exterior.coords)[:-1]
+    # just below the ceiling only walls remain (shelves and people end lower)
+    band = _trimmed(p[(p[:, 2] > max(floor_z + 0.3, ceiling_z - 0.6)) & (p[:, 2] < ceiling_z - 0.15)])
+    lo, hi = band[:, :2].min(0), band[:, :2].max(0)
+    # the walls as a 2D image; their filled inside, if they close
+    o = lo - 2 * cell
+    ij = np.floor((band[:, :2] - o) / cell).astype(int)
+    shape = tuple(np.floor((hi - o) / cell).astype(int) + 3)
+    img = np.zeros(shape, bool)
+    img[ij[:, 0], ij[:, 1]] = True
+    walls = ndimage.binary_closing(img, structure=np.ones((3, 3), bool), iterations=2) | img
+    inside = ndimage.binary_fill_holes(walls) & ~walls
+    if inside.sum() * cell * cell < 0.5 * hull.area:
+        return np.asarray(hull.exterior.coords)[:-1]  # the walls do not close: convex hull
+    labels, n = ndimage.label(inside)
+    biggest = np.argmax(np.bincount(labels.ravel())[1:]) + 1
+    room = ndimage.binary_fill_holes(labels == biggest)  # furniture columns inside belong to the room
+    room = ndimage.binary_dilation(room, iterations=1) & (room | walls)  # out to the wall surface
+    cells = np.argwhere(room)
+    poly = unary_union([box(o[0] + i * cell, o[1] + j * cell, o[0] + (i + 1) * cell, o[1] + (j + 1) * cell)
+                        for i, j in cells])
+    if poly.geom_type != "Polygon":
+        poly = max(poly.geoms, key=lambda g: g.area)
+    poly = poly.simplify(cell * 1.5)
+    if poly.geom_type != "Polygon" or not poly.is_valid or poly.area < 0.5:
+        return np.asarray(hull.exterior.coords)[:-1]
+    return np.asarray(poly.exterior.coords)[:-1]
 
 
 # ------------------------------------------------------------------ carving
