@@ -214,3 +214,18 @@ def test_scene_from_cloud_tilted_scan(tmp_path):
     sc = build_scene(parse_scene(data))
     z = sc.points[:, 2]
     assert abs(np.median(z[z < 0.5])) < 0.02  # floor at z = 0 after the stored transform
+
+
+def test_auto_footprint_keeps_an_l_shape():
+    from shapely.geometry import Polygon
+
+    from camplace.builtin import resolve_scene
+    from camplace.synthetic_scan import scan_scene
+
+    spec, _, _ = resolve_scene("store-a")  # L-shaped, wall shelves up to 2.2 m
+    sc = build_scene(spec)
+    cloud = scan_scene(sc, step_deg=0.6, noise=0.005)
+    fp = Polygon(auto_footprint(cloud.points, 0.0, 3.0))
+    iou = fp.intersection(sc.polygon).area / fp.union(sc.polygon).area
+    assert iou > 0.95
+    assert not fp.contains(Polygon([(14.0, 8.0), (15.5, 8.0), (15.5, 11.5), (14.0, 11.5)]).centroid)  # the notch
