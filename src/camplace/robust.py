@@ -7,13 +7,13 @@ over the selected rows gives all of them: removing i raises the cost by
 Worst case: W(S) = max_i cost(S minus i).
 
 ``robust_search`` (the ``--robust 1`` heuristic) minimises W(S) by best-improvement swap
-local search started from the nominal placement, continued as a short tabu search
-(least-bad move when none improves, the moved camera tabu for a few passes, best
-selection kept): a move removes one selected camera
-and adds one candidate drawn from a pool ranked by its gain in the current worst
-failure scenario and by its nominal gain; moves are compared lexicographically by
-(W, second and third worst failure costs, nominal cost), so W never rises and the robust placement's worst case is <= the
-nominal placement's. A valid lower bound on the optimal worst case: for any S,
+local search started from the nominal placement: a move removes one selected camera and
+adds one candidate drawn from a pool ranked by its gain in the current worst failure
+scenario and by its nominal gain; moves are compared lexicographically by (W, second and
+third worst failure costs, nominal cost). When no move improves it continues as a short
+tabu search (least-bad move, the removed camera tabu for a few passes) and returns the
+best selection seen, so the robust placement's worst case is <= the nominal placement's.
+A valid lower bound on the optimal worst case: for any S,
 W(S) >= cost(S minus i) >= OPT(N_s − 1), the optimum with one camera fewer, so any lower
 bound on OPT(N_s − 1) (Lagrangian, ``camplace.solvers.bounds``) bounds the robust
 optimum from below.
