@@ -229,3 +229,19 @@ def test_auto_footprint_keeps_an_l_shape():
     iou = fp.intersection(sc.polygon).area / fp.union(sc.polygon).area
     assert iou > 0.95
     assert not fp.contains(Polygon([(14.0, 8.0), (15.5, 8.0), (15.5, 11.5), (14.0, 11.5)]).centroid)  # the notch
+
+
+def test_a_viewpoint_outside_the_room_is_ignored_and_reported(tmp_path):
+    from camplace.builtin import resolve_scene
+    from camplace.freespace import describe_free_space
+    from camplace.loaders.pointcloud import write_pcd
+    from camplace.synthetic_scan import roundtrip_spec, scan_scene
+
+    spec, _, _ = resolve_scene("demo")
+    cloud = scan_scene(build_scene(spec), step_deg=0.8)
+    write_pcd(tmp_path / "s.pcd", cloud.points, viewpoints=[[-5.0, -5.0, 1.0]])  # a default/bogus VIEWPOINT
+    sc = build_scene(roundtrip_spec(spec, "point_cloud", tmp_path / "s.pcd"))
+    info = sc.info["free_space"]
+    assert info["viewpoints_ignored"] == 1 and sc.free_space.observed is None
+    assert "ignored" in describe_free_space(info) and "unknown" in describe_free_space(info)
+    assert len(build_targets(sc)) > 500  # free = not occupied: targets remain

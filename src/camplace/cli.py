@@ -274,6 +274,8 @@ _DOWNSAMPLE_OPT = typer.Option(0.02, "--downsample", help="With --cloud: voxel d
 _HEIGHTS_OPT = typer.Option("0.5,1.0,1.5", "--heights", help="With --cloud: walkable target heights (m, comma-separated).")
 _COVERAGE_OPT = typer.Option(2, "--coverage", min=0, help="With --cloud: cameras required per walkable target.")
 _WALL_MOUNTS_OPT = typer.Option(None, "--wall-mounts", help="With --cloud: also mount on the walls at this height (m).")
+_VIEWPOINT_OPT = typer.Option(None, "--viewpoint", help="With --cloud: a scanner position 'x,y,z' (file frame) for "
+                              "free-space carving; repeat for several (default: those the file records).")
 
 
 @app.command("run")
@@ -281,7 +283,7 @@ def run_cmd(scene: Optional[str] = typer.Argument(None, help="Scene YAML file or
             cloud: Optional[Path] = _CLOUD_OPT, save_scene: Optional[Path] = _SAVE_SCENE_OPT, up: str = _UP_OPT,
             no_level_floor: bool = _NO_LEVEL_OPT, crop: Optional[str] = _CROP_OPT,
             downsample: float = _DOWNSAMPLE_OPT, heights: str = _HEIGHTS_OPT, coverage: int = _COVERAGE_OPT,
-            wall_mounts: Optional[float] = _WALL_MOUNTS_OPT,
+            wall_mounts: Optional[float] = _WALL_MOUNTS_OPT, viewpoint: Optional[list[str]] = _VIEWPOINT_OPT,
             budget: Optional[int] = typer.Option(None, "--budget", help="Number of cameras N_s (default: the scene's)."),
             solver: Optional[str] = typer.Option(None, "--solver", help="Solver (default: the scene's)."),
             out: Optional[Path] = typer.Option(None, "--out", help="Output folder (default camplace-out/<scene>)."),
@@ -318,7 +320,7 @@ def run_cmd(scene: Optional[str] = typer.Argument(None, help="Scene YAML file or
     (docs/scan-to-mount-list.md); --save-scene writes that scene as YAML to edit."""
     if cloud is not None:
         scene = _scene_from_cloud(scene, cloud, save_scene, up, no_level_floor, crop, downsample, heights,
-                                  coverage, wall_mounts, budget)
+                                  coverage, wall_mounts, budget, viewpoint)
     elif scene is None:
         raise CamplaceInputErrorProxy("run: give a scene (YAML file or built-in name) or --cloud SCAN")
     _run(scene, budget, solver, out, time_limit, require_feasible, max_memory_gb, repeatable,
@@ -467,7 +469,7 @@ def _floats(text: str, option: str, n: int | None = None) -> list[float]:
 
 
 def _scene_from_cloud(scene, cloud, save_scene, up, no_level_floor, crop, downsample, heights, coverage,
-                      wall_mounts, budget):
+                      wall_mounts, budget, viewpoint=None):
     from camplace.config import parse_scene
     from camplace.freespace import scene_from_cloud
 
@@ -479,7 +481,8 @@ def _scene_from_cloud(scene, cloud, save_scene, up, no_level_floor, crop, downsa
     data, rep = scene_from_cloud(
         str(cloud), level_floor=not no_level_floor, up=up, crop=(box[:3], box[3:]) if box else None,
         downsample=downsample or None, heights=_floats(heights, "--heights"), coverage=coverage,
-        budget=budget if budget is not None else 20, wall_mount_height=wall_mounts)
+        budget=budget if budget is not None else 20, wall_mount_height=wall_mounts,
+        viewpoints=[_floats(v, "--viewpoint", 3) for v in viewpoint or []] or None)
     if not _state["quiet"]:
         console.print(f"[dim]scan: {rep['points']:,} points after clean-up; floor levelled, ceiling "
                       f"{rep['height_m']} m above it, footprint {rep['floor_area_m2']} m² "

@@ -347,11 +347,22 @@ def scene_free_space(grid, spec, loaded: list, progress=None):
     observed = None
     info: dict = {"grid_bytes_planned": need}
     if viewpoints is not None:
-        surface = occ & ~ndimage.binary_erosion(occ, border_value=1)
-        idx = np.argwhere(surface)
-        observed, n_rays = carve_observed(occ, origin, res, viewpoints, origin + (idx + 0.5) * res,
-                                          progress=progress)
-        info.update({"carved_from_viewpoints": int(len(viewpoints)), "clear_rays": n_rays})
+        # a viewpoint outside the room or inside something (e.g. a default "VIEWPOINT 0 0 0"
+        # of a merged scan) cannot have seen this room: ignore it, and say so
+        usable = viewpoints[~grid.is_occupied(viewpoints)]
+        if len(usable) < len(viewpoints):
+            info["viewpoints_ignored"] = int(len(viewpoints) - len(usable))
+        if len(usable):
+            surface = occ & ~ndimage.binary_erosion(occ, border_value=1)
+            idx = np.argwhere(surface)
+            observed, n_rays = carve_observed(occ, origin, res, usable, origin + (idx + 0.5) * res,
+                                              progress=progress)
+            info.update({"carved_from_viewpoints": int(len(usable)), "clear_rays": n_rays})
+            seen_share = float(observed.sum()) / max(int((~occ).sum()), 1)
+            if seen_share < 0.05:  # the viewpoints saw almost nothing: not this scan's scanners
+                info["viewpoints_ignored"] = int(len(viewpoints))
+                info["carving_dropped"] = f"the viewpoints saw only {100 * seen_share:.1f} % of the room"
+                observed = None
     free_leaves = [lo for lo in loaded if lo.free_lo is not None and len(lo.free_lo)]
     if free_leaves:
         from camplace.loaders.obstacles import mark_boxes
@@ -547,3 +558,18 @@ def scene_from_cloud(path: str, *, name: str | None = None, level_floor: bool = 
     report = {"points": len(pts), "cleanup": steps, "floor_z_in_file_frame": floor, "transform": tf, "ceiling_z": ceiling, "height_m": height,
               "footprint_vertices": len(fp), "floor_area_m2": round(area, 2), "viewpoints": len(cloud.viewpoints)}
     return data, report
+
+
+def describe_free_space(info: dict) -> str:
+    """One log line for scene.info['free_space']."""
+    out = (f"free space: {info.get('free_volume_m3', 0)} m3 walkable (clearance {info.get('clearance_m')} m, "
+           f"grid {info.get('grid_bytes_planned', 0) / 1024**2:.0f} MiB planned)")
+    if info.get("carved_from_viewpoints"):
+        out += f"; carved from {info['carved_from_viewpoints']} viewpoint(s)"
+    if info.get("octomap_free_leaves"):
+        out += f"; {info['octomap_free_leaves']:,} OctoMap free leaves"
+    if info.get("viewpoints_ignored"):
+        out += f"; {info['viewpoints_ignored']} viewpoint(s) ignored ({info.get('carving_dropped', 'outside the room or inside an obstacle')})"
+    if "observed" in info:
+        out += "; observed space unknown: free = not occupied (give obstacle viewpoints for ray carving)"
+    return out

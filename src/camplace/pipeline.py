@@ -93,10 +93,10 @@ def prepare(scene: str | Path | SceneSpec, progress: Progress | None = None,
         from camplace.loaders.obstacles import describe
 
         log.extend(describe(name, rep) for name, rep in sc.info["obstacle_files"].items())
-        fs = sc.info.get("free_space") or {}
-        if fs:
-            log.append(f"free space: {fs.get('free_volume_m3', 0)} m3 walkable (clearance {fs.get('clearance_m')} m, "
-                       f"grid {fs.get('grid_bytes_planned', 0) / 1024**2:.0f} MiB planned)")
+        if sc.info.get("free_space"):
+            from camplace.freespace import describe_free_space
+
+            log.append(describe_free_space(sc.info["free_space"]))
     log.append(f"candidates: {cands.info['generated']} generated, {cands.info['dropped_inside_obstacle']} inside "
                f"obstacles, {vis.info['dropped_blind']} seeing no target, {len(vis.candidates)} kept")
     log.append(f"targets: {len(targets)} ({', '.join(f'{n}: {int((targets.region_ids == r).sum())}' for r, n in enumerate(targets.region_names))})")
