@@ -45,6 +45,7 @@ class Browser:
         args = [CHROMIUM, "--headless", "--no-sandbox", "--remote-debugging-pipe", "--no-first-run",
                 "--disable-background-networking", "--disable-component-update", "--disable-sync",
                 "--disable-default-apps", "--disable-extensions", "--mute-audio", "--hide-scrollbars",
+                "--disable-dev-shm-usage",  # containers often have a tiny /dev/shm
                 "--use-angle=swiftshader", "--enable-unsafe-swiftshader", "--ignore-gpu-blocklist",
                 "--host-resolver-rules=MAP * ~NOTFOUND",  # offline: no name resolves
                 f"--window-size={width},{height}", f"--user-data-dir={self.profile}", "about:blank"]
@@ -121,7 +122,8 @@ class Browser:
         for e in self.events:
             m, p = e.get("method"), e.get("params", {})
             if m == "Runtime.exceptionThrown":
-                out.append(json.dumps(p.get("exceptionDetails", {}))[:500])
+                d = p.get("exceptionDetails", {})
+                out.append((d.get("exception") or {}).get("description") or d.get("text", "exception"))
             elif m == "Runtime.consoleAPICalled" and p.get("type") in ("error", "assert"):
                 out.append(" ".join(str(a.get("value", a.get("description", ""))) for a in p.get("args", [])))
             elif m == "Log.entryAdded" and p.get("entry", {}).get("level") == "error":
@@ -304,6 +306,25 @@ def test_report_renders_in_headless_chromium(report_dir):
         assert errors == [], errors
         remote = [u for u in b.requested_urls() if not u.startswith(("file:", "data:", "blob:", "about:"))]
         assert remote == [], remote  # works offline: nothing fetched from the network
+    finally:
+        b.close()
+
+
+@pytest.mark.skipif(CHROMIUM is None, reason="Debian chromium is not installed (.ci/run installs it)")
+def test_browser_harness_sees_errors_and_requests(tmp_path):
+    """Negative control: the harness does catch console errors, exceptions and network use."""
+    (tmp_path / "bad.html").write_text(
+        "<html><body><script>console.error('boom'); fetch('http://example.invalid/x').catch(() => {});"
+        "document.body.setAttribute('data-plots-ready', '0'); undefined_function();</script></body></html>")
+    b = Browser()
+    try:
+        b.open((tmp_path / "bad.html").resolve().as_uri())
+        b.wait_for("document.body && document.body.getAttribute('data-plots-ready')", timeout=60)
+        time.sleep(0.5)
+        b.evaluate("1")  # drain pending events
+        errors = " | ".join(b.console_errors())
+        assert "boom" in errors and "undefined_function" in errors
+        assert any(u.startswith("http://example.invalid") for u in b.requested_urls())
     finally:
         b.close()
 
