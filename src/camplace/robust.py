@@ -165,8 +165,8 @@ def robust_search(problem: PlacementProblem, initial: np.ndarray, *, time_limit_
     lexicographic order, from ``initial``: moves that keep the worst case but lower the next
     ones cross the plateaus of the max. With max_stall > 0 it goes on as a tabu search:
     when no move improves, it takes the least bad move (the camera removed may not come
-    back for ``tenure`` passes), up to max_stall passes in a row without improvement, and
-    returns the best selection seen.
+    back for ``tenure`` passes), until max_stall passes in a row have not improved the best
+    selection, and returns the best selection seen.
     Returns the selection and info (moves, passes, seconds, stopped)."""
     t0 = time.perf_counter()
     V = problem.V
@@ -238,12 +238,9 @@ def robust_search(problem: PlacementProblem, initial: np.ndarray, *, time_limit_
             if time_limit_s is not None and time.perf_counter() - t0 > time_limit_s:
                 break
         if best[2] is None:
-            stall += 1
-            if fallback is None or stall > max_stall:
+            if fallback is None or stall >= max_stall:
                 break
             best = fallback  # tabu step: the least bad move; the moved cameras may not return for `tenure` passes
-        else:
-            stall = 0
         cur, a, b = best
         if a is not None:
             tabu[a] = passes + tenure
@@ -255,6 +252,9 @@ def robust_search(problem: PlacementProblem, initial: np.ndarray, *, time_limit_
         moves += 1
         if _better(cur[2], best_key):
             best_key, best_sel = cur[2], sorted(sel)
+            stall = 0
+        else:
+            stall += 1  # passes since the best selection last improved
     return np.array(sorted(best_sel), np.int64), {"moves": moves, "passes": passes, "stopped": stopped,
                                                   "seconds": time.perf_counter() - t0}
 
