@@ -121,3 +121,21 @@ def test_run_with_refine_and_adaptive_options():
     assert r.metrics.cost == pytest.approx(p.objective)  # metrics from the extended V
     assert r.visibility.V.shape[0] == r.problem.n_candidates > 0
     assert p.info["refine"]["stopped"] in ("converged", "time_limit")
+
+
+def test_wall_cameras_only_turn():
+    from conftest import box_room
+
+    from camplace.pipeline import prepare
+
+    spec = box_room(mounts=[{"kind": "wall", "camera": "cam", "height": 2.5, "spacing": 1.0, "pitch_deg": [20, 40]},
+                            {"kind": "ceiling_grid", "camera": "cam", "spacing": 1.0, "yaw_deg": [0, 90],
+                             "pitch_deg": [45]}])
+    sc, vis = prepare(spec)
+    c = vis.candidates
+    wall = np.flatnonzero(np.isclose(c.positions[:, 2], 2.5))
+    ceil = np.flatnonzero(np.isclose(c.positions[:, 2], 2.9))
+    assert len(wall) and len(ceil)
+    bw, bc = pose_box(sc, c, int(wall[0])), pose_box(sc, c, int(ceil[0]))
+    assert bw.half[:3].tolist() == [0, 0, 0] and bw.half[4] == pytest.approx(0.499 * 20)
+    assert bc.half[:2].tolist() == pytest.approx([0.499, 0.499]) and bc.half[3] == pytest.approx(0.499 * 90)

@@ -66,14 +66,19 @@ class PoseBox:
 def mount_of(spec: SceneSpec, camera_name: str, z: float) -> Mount | None:
     """The mount that produces a camera of this type at this height (None if none)."""
     for m in spec.mounts:
-        if m.camera == camera_name and abs(spec.room.height - m.offset_below_ceiling - z) < 1e-6:
+        if m.camera != camera_name:
+            continue
+        kind = getattr(m, "kind", "ceiling_grid")
+        mz = float(m.height) if kind == "wall" else spec.room.height - m.offset_below_ceiling
+        if abs(mz - z) < 1e-6:
             return m
     return None
 
 
 def pose_box(scene: Scene, candidates: Candidates, i: int, fraction: float = HALF) -> PoseBox:
     """The search box of candidate i: ``fraction`` of its mount's grid spacing and angle
-    steps around it (a pose not from any mount may only turn, by 15° / 7.5°)."""
+    steps around it. Wall-mount cameras stay at their wall point and only turn; a pose
+    not from any mount may only turn, by 15° / 7.5°."""
     cam = candidates.cameras[int(candidates.camera_ids[i])]
     p = candidates.positions[i]
     m = mount_of(scene.spec, cam.name, float(p[2]))
@@ -82,7 +87,7 @@ def pose_box(scene: Scene, candidates: Candidates, i: int, fraction: float = HAL
         half = np.array([0, 0, 0, 30.0, 15.0, 0.0]) * fraction
         region = scene.polygon
     else:
-        s = float(m.spacing)
+        s = 0.0 if getattr(m, "kind", "ceiling_grid") == "wall" else float(m.spacing)  # wall cameras only turn
         half = np.array([s, s, 0.0, angle_step(m.yaw_deg), angle_step(m.pitch_deg), angle_step(m.roll_deg)]) * fraction
         region = scene.polygon.buffer(-m.wall_clearance) if m.wall_clearance > 0 else scene.polygon
     return PoseBox(centre, half, region)
