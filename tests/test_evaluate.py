@@ -189,3 +189,27 @@ def test_cli_run_quiet_verbose_json(tmp_path):
     res = runner.invoke(app, ["--verbose", "run", "demo", "--out", str(out), "--no-cache"])
     assert res.exit_code == 0
     assert "report.html" in res.output and "opencv" in res.output
+
+
+def test_foreign_lens_from_intrinsics(demo_out, tmp_path):
+    """Another tool's camera (a lens the scene lacks) is scored with its own intrinsics: the
+    scene's lens written out as intrinsics under another name gives the same V rows; a
+    narrower lens sees a subset."""
+    p = json.loads((demo_out / "placement.json").read_text())
+    for c in p["cameras"]:
+        c["camera"] = "their-lens"  # intrinsics (same as the scene's 'wide') stay in the file
+    (tmp_path / "same.json").write_text(json.dumps(p))
+    base = evaluate("demo", demo_out / "placement.json")
+    same = evaluate("demo", tmp_path / "same.json")
+    assert (same.visibility.V != base.visibility.V).nnz == 0
+    assert same.visibility.candidates.cameras[-1].name == "their-lens"
+    for c in p["cameras"]:
+        c["intrinsics"]["fx"] *= 2  # half the horizontal field of view
+    (tmp_path / "tele.json").write_text(json.dumps(p))
+    tele = evaluate("demo", tmp_path / "tele.json")
+    assert 0 < tele.visibility.V.nnz < base.visibility.V.nnz
+    assert (tele.visibility.V - tele.visibility.V.multiply(base.visibility.V)).nnz == 0  # a subset
+    del p["cameras"][0]["intrinsics"]
+    (tmp_path / "bad.json").write_text(json.dumps(p))
+    with pytest.raises(InputError, match="lens 'their-lens' is not a camera of the scene"):
+        evaluate("demo", tmp_path / "bad.json")

@@ -17,7 +17,10 @@ Accepted files:
   each with ``position`` [x, y, z] and either ``rotation`` (3x3 world-from-camera,
   OpenCV camera axes) or ``yaw_deg``/``pitch_deg``/``roll_deg`` (or ``yaw``/``pitch``/
   ``roll``), and ``camera`` (or ``lens``). When both rotation and angles are given they
-  must agree (1e-6), so a hand edit of one without the other is caught.
+  must agree (1e-6), so a hand edit of one without the other is caught. A camera whose
+  lens the scene does not define is evaluated with its own ``intrinsics`` (model, width,
+  height, fx, fy, cx, cy, optional distortion) and ``max_range`` (default: the scene
+  cameras' common range).
 """
 
 from __future__ import annotations
@@ -43,7 +46,8 @@ CSV_COLUMNS = ("id", "x", "y", "z", "yaw", "pitch", "roll", "lens")
 class Poses:
     """Camera poses read from a file. ids: source ids (str); positions: (k, 3) m;
     rotations: (k, 3, 3) world-from-camera; angles_deg: (k, 3) yaw, pitch, roll;
-    lenses: camera type names (None: the scene's only camera)."""
+    lenses: camera type names (None: the scene's only camera); intrinsics: per pose the
+    JSON ``intrinsics`` object (+ ``max_range``) or None, used for a lens the scene lacks."""
 
     ids: tuple[str, ...]
     positions: np.ndarray
@@ -51,6 +55,7 @@ class Poses:
     angles_deg: np.ndarray
     lenses: tuple[str | None, ...]
     source: str = "<poses>"
+    intrinsics: tuple[dict | None, ...] = ()
 
     def __len__(self) -> int:
         return len(self.positions)
@@ -137,7 +142,7 @@ def read_placement_json(path: str | Path) -> Poses:
     cams = data.get("cameras") if isinstance(data, dict) else data
     if not isinstance(cams, list):
         raise InputError(f"{p}: cameras: expected a list of camera objects (placement.json format)")
-    ids, pos, rot, ang, lenses = [], [], [], [], []
+    ids, pos, rot, ang, lenses, intrinsics = [], [], [], [], [], []
     for k, cam in enumerate(cams):
         where = f"{p}: cameras[{k}]"
         if not isinstance(cam, dict):
@@ -153,10 +158,15 @@ def read_placement_json(path: str | Path) -> Poses:
         ids.append(str(k if cid is None else cid))
         lens = cam.get("camera", cam.get("lens"))
         lenses.append(None if lens is None else str(lens))
+        intr = cam.get("intrinsics")
+        if intr is not None and not isinstance(intr, dict):
+            raise InputError(f"{where}.intrinsics: expected an object (model, width, height, fx, fy, cx, cy)")
+        intrinsics.append(None if intr is None else dict(intr, **({"max_range": cam["max_range"]}
+                                                                     if "max_range" in cam else {})))
     if not cams:
         raise InputError(f"{p}: cameras: the list is empty")
     return Poses(tuple(ids), np.asarray(pos, float), np.asarray(rot, float), np.asarray(ang, float),
-                 tuple(lenses), str(p))
+                 tuple(lenses), str(p), tuple(intrinsics))
 
 
 def read_placement(path: str | Path) -> Poses:
@@ -172,22 +182,54 @@ def read_placement(path: str | Path) -> Poses:
     raise InputError(f"{p}: expected a .json (placement.json) or .csv (id,x,y,z,yaw,pitch,roll,lens) file")
 
 
+def camera_from_intrinsics(name: str, intr: dict, scene_cameras: list[CameraModel], where: str) -> CameraModel:
+    """A lens the scene does not name, from a placement.json-style ``intrinsics`` object;
+    ``max_range`` from the object, else the scene's cameras' common range."""
+    try:
+        vals = {k: intr[k] for k in ("width", "height", "fx", "fy", "cx", "cy")}
+    except KeyError as err:
+        raise InputError(f"{where}.intrinsics: '{err.args[0]}' missing; expected model, width, height, fx, fy, "
+                         f"cx, cy (pixels) and optional distortion, max_range") from None
+    ranges = {c.max_range for c in scene_cameras}
+    if "max_range" in intr:
+        rng = _number(intr["max_range"], f"{where}.max_range")
+    elif len(ranges) == 1:
+        rng = ranges.pop()
+    else:
+        raise InputError(f"{where}: lens '{name}' is not in the scene and the scene's cameras differ in "
+                         f"max_range; give 'max_range' (m)")
+    return CameraModel(name, str(intr.get("model", "pinhole")), int(vals["width"]), int(vals["height"]),
+                       *(_number(vals[k], f"{where}.intrinsics.{k}") for k in ("fx", "fy", "cx", "cy")),
+                       max_range=rng, distortion=tuple(_number(v, f"{where}.intrinsics.distortion")
+                                                       for v in intr.get("distortion") or ()))
+
+
 def candidates_from_poses(poses: Poses, cameras: dict[str, CameraModel]) -> Candidates:
-    """One candidate per pose, in file order; lens names must be scene cameras."""
-    cam_list = tuple(cameras.values())
+    """One candidate per pose, in file order. A lens is a scene camera by name; a name the
+    scene lacks needs the pose's ``intrinsics`` (JSON), which then define that lens."""
+    cam_list = list(cameras.values())
     index = {c.name: k for k, c in enumerate(cam_list)}
+    scene_names = list(index)
     ids = np.empty(len(poses), np.int32)
     for k, lens in enumerate(poses.lenses):
+        intr = poses.intrinsics[k] if k < len(poses.intrinsics) else None
         if lens is None:
-            if len(cam_list) != 1:
+            if len(scene_names) != 1:
                 raise InputError(f"{poses.source}: camera {poses.ids[k]}: no lens given and the scene has "
-                                 f"{len(cam_list)} cameras ({', '.join(index)}); add a 'lens' column / 'camera' key")
+                                 f"{len(scene_names)} cameras ({', '.join(scene_names)}); add a 'lens' column / "
+                                 f"'camera' key")
             ids[k] = 0
         elif lens not in index:
-            raise InputError(f"{poses.source}: camera {poses.ids[k]}: lens '{lens}' is not a camera of the scene "
-                             f"(expected one of {', '.join(index)})")
+            if intr is None:
+                raise InputError(f"{poses.source}: camera {poses.ids[k]}: lens '{lens}' is not a camera of the "
+                                 f"scene (expected one of {', '.join(scene_names)}, or give its 'intrinsics')")
+            index[lens] = len(cam_list)
+            cam_list.append(camera_from_intrinsics(lens, intr, list(cameras.values()),
+                                                   f"{poses.source}: cameras[{k}]"))
+            ids[k] = index[lens]
         else:
             ids[k] = index[lens]
+    cam_list = tuple(cam_list)
     return Candidates(np.ascontiguousarray(poses.positions, float), np.ascontiguousarray(poses.rotations, float),
                       np.asarray(poses.angles_deg, float), ids, location_ids_of(poses.positions), cam_list,
                       {"generated": len(poses), "dropped_inside_obstacle": 0, "source": poses.source})
