@@ -193,3 +193,28 @@ def test_time_limit_option_reaches_the_solver(monkeypatch):
     assert got["time_limit_s"] == 7.5
     run("demo")
     assert got["time_limit_s"] == 600.0  # the scene's placement.time_limit_s default
+
+
+@pytest.mark.skipif(not Path("/proc/self/status").exists(), reason="needs Linux /proc")
+def test_visibility_workers_do_not_receive_ctrl_c():
+    """Worker processes are spawned with SIGINT blocked: a terminal's Ctrl-C (sent to the
+    whole process group) reaches only the parent, which stops between chunks."""
+    import re
+
+    from camplace.distributed import _sigint_ignored
+
+    def blocked(pid: int) -> bool:
+        status = Path(f"/proc/{pid}/status").read_text()
+        return bool(int(re.search(r"SigBlk:\s*([0-9a-f]+)", status).group(1), 16) & (1 << (signal.SIGINT - 1)))
+
+    with _sigint_ignored():
+        child = subprocess.Popen([sys.executable, "-c", "import time; time.sleep(10)"])
+    try:
+        assert not blocked(os.getpid())  # the parent's mask is restored
+        assert blocked(child.pid)
+        child.send_signal(signal.SIGINT)
+        time.sleep(0.5)
+        assert child.poll() is None
+    finally:
+        child.kill()
+        child.wait()

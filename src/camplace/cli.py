@@ -90,8 +90,9 @@ class _RichProgress:
     def __call__(self, stage: str, done: int, total: int) -> None:
         if self.stop is not None and self.stop() and not self.told_stop:
             self.told_stop = True
-            console.print("[yellow]interrupt: stopping; the best placement so far will be written "
-                          "(Ctrl-C again to abort)[/yellow]")
+            what = ("after the current visibility chunk (finished chunks stay cached)" if stage == "visibility"
+                    else "the solver; the best placement so far will be written")
+            console.print(f"[yellow]interrupt: stopping {what} (Ctrl-C again to abort)[/yellow]")
         if stage not in self.tasks:
             if not console.is_terminal and not _state["quiet"]:
                 console.print(f"stage: {stage}", highlight=False)

@@ -22,6 +22,7 @@ environment stands for ``scheduler`` when it is not given.
 
 from __future__ import annotations
 
+import contextlib
 import os
 import threading
 import uuid
@@ -80,6 +81,25 @@ def _pool_init(shared: Any, n_threads: int | None) -> None:
     _set_threads(n_threads)
 
 
+@contextlib.contextmanager
+def _sigint_ignored():
+    """Block SIGINT while worker processes are spawned: they inherit the blocked mask
+    (across exec), so a Ctrl-C - sent by the terminal to the whole process group -
+    reaches only the parent, which stops cleanly between chunks (camplace.pipeline),
+    instead of killing workers mid-start and hanging the pool. The parent gets a SIGINT
+    sent meanwhile as soon as the mask is restored."""
+    import signal
+
+    if not hasattr(signal, "pthread_sigmask"):  # pragma: no cover - non-POSIX
+        yield
+        return
+    old = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
+    try:
+        yield
+    finally:
+        signal.pthread_sigmask(signal.SIG_SETMASK, old)
+
+
 def _pool_call(fn: TaskFn, task: Any) -> Any:
     return run_task(fn, _WORKER_SHARED, task)
 
@@ -105,7 +125,8 @@ class ProcessPoolChunkExecutor:
         n = min(self.workers, len(tasks))
         with ProcessPoolExecutor(n, mp_context=ctx, initializer=_pool_init,
                                  initargs=(shared, self.threads_per_worker)) as pool:
-            futures = {pool.submit(_pool_call, fn, t): k for k, t in enumerate(tasks)}
+            with _sigint_ignored():  # the workers are spawned here and keep SIGINT ignored (see below)
+                futures = {pool.submit(_pool_call, fn, t): k for k, t in enumerate(tasks)}
             try:
                 for fut in as_completed(futures):
                     yield futures[fut], fut.result()

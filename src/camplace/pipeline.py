@@ -144,7 +144,7 @@ def _stoppable(progress: Progress | None, should_stop: Callable[[], bool]) -> Pr
         if progress:
             progress(stage, done, total)
         if stage == "visibility" and should_stop():
-            raise Interrupted(f"interrupted during visibility ({done}/{total} chunks); nothing written")
+            raise Interrupted(f"stopped during visibility ({done}/{total} chunks done); nothing written")
     return cb
 
 
