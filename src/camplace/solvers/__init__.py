@@ -11,6 +11,7 @@ from typing import Callable
 from camplace.errors import InputError
 from camplace.problem import PlacementProblem
 from camplace.solvers.base import Placement
+from camplace.solvers.certify import solve_certify
 from camplace.solvers.greedy import solve_greedy
 from camplace.solvers.greedy_fast import solve_greedy_fast
 from camplace.solvers.polish import solve_greedy_polish
@@ -18,6 +19,7 @@ from camplace.solvers.horster import solve_horster
 from camplace.solvers.min_cameras import solve_min_cameras
 from camplace.solvers.mip import solve_mip
 from camplace.solvers.paper_mip import solve_paper_mip
+from camplace.solvers.tabu import solve_tabu
 from camplace.solvers.zhao import solve_zhao
 
 SOLVERS: dict[str, Callable[..., Placement]] = {
@@ -29,6 +31,8 @@ SOLVERS: dict[str, Callable[..., Placement]] = {
     "zhao": solve_zhao,
     "horster": solve_horster,
     "min-cameras": solve_min_cameras,
+    "tabu": solve_tabu,
+    "certify": solve_certify,
 }
 
 
