@@ -62,6 +62,39 @@ def _greedy_start(problem: PlacementProblem, target: float) -> np.ndarray | None
     return None
 
 
+def _fewest(problem: PlacementProblem, target: float, prices: np.ndarray, end: float | None, *, threads, seed,
+            should_stop, verbose, integral) -> tuple[np.ndarray | None, np.ndarray | None, object]:
+    """Least-price selection with cost <= target: (selection or None, greedy start, HiGHS outcome)."""
+    start = _greedy_start(problem, target)
+    arrays, layout = tight_model_arrays(problem)
+    n_t = len(layout.cover_targets)
+    n_x = layout.n_x
+    u_cost = arrays.c[n_x:].copy()
+    arrays.c = np.concatenate([prices, np.zeros(len(u_cost))])
+    arrays.row_upper[n_t] = INF  # the camera budget row: not a constraint here
+    if target <= 1e-9:
+        arrays.col_upper[n_x:] = 0.0
+    else:
+        row = sp.csr_matrix(np.concatenate([np.zeros(n_x), u_cost]).reshape(1, -1))
+        arrays.A = sp.vstack([arrays.A, row], format="csc")
+        arrays.row_lower = np.append(arrays.row_lower, -INF)
+        arrays.row_upper = np.append(arrays.row_upper, target)
+    h = highs_from_arrays(arrays)
+    start_cols = None if start is None else tight_start(problem, layout, start)
+    if start_cols is not None and target <= 1e-9:
+        start_cols[n_x:] = 0.0
+    left = None if end is None else max(0.01, end - time.perf_counter())
+    out = run_highs(h, time_limit_s=left, threads=threads, seed=seed, should_stop=should_stop,
+                    start=start_cols, verbose=verbose, options={"mip_abs_gap": 0.999} if integral else None)
+    sel = start
+    if out.values is not None:
+        cand = np.nonzero(out.values[:n_x] > 0.5)[0].astype(np.int64)
+        ok = len(np.unique(problem.location_ids[cand])) == len(cand)
+        if ok and problem.cost(cand) <= target + 1e-6 and (sel is None or prices[cand].sum() <= prices[sel].sum()):
+            sel = cand
+    return sel, start, out
+
+
 def solve_min_cameras(problem: PlacementProblem, *, time_limit_s: float | None = None, threads: int | None = None,
                       seed: int = 0, should_stop: ShouldStop | None = None, progress: ProgressFn | None = None,
                       on_incumbent: OnIncumbent | None = None, coverage_gap: float | None = None,
@@ -81,12 +114,16 @@ def solve_min_cameras(problem: PlacementProblem, *, time_limit_s: float | None =
     if minimize == "count":
         prices = np.ones(problem.n_candidates)
     info: dict = {"target_cost": target, "minimize": minimize}
-    # Reachability: cheap certificate of unreachability, else try.
+    # Reachability: a cheap certificate of unreachability first, else HiGHS says so.
     deg = location_degree(problem)
     floor = float(np.dot(problem.weights, np.maximum(problem.gamma - deg, 0).astype(float) ** 2))
-    unreachable = floor > target + 1e-9
     end = None if time_limit_s is None else t0 + time_limit_s
-    if unreachable:
+    integral = bool(np.all(np.abs(prices - np.round(prices)) < 1e-9))
+    kw = dict(threads=threads, seed=seed, should_stop=should_stop, verbose=verbose, integral=integral)
+    sel = start = out = None
+    if floor <= target + 1e-9:
+        sel, start, out = _fewest(problem, target, prices, end, **kw)
+    if sel is None and (out is None or out.status == "infeasible"):
         from camplace.solvers.mip import solve_mip
 
         n_loc = len(np.unique(problem.location_ids))
@@ -97,46 +134,21 @@ def solve_min_cameras(problem: PlacementProblem, *, time_limit_s: float | None =
                     least_reachable_cost=best.objective, least_reachable_bound=best.bound)
         target = best.objective
         info["target_cost"] = target
-    start = _greedy_start(problem, target)
-    arrays, layout = tight_model_arrays(problem)
-    n_t = len(layout.cover_targets)
-    n_x = layout.n_x
-    u_cost = arrays.c[n_x:].copy()
-    arrays.c = np.concatenate([prices, np.zeros(len(u_cost))])
-    arrays.row_upper[n_t] = INF  # the camera budget row: not a constraint here
-    if target <= 1e-9:
-        arrays.col_upper[n_x:] = 0.0
-    else:
-        row = sp.csr_matrix(np.concatenate([np.zeros(n_x), u_cost]).reshape(1, -1))
-        arrays.A = sp.vstack([arrays.A, row], format="csc")
-        arrays.row_lower = np.append(arrays.row_lower, -INF)
-        arrays.row_upper = np.append(arrays.row_upper, target)
-    h = highs_from_arrays(arrays)
-    if stopped(should_stop):
-        sel = start if start is not None else np.zeros(0, np.int64)
-        return Placement(sel, problem.cost(sel), None, "interrupted", "min-cameras", time.perf_counter() - t0, info)
-    left = None if end is None else max(0.01, end - time.perf_counter())
-    start_cols = None if start is None else tight_start(problem, layout, start)
-    if start_cols is not None and target <= 1e-9:
-        start_cols[n_x:] = 0.0
-    integral = bool(np.all(np.abs(prices - np.round(prices)) < 1e-9))
-    out = run_highs(h, time_limit_s=left, threads=threads, seed=seed, should_stop=should_stop,
-                    start=start_cols, verbose=verbose, options={"mip_abs_gap": 0.999} if integral else None)
-    sel = start
-    if out.values is not None:
-        cand = np.nonzero(out.values[:n_x] > 0.5)[0].astype(np.int64)
-        if problem.cost(cand) <= target + 1e-6 and (sel is None or prices[cand].sum() <= prices[sel].sum()):
-            sel = cand
+        sel, start, out = _fewest(problem, target, prices, end, **kw)
+        if sel is None:
+            sel = best.selected
     if sel is None:
         from camplace.errors import InputError
 
         raise InputError(f"min-cameras: no placement with cost <= {target:g} found (HiGHS: {out.model_status})")
     value = float(prices[sel].sum())
-    bound = out.bound if out.bound is not None else 0.0
+    bound = out.bound if out is not None and out.bound is not None else 0.0
     lower = math.ceil(bound - 1e-6) if integral else bound
     lower = min(lower, value)
     status = out.status if out.status in ("optimal", "time_limit", "interrupted") else "feasible"
-    if lower >= value - 1e-6:
+    if stopped(should_stop):
+        status = "interrupted"
+    elif lower >= value - 1e-6:
         status = "optimal"
     info.update(cameras=int(len(sel)), camera_price=value, lower_bound=lower,
                 proven_minimal=bool(lower >= value - 1e-6), highs_status=out.model_status, nodes=out.nodes,

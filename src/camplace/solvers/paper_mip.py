@@ -226,6 +226,11 @@ def _solve_cbc(mip, problem: PlacementProblem, h, arrays: MilpArrays, start_cols
             info["cbc_solution_rejected"] = True
     bound = m.objective_bound
     bound = None if bound is None or not np.isfinite(bound) else min(max(float(bound), 0.0), best_cost)
+    if st != mip.OptimizationStatus.OPTIMAL and bound is not None and bound >= best_cost - 1e-9 * max(1.0, best_cost):
+        # CBC stopped by its time limit (often before its root LP) reports the incumbent as
+        # its bound: that proves nothing, so no bound is claimed.
+        info["cbc_reported_bound"] = m.objective_bound
+        bound = None
     if st == mip.OptimizationStatus.OPTIMAL:
         status = "optimal"
     elif left is not None and info["cbc_seconds"] >= 0.95 * left:
