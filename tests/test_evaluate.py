@@ -106,6 +106,10 @@ def test_off_grid_pose_is_raycast_afresh(tmp_path):
     inner = vol & (dx < 0.95 * hx) & (dy < 0.95 * hy)  # free floor there: nothing occludes
     assert inner.sum() > 50 and np.all(seen[inner])
     assert r.placement.solver == "file" and r.placement.info["source_ids"] == ["cam-A"]
+    from camplace.report import placement_dict
+
+    cams = placement_dict("demo", r.placement, 1, r.visibility.candidates)["cameras"]
+    assert cams[0]["candidate_id"] == 0 and cams[0]["source_id"] == "cam-A"
 
 
 def test_json_hand_made_list_and_angle_forms(tmp_path):

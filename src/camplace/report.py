@@ -43,7 +43,7 @@ def camera_entries(candidates: Candidates, selected: np.ndarray) -> list[dict]:
 
 
 def placement_dict(scene_name: str, placement: Placement, budget: int, candidates: Candidates) -> dict:
-    return {
+    out = {
         "scene": scene_name,
         "solver": placement.solver,
         "budget": int(budget),
@@ -56,6 +56,11 @@ def placement_dict(scene_name: str, placement: Placement, budget: int, candidate
         "n_cameras": int(len(placement.selected)),
         "cameras": camera_entries(candidates, placement.selected),
     }
+    src = placement.info.get("source_ids")
+    if src is not None:  # an evaluated placement (camplace.evaluate): the ids its file gave the cameras
+        for c in out["cameras"]:
+            c["source_id"] = str(src[c["candidate_id"]])
+    return out
 
 
 def placement_csv(cameras: list[dict]) -> str:
