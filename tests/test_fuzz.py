@@ -174,3 +174,39 @@ def test_mutated_scenes_fail_cleanly_or_run(text, tmp_path_factory, monkeypatch,
         assert not out.exists()
     else:
         assert (out / "placement.json").is_file()
+
+
+# ---- placement files for `camplace evaluate`: random JSON and CSV ---------------------------
+
+json_values = st.recursive(
+    st.none() | st.booleans() | st.integers(-5, 5) | st.floats(allow_nan=True, allow_infinity=True) | st.text(max_size=5),
+    lambda kids: st.lists(kids, max_size=4) | st.dictionaries(
+        st.sampled_from(["position", "rotation", "yaw_deg", "pitch_deg", "roll_deg", "camera", "cameras", "id"]),
+        kids, max_size=5),
+    max_leaves=12)
+camera_objects = st.fixed_dictionaries(
+    {"position": st.lists(st.floats(-1, 4) | st.just("x"), min_size=2, max_size=4),
+     "yaw_deg": st.floats(-400, 400) | st.none(), "pitch_deg": st.floats(-90, 90)},
+    optional={"camera": st.sampled_from(["cam", "tele"]), "roll_deg": st.floats(-10, 10)})
+placement_texts = st.one_of(
+    json_values.map(lambda v: json.dumps(v)),
+    st.lists(camera_objects, min_size=0, max_size=3).map(lambda cams: json.dumps({"cameras": cams})),
+    st.text(max_size=40))
+
+
+@settings(max_examples=40, deadline=20000, derandomize=True,
+          suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow])
+@given(text=placement_texts, ext=st.sampled_from([".json", ".csv"]))
+def test_random_placement_files_fail_cleanly_or_evaluate(text, ext, tmp_path_factory, monkeypatch, capsys):
+    from test_bad_input import BASE
+
+    d = tmp_path_factory.mktemp("fuzz-placement")
+    monkeypatch.setattr("camplace.report_html.write_report", lambda *a, **k: {})
+    scene = d / "scene.yaml"
+    scene.write_text(yaml.safe_dump(BASE))
+    pfile = d / f"p{ext}"
+    pfile.write_text(text)
+    code, msg = run_cli(["-q", "evaluate", scene, pfile, "--out", d / "out"], monkeypatch, capsys)
+    assert "Traceback" not in msg and "internal error" not in msg, msg
+    assert code in (0, 2), msg
+    assert (code == 0) == (d / "out" / "placement.json").is_file()
