@@ -309,7 +309,10 @@ def run_cmd(scene: Optional[str] = typer.Argument(None, help="Scene YAML file or
                                           help="MIN,MAX degrees at which two rays triangulate well."),
             well_triangulated: bool = typer.Option(False, "--well-triangulated",
                                                    help="Greedy that counts a camera toward Γ only where it pairs "
-                                                        "with another at a --tri-angle angle.")) -> None:
+                                                        "with another at a --tri-angle angle."),
+            certify: Optional[float] = typer.Option(None, "--certify", help="Spend SECONDS on both sides: tabu search "
+                                                    "for the placement, Lagrangian/LP/exact bounds for a proven gap "
+                                                    "(solver 'certify').")) -> None:
     """Run the whole pipeline on a scene and write placement.json, metrics.json, visibility.npz.
 
     Ctrl-C during the solve writes the best placement found so far (status 'interrupted',
@@ -324,6 +327,10 @@ def run_cmd(scene: Optional[str] = typer.Argument(None, help="Scene YAML file or
                                   coverage, wall_mounts, budget, viewpoint)
     elif scene is None:
         raise CamplaceInputErrorProxy("run: give a scene (YAML file or built-in name) or --cloud SCAN")
+    if certify is not None:
+        if certify <= 0:
+            raise CamplaceInputErrorProxy(f"--certify: expected seconds > 0, got {certify}")
+        solver, time_limit = "certify", certify
     _run(scene, budget, solver, out, time_limit, require_feasible, max_memory_gb, repeatable,
          **_scale_options(workers, scheduler, cache, no_cache), visibility_mode=visibility, stride=stride, probe=probe,
          **({"local_search": True} if local_search else {}), **({"threads": threads} if threads else {}),
@@ -382,6 +389,59 @@ def bench(scene: str = typer.Argument(..., help="Scene YAML file or built-in nam
         typer.echo((out_dir / "bench.md").read_text())
     for p in paths.values():
         console.print(f"wrote {escape(str(p))}", highlight=False)
+
+
+@app.command("solve")
+def solve_cmd(visibility: Path = typer.Argument(..., help="A saved instance: visibility.npz (CSR arrays, gamma, "
+                                               "location_ids; weights and geometry optional)."),
+              budget: int = typer.Option(..., "--budget", help="Number of cameras N_s."),
+              solver: str = typer.Option("greedy", "--solver", help="Solver name."),
+              certify: Optional[float] = typer.Option(None, "--certify", help="Solver 'certify' for SECONDS: "
+                                                      "placement and proven bound."),
+              time_limit: Optional[float] = typer.Option(None, "--time-limit", help="Solver time limit, seconds."),
+              threads: Optional[int] = typer.Option(None, "--threads", min=1, help="Solver threads."),
+              seed: int = typer.Option(0, "--seed", help="Seed of randomized solvers."),
+              out: Optional[Path] = typer.Option(None, "--out", help="Output folder (default "
+                                                 "camplace-out/<instance>-solved).")) -> None:
+    """Re-solve a saved instance with no geometry; writes placement.json and metrics.json."""
+    from camplace.instance import instance_name, solve_instance, write_instance_outputs
+
+    _check_options(budget, time_limit, None, out)
+    if certify is not None:
+        if certify <= 0:
+            raise CamplaceInputErrorProxy(f"--certify: expected seconds > 0, got {certify}")
+        solver, time_limit = "certify", certify
+    opts = {k: v for k, v in {"time_limit_s": time_limit, "threads": threads}.items() if v is not None}
+    stop = _StopFlag()
+    with stop.installed(), _progress() as prog:
+        bars = _RichProgress(prog, stop)
+        problem, placement, metrics, arrays, timings = solve_instance(
+            visibility, budget, solver, progress=bars, on_incumbent=bars.incumbent, should_stop=stop, seed=seed,
+            **opts)
+    name = instance_name(visibility)
+    out_dir = out or Path("camplace-out") / f"{name}-solved"
+    paths = write_instance_outputs(out_dir, name, problem, placement, metrics, arrays, timings)
+    p = placement
+    if _state["json"]:
+        typer.echo(json.dumps({"instance": str(visibility), "solver": p.solver, "status": p.status,
+                               "budget": budget, "cost": p.objective, "bound": p.bound, "gap": p.gap,
+                               **{k: p.info[k] for k in ("incumbent_method", "bound_method") if k in p.info},
+                               "files": {k: str(v) for k, v in paths.items()}}, indent=2))
+    elif _state["quiet"]:
+        typer.echo(str(out_dir))
+    else:
+        t = Table(title=f"camplace solve - {name}", show_header=False)
+        t.add_row("solver / status", f"{p.solver} / {p.status}")
+        t.add_row("cameras (budget)", f"{len(p.selected)} ({budget})")
+        t.add_row("cost", f"{p.objective:.6g}" + (f"  ({p.info['incumbent_method']})" if "incumbent_method" in p.info
+                                                 else ""))
+        t.add_row("bound", "-" if p.bound is None else f"{p.bound:.6g} (gap {100 * (p.gap or 0):.2f} %)"
+                  + (f"  ({p.info['bound_method']})" if "bound_method" in p.info else ""))
+        t.add_row("coverage gap (eq. 8)", f"{metrics.coverage_gap:.4f}")
+        t.add_row("outputs", str(out_dir))
+        Console().print(t)
+    if stop():
+        raise typer.Exit(130)
 
 
 @app.command("evaluate")
