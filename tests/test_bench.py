@@ -1,0 +1,65 @@
+"""camplace.bench: the paper's comparison on the small demo scene."""
+
+from __future__ import annotations
+
+import csv
+
+import numpy as np
+import pytest
+
+from camplace.bench import PAPER_TABLES, parse_budgets, rows_markdown, run_bench, write_bench
+from camplace.errors import InputError
+
+
+@pytest.fixture(scope="module")
+def demo_bench():
+    return run_bench("demo", [3, 6], ["greedy", "mip", "horster"], time_limit_s=3, threads=1)
+
+
+def test_bench_rows_score_every_method_on_the_same_problem(demo_bench):
+    name, info, rows = demo_bench
+    assert name == "demo" and info["target_set"] == "volume"
+    assert len(rows) == 6
+    by = {(r.method, r.budget): r for r in rows}
+    for b in (3, 6):
+        assert by["mip", b].cost <= by["greedy", b].cost + 1e-9  # warm-started from greedy
+        for r in (by[m, b] for m in ("greedy", "mip", "horster")):
+            assert r.cameras <= b
+            assert 0 <= r.coverage_gap <= 1 and 0 <= r.non_triangulatable_pct <= 100
+    assert by["greedy", 6].coverage_gap < by["greedy", 3].coverage_gap
+
+
+def test_bench_writes_csv_markdown_png(demo_bench, tmp_path):
+    name, info, rows = demo_bench
+    paths = write_bench(tmp_path, name, info, rows)
+    with open(paths["csv"]) as f:
+        got = list(csv.DictReader(f))
+    assert len(got) == 6 and {"method", "budget", "coverage_gap", "non_triangulatable_pct", "bound",
+                              "proven_gap", "status", "seconds"} <= set(got[0])
+    md = paths["markdown"].read_text()
+    assert "| Proposed MIP |" in md and "N_s=6" in md
+    assert paths["png"].read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_markdown_shows_the_paper_rows():
+    from camplace.bench import BenchRow
+
+    rows = [BenchRow("standard-store", 20, "mip", 20, 1.0, 0.2, 30.0, 0.5, 0.5, "time_limit", 60.0)]
+    md = rows_markdown("standard-store", {}, rows)
+    assert "*paper: Proposed MIP* | 0.16" in md
+    assert PAPER_TABLES["store-a"]["zhao"][20] == 0.41
+
+
+def test_volume_restriction_drops_surface_targets():
+    _, info_all, _ = run_bench("demo", [2], ["greedy"], targets="all")
+    _, info_vol, _ = run_bench("demo", [2], ["greedy"], targets="volume")
+    assert info_vol["targets"] < info_all["targets"]
+
+
+def test_bad_options_are_input_errors():
+    with pytest.raises(InputError, match="--budgets"):
+        parse_budgets("20,x")
+    with pytest.raises(InputError, match="--methods"):
+        run_bench("demo", [2], ["nope"])
+    assert parse_budgets("20, 30,40") == [20, 30, 40]
+    assert np.all(np.array(parse_budgets("5")) == 5)
