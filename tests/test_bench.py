@@ -39,6 +39,11 @@ def test_bench_writes_csv_markdown_png(demo_bench, tmp_path):
     md = paths["markdown"].read_text()
     assert "| Proposed MIP |" in md and "N_s=6" in md
     assert paths["png"].read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    from camplace.bench import read_csv
+
+    back = read_csv(paths["csv"])
+    assert [(r.method, r.budget, r.status) for r in back] == [(r.method, r.budget, r.status) for r in rows]
+    assert back[0].cost == pytest.approx(rows[0].cost, rel=1e-5)
 
 
 def test_markdown_shows_the_paper_rows():

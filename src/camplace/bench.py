@@ -198,6 +198,18 @@ def write_bench(out_dir: str | Path, scene: str, info: dict, rows: list[BenchRow
             "png": atomic_write_bytes(out / "bench.png", rows_png(scene, rows))}
 
 
+def read_csv(path: str | Path) -> list[BenchRow]:
+    """Rows back from a bench.csv (to re-render bench.md / bench.png)."""
+    rows = []
+    with open(path, newline="") as f:
+        for d in csv.DictReader(f):
+            opt = {k: (None if d[k] == "" else float(d[k])) for k in ("bound", "proven_gap")}
+            rows.append(BenchRow(d["scene"], int(d["budget"]), d["method"], int(d["cameras"]), float(d["cost"]),
+                                 float(d["coverage_gap"]), float(d["non_triangulatable_pct"]), opt["bound"],
+                                 opt["proven_gap"], d["status"], float(d["seconds"])))
+    return rows
+
+
 def parse_budgets(text: str) -> list[int]:
     """'20,30,40' -> [20, 30, 40]; InputError on anything else."""
     try:
@@ -209,5 +221,5 @@ def parse_budgets(text: str) -> list[int]:
     return vals
 
 
-__all__ = ["BenchRow", "DEFAULT_METHODS", "PAPER_TABLES", "bench_problem", "parse_budgets", "run_bench",
+__all__ = ["BenchRow", "DEFAULT_METHODS", "PAPER_TABLES", "bench_problem", "parse_budgets", "read_csv", "run_bench",
            "write_bench"]
