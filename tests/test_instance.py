@@ -81,3 +81,22 @@ def test_certify_keys_in_placement_json(tmp_path):
     assert pj["bound_method"] and pj["incumbent_method"]
     assert pj["cameras"][0]["position"] is None  # no geometry in this file
     assert pj["objective"] == problem.cost(np.array([c["candidate_id"] for c in pj["cameras"]]))
+
+
+def test_cli_solve_writes_contract_files(tmp_path):
+    import subprocess
+    import sys
+
+    p = random_problem(8, n_g=25, n_p=30, budget=3, n_loc=9)
+    path = save_problem_npz(tmp_path / "visibility.npz", p)
+    out = tmp_path / "out"
+    r = subprocess.run([sys.executable, "-m", "camplace.cli", "--json", "solve", str(path), "--budget", "3",
+                        "--certify", "2", "--threads", "1", "--out", str(out)], capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    summary = json.loads(r.stdout)
+    pj = json.loads((out / "placement.json").read_text())
+    assert summary["cost"] == pj["objective"] and pj["solver"] == "certify"
+    assert pj["bound"] <= pj["objective"]
+    bad = subprocess.run([sys.executable, "-m", "camplace.cli", "solve", str(tmp_path / "missing.npz"), "--budget",
+                          "3"], capture_output=True, text=True)
+    assert bad.returncode == 2 and "not found" in bad.stderr and "Traceback" not in bad.stderr
