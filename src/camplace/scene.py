@@ -15,7 +15,7 @@ import numpy as np
 import shapely
 from shapely.geometry import Polygon
 
-from camplace.config import SceneSpec
+from camplace.config import SceneSpec, memory_limit_bytes
 from camplace.errors import InputError
 
 if TYPE_CHECKING:
@@ -104,10 +104,13 @@ def build_scene(spec: SceneSpec, base_dir: Path | None = None, source: str = "<s
     camplace.loaders; free space derived when a scan or OctoMap is present)."""
     poly = _validate_footprint(spec, source)
     need = estimate_grid_bytes(spec)
-    if need > MAX_GRID_BYTES:
+    # last guard for direct callers: the pipeline already checked every size against the
+    # user's limit (camplace.config.check_resources, --max-memory-gb) before this point
+    limit = max(MAX_GRID_BYTES, memory_limit_bytes())
+    if need > limit:
         raise InputError(
             f"{source}: occupancy_resolution: {spec.occupancy_resolution} m would need a "
-            f"{need / 1024**3:.1f} GiB occupancy grid (limit {MAX_GRID_BYTES / 1024**3:.0f} GiB); use a coarser resolution"
+            f"{need / 1024**3:.1f} GiB occupancy grid (limit {limit / 1024**3:.1f} GiB); use a coarser resolution"
         )
     res = float(spec.occupancy_resolution)
     fp = np.asarray(spec.room.footprint, float)
