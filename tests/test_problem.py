@@ -2,28 +2,18 @@
 
 from __future__ import annotations
 
-import itertools
-
 import numpy as np
 import pytest
 import scipy.sparse as sp
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from camplace.problem import PlacementProblem, build_problem, dominated_candidates, reduce_problem
+from camplace.problem import (PlacementProblem, brute_force_optimum, build_problem, dominated_candidates,
+                              reduce_problem)
 
 
 def optimum(problem: PlacementProblem) -> float:
-    best = problem.normalizer
-    for k in range(1, min(problem.budget, problem.n_candidates) + 1):
-        for c in itertools.combinations(range(problem.n_candidates), k):
-            sel = np.array(c, np.int64)
-            try:
-                problem.check_feasible(sel)
-            except ValueError:
-                continue
-            best = min(best, problem.cost(sel))
-    return best
+    return brute_force_optimum(problem)[0]
 
 
 @st.composite

@@ -3,15 +3,13 @@ check_estimator), then solver-specific checks against brute force."""
 
 from __future__ import annotations
 
-import itertools
-
 import numpy as np
 import pytest
 import scipy.sparse as sp
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from camplace.problem import PlacementProblem, build_problem
+from camplace.problem import PlacementProblem, brute_force_optimum, build_problem, feasible_selections
 from camplace.solvers import SOLVERS, solve
 
 STATUSES = {"optimal", "feasible", "time_limit", "interrupted", "heuristic"}
@@ -20,18 +18,7 @@ EXACT = {"mip", "paper-mip"}  # proven optimal on tiny instances without a time 
 
 def brute_force(problem: PlacementProblem) -> tuple[float, np.ndarray]:
     """Optimal cost and one optimal selection by enumeration (tiny problems only)."""
-    best, best_sel = problem.normalizer, np.zeros(0, np.int64)
-    for k in range(1, min(problem.budget, problem.n_candidates) + 1):
-        for c in itertools.combinations(range(problem.n_candidates), k):
-            sel = np.array(c, np.int64)
-            try:
-                problem.check_feasible(sel)
-            except ValueError:
-                continue
-            cost = problem.cost(sel)
-            if cost < best:
-                best, best_sel = cost, sel
-    return best, best_sel
+    return brute_force_optimum(problem)
 
 
 @st.composite
@@ -245,15 +232,9 @@ def test_horster_counts_targets_below_their_coverage():
 def test_zhao_maximizes_fully_covered_targets(problem):
     best = 0.0
     live = problem.gamma > 0
-    for k in range(0, min(problem.budget, problem.n_candidates) + 1):
-        for c in itertools.combinations(range(problem.n_candidates), k):
-            sel = np.array(c, np.int64)
-            try:
-                problem.check_feasible(sel)
-            except ValueError:
-                continue
-            full = (problem.coverage(sel) >= problem.gamma) & live
-            best = max(best, float(problem.weights[full].sum()))
+    for sel in feasible_selections(problem):
+        full = (problem.coverage(sel) >= problem.gamma) & live
+        best = max(best, float(problem.weights[full].sum()))
     p = solve_zhao(problem)
     if p.status == "optimal" and "zhao_covered" in p.info:
         assert p.info["zhao_covered"] == pytest.approx(best)
@@ -268,11 +249,9 @@ def fewest_by_brute_force(problem: PlacementProblem, target: float) -> int:
     n_loc = len(np.unique(problem.location_ids))
     least, _ = brute_force(replace(problem, budget=n_loc))
     target = max(target, least)
-    for k in range(0, n_loc + 1):
-        for c in itertools.combinations(range(problem.n_candidates), k):
-            sel = np.array(c, np.int64)
-            if len(np.unique(problem.location_ids[sel])) == k and problem.cost(sel) <= target + 1e-9:
-                return k
+    for sel in feasible_selections(problem, max_size=n_loc):  # by increasing size, budget ignored
+        if problem.cost(sel) <= target + 1e-9:
+            return len(sel)
     raise AssertionError("unreachable")
 
 

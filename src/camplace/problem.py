@@ -108,6 +108,38 @@ def build_problem(V: sp.csr_matrix, gamma: np.ndarray, weights: np.ndarray | Non
     return PlacementProblem(V, np.asarray(gamma, np.int64), w, int(budget), loc)
 
 
+def feasible_selections(problem: PlacementProblem, max_size: int | None = None):
+    """Yield every feasible selection ((k,) int64, sorted) of at most max_size (default
+    N_s) cameras, the empty one first. Exponential: for tests and tiny instances."""
+    import itertools
+
+    top = problem.budget if max_size is None else max_size
+    for k in range(0, min(top, problem.n_candidates) + 1):
+        for c in itertools.combinations(range(problem.n_candidates), k):
+            sel = np.array(c, np.int64)
+            try:
+                if max_size is None:
+                    problem.check_feasible(sel)
+            except ValueError:
+                continue
+            if max_size is not None and len(np.unique(problem.location_ids[sel])) != k:
+                continue
+            yield sel
+
+
+def brute_force_optimum(problem: PlacementProblem, max_candidates: int = 14) -> tuple[float, np.ndarray]:
+    """(optimal cost, one optimal selection) by enumerating every feasible selection.
+    Exponential: for tests and tiny instances only (InputError above max_candidates)."""
+    if problem.n_candidates > max_candidates:
+        raise InputError(f"brute force: {problem.n_candidates} candidates, at most {max_candidates} allowed")
+    best, best_sel = problem.normalizer, np.zeros(0, np.int64)
+    for sel in feasible_selections(problem):
+        cost = problem.cost(sel)
+        if cost < best:
+            best, best_sel = cost, sel
+    return best, best_sel
+
+
 # ---------------------------------------------------------------------------
 # Reductions that keep the optimum (applied by camplace.solvers.solve before any solver)
 

@@ -103,6 +103,24 @@ def selection_from_x(values: np.ndarray, n_x: int) -> np.ndarray:
     return np.nonzero(np.asarray(values[:n_x]) > 0.5)[0].astype(np.int64)
 
 
+def better_selection(problem: PlacementProblem, start: np.ndarray, found: np.ndarray | None, info: dict,
+                     reject_key: str) -> tuple[np.ndarray, float]:
+    """(selection, cost): the solver's selection when it is feasible and strictly cheaper
+    than the start, else the start (info[reject_key] = True if it was infeasible)."""
+    best = np.sort(np.asarray(start, np.int64))
+    best_cost = problem.cost(best)
+    if found is not None:
+        try:
+            problem.check_feasible(found)
+        except ValueError:
+            info[reject_key] = True
+            return best, best_cost
+        c = problem.cost(found)
+        if c < best_cost - 1e-9 * max(1.0, best_cost):
+            return np.sort(found), c
+    return best, best_cost
+
+
 def solve_highs_model(problem: PlacementProblem, h: highspy.Highs, start_cols: np.ndarray | None,
                       start_sel: np.ndarray, n_x: int, name: str, *, time_limit_s: float | None,
                       threads: int | None, seed: int, should_stop: ShouldStop | None,
@@ -113,17 +131,8 @@ def solve_highs_model(problem: PlacementProblem, h: highspy.Highs, start_cols: n
     left = None if time_limit_s is None else max(0.01, time_limit_s - (time.perf_counter() - t0))
     out = run_highs(h, time_limit_s=left, threads=threads, seed=seed, should_stop=should_stop,
                     on_incumbent=on_incumbent, start=start_cols, mip_rel_gap=mip_rel_gap, verbose=verbose)
-    best = np.sort(np.asarray(start_sel, np.int64))
-    best_cost = problem.cost(best)
-    if out.values is not None:
-        sel = selection_from_x(out.values, n_x)
-        try:
-            problem.check_feasible(sel)
-            c = problem.cost(sel)
-            if c < best_cost - 1e-9 * max(1.0, best_cost):
-                best, best_cost = sel, c
-        except ValueError:
-            info["highs_solution_rejected"] = True
+    found = None if out.values is None else selection_from_x(out.values, n_x)
+    best, best_cost = better_selection(problem, start_sel, found, info, "highs_solution_rejected")
     bound = out.bound
     if bound is not None:
         bound = min(max(bound, 0.0), best_cost)

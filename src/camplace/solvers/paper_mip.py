@@ -32,7 +32,7 @@ import scipy.sparse as sp
 from camplace.problem import PlacementProblem
 from camplace.solvers.base import OnIncumbent, Placement, ProgressFn, ShouldStop, stopped, trivial_placement
 from camplace.solvers.highs_util import INF, MilpArrays, highs_from_arrays, location_rows, run_highs
-from camplace.solvers.mip import solve_highs_model
+from camplace.solvers.mip import better_selection, solve_highs_model
 
 
 def paper_model_arrays(problem: PlacementProblem) -> tuple[MilpArrays, np.ndarray, np.ndarray]:
@@ -212,18 +212,11 @@ def _solve_cbc(mip, problem: PlacementProblem, h, arrays: MilpArrays, start_cols
     st = m.optimize(max_seconds=left if left is not None else float("inf"))
     info["cbc_seconds"] = time.perf_counter() - ts
     info["cbc_status"] = st.name
-    best = np.sort(np.asarray(start_sel, np.int64))
-    best_cost = problem.cost(best)
+    found = None
     if st in (mip.OptimizationStatus.OPTIMAL, mip.OptimizationStatus.FEASIBLE) and m.num_solutions:
         x = np.array([cols[k].x or 0.0 for k in range(arrays.n_x)])
-        sel = np.nonzero(x > 0.5)[0].astype(np.int64)
-        try:
-            problem.check_feasible(sel)
-            c = problem.cost(sel)
-            if c < best_cost - 1e-9 * max(1.0, best_cost):
-                best, best_cost = sel, c
-        except ValueError:
-            info["cbc_solution_rejected"] = True
+        found = np.nonzero(x > 0.5)[0].astype(np.int64)
+    best, best_cost = better_selection(problem, start_sel, found, info, "cbc_solution_rejected")
     bound = m.objective_bound
     bound = None if bound is None or not np.isfinite(bound) else min(max(float(bound), 0.0), best_cost)
     if st != mip.OptimizationStatus.OPTIMAL and bound is not None and bound >= best_cost - 1e-9 * max(1.0, best_cost):
