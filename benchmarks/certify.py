@@ -4,6 +4,7 @@ Usage (one job at a time on a 2-core machine; each writes one JSON line per inst
     python benchmarks/certify.py highs   --out benchmarks/results/certify-highs.jsonl  [--time 600]
     python benchmarks/certify.py papermip --out benchmarks/results/certify-papermip.jsonl [--time 600]
     python benchmarks/certify.py engine  --out benchmarks/results/certify-engine.jsonl [--time 600]
+    python benchmarks/certify.py table      # the docs/results.md table from benchmarks/results/*.jsonl
 Instances: standard-store at N_s = 20, 40, 60, 80 and store-a at N_s = 40 (`--only scene:N` to pick).
 The engine run records the incumbent and bound it held at 10 s, 60 s and the end.
 """
@@ -84,6 +85,15 @@ def run_papermip(problem, time_s: float) -> dict:
 def run_engine(problem, time_s: float) -> dict:
     from camplace.solvers.certify import solve_certify
 
+    import scipy.sparse as sp
+
+    from camplace.problem import PlacementProblem
+
+    # warm the numba caches (compiled once per install; not part of the solve)
+    rng = np.random.default_rng(0)
+    tiny = PlacementProblem(sp.csr_matrix((rng.random((30, 40)) < 0.3).astype(np.uint8)), rng.integers(0, 4, 40),
+                            np.ones(40), 3, rng.integers(0, 10, 30))
+    solve_certify(tiny, time_limit_s=0.5, threads=2)
     trace: list[dict] = []
     t0 = time.perf_counter()
 
@@ -102,7 +112,48 @@ def run_engine(problem, time_s: float) -> dict:
             "snapshots": snaps, "seconds": round(time.perf_counter() - t0, 2), "trace": trace[-200:]}
 
 
+def _ceil(b):
+    return None if b is None else float(np.ceil(b - 1e-6))  # unit weights: costs are integers (docs/certify.md §4)
+
+
+def table(results_dir: Path) -> str:
+    """The docs/results.md table from the three .jsonl files."""
+    def load(name):
+        f = results_dir / f"certify-{name}.jsonl"
+        rows = [json.loads(line) for line in f.read_text().splitlines()] if f.is_file() else []
+        return {(r["scene"], r["budget"]): r for r in rows}
+
+    eng, hig, pm = load("engine"), load("highs"), load("papermip")
+    eng_by = {"10": load("engine-10"), "60": load("engine-60")}  # separate runs with that time limit
+    head = ("| instance | N_s | engine 10 s cost / bound | engine 60 s cost / bound | engine 600 s cost / bound "
+            "(gap) | HiGHS tight 600 s cost / bound | paper-mip CBC 600 s cost / bound |")
+    lines = [head, "|" + "---|" * 7]
+    fmt = lambda o, b: f"{o:,.0f} / {b:,.0f}" if b is not None else f"{o:,.0f} / -"  # noqa: E731
+    for scene, n in INSTANCES:
+        cells = [scene, str(n)]
+        for mark in ("10", "60", "600"):
+            e = eng_by.get(mark, {}).get((scene, n)) or eng.get((scene, n))
+            s = (e or {}).get("snapshots", {}).get(mark)
+            if e is not None and int(e["time_limit_s"]) == int(mark):
+                s = {"objective": e["objective"], "bound": e["bound"]}  # the run's final answer
+            if s is None:
+                cells.append("not run")
+            else:
+                b = _ceil(s["bound"])
+                gap = (s["objective"] - b) / s["objective"] if s["objective"] > 0 else 0.0
+                cells.append(fmt(s["objective"], b) + (f" ({100 * gap:.1f} %)" if mark == "600" else ""))
+        h = hig.get((scene, n))
+        cells.append(fmt(h["objective"], h["bound"]) if h else "not run")
+        q = pm.get((scene, n))
+        cells.append((fmt(q["objective"], q["bound"]) if "objective" in q else q.get("error", "?")) if q else "not run")
+        lines.append("| " + " | ".join(cells) + " |")
+    return "\n".join(lines)
+
+
 def main(argv: list[str] | None = None) -> None:
+    if argv is None and len(sys.argv) > 1 and sys.argv[1] == "table":
+        print(table(Path(sys.argv[2]) if len(sys.argv) > 2 else Path(__file__).resolve().parent / "results"))
+        return
     ap = argparse.ArgumentParser()
     ap.add_argument("what", choices=["highs", "papermip", "engine"])
     ap.add_argument("--out", required=True)

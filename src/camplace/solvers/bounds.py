@@ -427,8 +427,13 @@ def solve_reduced_mip(problem: PlacementProblem, red: Reduction, incumbent: np.n
     if len(forced) < len(red.forced):
         info["status"] = "infeasible-forcing"
         return red.ub, None, info
-    h, n_x = build_highs(sub, integer=True, threads=threads, time_limit_s=max(0.1, time_limit_s), seed=seed,
+    h, n_x = build_highs(sub, integer=True, threads=threads, time_limit_s=None, seed=seed,
                          forced_locations=forced)
+    left = time_limit_s - (time.perf_counter() - t0)  # building counts against the limit
+    if left <= 0.05:
+        info["status"] = "no time left after building"
+        return red.lagrangian, None, info
+    h.setOptionValue("time_limit", float(left))
     h.setOptionValue("mip_rel_gap", 0.0)
     h.setOptionValue("mip_abs_gap", 0.5 * float(np.min(problem.weights[problem.weights > 0], initial=1.0)) * 1e-3)
     if incumbent is not None and np.all(red.keep[incumbent]):

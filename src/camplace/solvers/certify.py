@@ -195,8 +195,11 @@ def solve_certify(problem: PlacementProblem, *, time_limit_s: float | None = Non
             red = reduce_by_fixing(problem, lam, ub, lg)
             red_info = {"ub": ub, "candidates_kept": int(red.keep.sum()), "locations_forced": int(len(red.forced))}
             remaining = end - time.perf_counter()
-            if remaining > 1 and not stop_now():
-                bnd, sel, info = solve_reduced_mip(problem, red, inc, time_limit_s=remaining - 0.5,
+            # worth it only when fixing left a small problem or there is time for a big one
+            kept_nnz = int(np.diff(problem.V.indptr)[red.keep].sum())
+            small = red.keep.sum() <= 0.25 * problem.n_candidates or kept_nnz <= 100_000
+            if remaining > 2 and (small or remaining >= 120) and not stop_now():
+                bnd, sel, info = solve_reduced_mip(problem, red, inc, time_limit_s=remaining - 1.0,
                                                    threads=1, seed=seed, should_stop=stop_now)
                 red_info.update(info)
                 if sel is not None:
