@@ -68,3 +68,18 @@ def test_bad_options_are_input_errors():
         run_bench("demo", [2], ["nope"])
     assert parse_budgets("20, 30,40") == [20, 30, 40]
     assert np.all(np.array(parse_budgets("5")) == 5)
+
+
+def test_cli_bench_writes_the_three_files(tmp_path):
+    import subprocess
+    import sys
+
+    out = tmp_path / "b"
+    r = subprocess.run([sys.executable, "-m", "camplace.cli", "bench", "demo", "--budgets", "2,4", "--methods",
+                        "greedy,horster", "--out", str(out)], capture_output=True, text=True, timeout=120)
+    assert r.returncode == 0, r.stderr
+    assert "| Proposed Greedy |" in r.stdout
+    assert {p.name for p in out.iterdir()} >= {"bench.csv", "bench.md", "bench.png"}
+    bad = subprocess.run([sys.executable, "-m", "camplace.cli", "bench", "demo", "--budgets", "x"],
+                         capture_output=True, text=True, timeout=60)
+    assert bad.returncode == 2 and "--budgets" in bad.stderr
