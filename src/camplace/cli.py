@@ -299,6 +299,9 @@ def run_cmd(scene: Optional[str] = typer.Argument(None, help="Scene YAML file or
                                                                          "(1 = any part, the paper's rule; 0 = centre)."),
             local_search: bool = typer.Option(False, "--local-search", help="Greedy: 1-swap local search afterwards."),
             threads: Optional[int] = typer.Option(None, "--threads", min=1, help="Solver threads (MIP solvers)."),
+            coverage_gap: Optional[float] = typer.Option(None, "--coverage-gap", min=0.0,
+                                                         help="min-cameras: allowed coverage gap ε (paper eq. 8; "
+                                                              "default 0 = every Γ met)."),
             refine: bool = typer.Option(False, "--refine", help="Move each camera off the grid (continuous pose search)."),
             refine_time: float = typer.Option(60.0, "--refine-time", help="Seconds for --refine."),
             adaptive: int = typer.Option(0, "--adaptive", help="Rounds of finer candidates around the placement."),
@@ -334,6 +337,7 @@ def run_cmd(scene: Optional[str] = typer.Argument(None, help="Scene YAML file or
     _run(scene, budget, solver, out, time_limit, require_feasible, max_memory_gb, repeatable,
          **_scale_options(workers, scheduler, cache, no_cache), visibility_mode=visibility, stride=stride, probe=probe,
          **({"local_search": True} if local_search else {}), **({"threads": threads} if threads else {}),
+         **({"coverage_gap": coverage_gap} if coverage_gap is not None else {}),
          **_beyond_grid_options(refine, refine_time, adaptive, robust, money_budget, tri_angle),
          **({"well_triangulated": True} if well_triangulated else {}))
 
