@@ -167,17 +167,12 @@ class Lagrangian:
         return float(u_val - x_val), g, chosen
 
     def initial_multipliers(self, coverage: np.ndarray | None = None) -> np.ndarray:
-        """λ from an incumbent's coverage: the slope of the next unit of shortfall,
-        λ_j = w_j(2 d_j + 1) clipped at w_j(2Γ_j − 1), with d_j the incumbent's deficit
-        (what one more view is worth, a good dual guess)."""
+        """λ from an incumbent's coverage: the slope of the last missing unit,
+        λ_j = w_j(2 d_j − 1) where the deficit d_j > 0, else 0 (a target the incumbent
+        covers needs no price). Without an incumbent d = Γ."""
         g = self.gamma.astype(np.float64)
-        if coverage is None:
-            d = g
-        else:
-            d = np.maximum(g - coverage, 0)
-        lam = self.weights * np.minimum(2 * d + 1, 2 * g - 1)
-        lam[self.gamma == 0] = 0.0
-        return np.maximum(lam, 0.0)
+        d = g if coverage is None else np.maximum(g - coverage, 0)
+        return np.where(d > 0, self.weights * (2 * d - 1), 0.0)
 
 
 def fixing_bounds(lagr: Lagrangian, lam: np.ndarray, budget: int | None = None) -> tuple[np.ndarray, np.ndarray, float]:
