@@ -107,7 +107,11 @@ def one(size: float, mode: str, dask_workers: int, solvers: list[str], budget: i
         m = compute_metrics(problem, p.selected, vis.targets.region_ids, vis.targets.region_names)
         stage(f"metrics:{name}", t)
         out["solvers"][name] = {"objective": p.objective, "coverage_gap": m.coverage_gap,
-                                "cameras": int(len(p.selected)), "selected_hash": hashlib.blake2b(
+                                "cameras": int(len(p.selected)),
+                                "reduction_s": p.info.get("reduction", {}).get("seconds"),
+                                "order_hash": hashlib.blake2b(np.asarray(p.info.get("order", []), np.int64).tobytes(),
+                                                              digest_size=8).hexdigest(),
+                                "selected_hash": hashlib.blake2b(
                                     np.asarray(p.selected, np.int64).tobytes(), digest_size=8).hexdigest()}
     return out
 
