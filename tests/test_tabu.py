@@ -62,7 +62,7 @@ def test_registered_and_time_limited():
     assert "tabu" in SOLVERS
     p = random_problem(2, n_g=40, n_p=50, budget=5, n_loc=15)
     seen = []
-    r = solve(p, "tabu", time_limit_s=0.3, on_incumbent=lambda o, b: seen.append(o))
+    r = solve(p, "tabu", time_limit_s=0.3, on_incumbent=lambda o, b: seen.append(o), max_stall_restarts=None)
     assert r.seconds < 5 and r.status == "time_limit"
     assert seen and seen[-1] == r.objective and seen == sorted(seen, reverse=True)
     stop = solve_tabu(p, should_stop=lambda: True)
@@ -74,3 +74,11 @@ def test_zero_budget_and_empty():
     p = random_problem(1, budget=0)
     r = solve_tabu(p, max_iterations=10)
     assert len(r.selected) == 0 and r.objective == p.normalizer
+
+
+def test_stops_when_converged():
+    """On a tiny instance the search stops long before a generous time limit."""
+    p = random_problem(12, n_g=8, n_p=10, budget=2, n_loc=4)
+    r = solve_tabu(p, time_limit_s=30, max_stall_restarts=20)
+    assert r.seconds < 10 and r.status == "heuristic"
+    assert r.objective == brute_force(p)[0]

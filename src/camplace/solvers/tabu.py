@@ -361,10 +361,13 @@ class TabuSearch:
 
 def solve_tabu(problem: PlacementProblem, *, time_limit_s: float | None = None, threads: int | None = None,
                seed: int = 0, should_stop=None, progress=None, on_incumbent=None, max_iterations: int | None = None,
-               initial: np.ndarray | None = None, chunk: int = 20, **options) -> Placement:
+               initial: np.ndarray | None = None, chunk: int = 20, max_stall_restarts: int | None = 200,
+               **options) -> Placement:
     """Tabu search from greedy. Stops at `time_limit_s` (default 10 s when no
     `max_iterations` is given), after `max_iterations`, or when should_stop() is true.
-    With `max_iterations` and no time limit the result depends only on the seed.
+    With `max_iterations` and no time limit the result depends only on the seed. It also
+    stops after `max_stall_restarts` restarts in a row without a better placement (the
+    search has converged; None: never).
     Options: tenure_add, tenure_rem, stall_limit, perturb, k_rcl (see TabuSearch)."""
     t0 = time.perf_counter()
     if time_limit_s is None and max_iterations is None:
@@ -377,7 +380,10 @@ def solve_tabu(problem: PlacementProblem, *, time_limit_s: float | None = None, 
         on_incumbent(float(problem.cost(ts.best_selected)), None)
     status = "heuristic"
     total = max_iterations if max_iterations is not None else 0
+    since = ts.restarts
     while problem.budget > 0 and problem.n_candidates > 0:
+        if max_stall_restarts is not None and ts.restarts - since >= max_stall_restarts:
+            break
         if max_iterations is not None and ts.iterations >= max_iterations:
             break
         if time.perf_counter() >= end:
@@ -390,6 +396,7 @@ def solve_tabu(problem: PlacementProblem, *, time_limit_s: float | None = None, 
         ts.run(n)
         if ts.best_cost < best - 1e-9:
             best = ts.best_cost
+            since = ts.restarts
             if on_incumbent is not None:
                 on_incumbent(float(problem.cost(ts.best_selected)), None)
         if progress is not None:
