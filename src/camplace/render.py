@@ -25,7 +25,7 @@ from camplace.errors import InputError
 from camplace.files import atomic_write_bytes
 from camplace.scene import Scene
 from camplace.targets import Targets
-from camplace.visibility_pixel import BOUNDARY, NO_HIT, _first_hit
+from camplace.visibility_pixel import BOUNDARY, NO_HIT, _first_hit, free_distance
 
 FREE, WALL, FLOOR, CEILING, OTHER = 0, 1, 2, 3, 4  # labels; obstacle k (scene.boxes order) = 5 + k
 NEUTRAL = {WALL: (0.80, 0.80, 0.78), FLOOR: (0.62, 0.62, 0.60), CEILING: (0.92, 0.92, 0.90),
@@ -84,9 +84,9 @@ def obstacle_colours(n: int) -> np.ndarray:
 
 
 @numba.njit(cache=True, parallel=True)
-def _cast_rays(occ, origin, res, p, dirs, max_t, t_out, cell_out, axis_out):
+def _cast_rays(occ, dist, origin, res, p, dirs, max_t, t_out, cell_out, axis_out):
     for r in numba.prange(dirs.shape[0]):
-        t, ix, iy, iz, axis, step = _first_hit(occ, origin[0], origin[1], origin[2], res, p[0], p[1], p[2],
+        t, ix, iy, iz, axis, step = _first_hit(occ, dist, origin[0], origin[1], origin[2], res, p[0], p[1], p[2],
                                                dirs[r, 0], dirs[r, 1], dirs[r, 2], max_t)
         t_out[r] = t if axis != NO_HIT else np.inf
         cell_out[r, 0], cell_out[r, 1], cell_out[r, 2] = ix, iy, iz
@@ -118,7 +118,7 @@ def render_view(scene: Scene, camera: CameraModel, position: np.ndarray, rotatio
     axis = np.empty(n, np.int64)
     diag = float(np.linalg.norm(np.array(occ.shape) * occ.resolution)) + 1.0
     p = np.asarray(position, float)
-    _cast_rays(occ.occupied.view(np.uint8), occ.origin.astype(np.float64), float(occ.resolution), p, dirs, diag,
+    _cast_rays(occ.occupied.view(np.uint8), free_distance(occ), occ.origin.astype(np.float64), float(occ.resolution), p, dirs, diag,
                t, cell, axis)
     shape = np.array(occ.shape)
     inside = np.all((cell >= 0) & (cell < shape), axis=1) & np.isfinite(t)
