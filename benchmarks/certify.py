@@ -143,13 +143,13 @@ def table(results_dir: Path) -> str:
                 gap = (s["objective"] - b) / s["objective"] if s["objective"] > 0 else 0.0
                 cells.append(fmt(s["objective"], b) + (f" ({100 * gap:.1f} %)" if mark == "600" else ""))
         h = hig.get((scene, n))
-        cells.append(fmt(h["objective"], h["bound"]) if h else "not run")
+        cells.append(fmt(h["objective"], _ceil(h["bound"])) if h else "not run")
         q = pm.get((scene, n))
         known = min([r["objective"] for d in (eng, hig, pm, *eng_by.values()) for r in [d.get((scene, n))]
                      if r and "objective" in r])
         if q and q.get("bound") is not None and q["bound"] > known + 0.5:
             q = dict(q, bound=None)  # reported a "bound" above a known placement: not a bound (see text)
-        cells.append((fmt(q["objective"], q["bound"]) if "objective" in q else q.get("error", "?")) if q else "not run")
+        cells.append((fmt(q["objective"], _ceil(q["bound"])) if "objective" in q else q.get("error", "?")) if q else "not run")
         lines.append("| " + " | ".join(cells) + " |")
     return "\n".join(lines)
 
