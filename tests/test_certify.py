@@ -28,7 +28,7 @@ def test_small_instance_proven_optimal():
     r = solve_certify(p, time_limit_s=20, threads=1)
     opt, _ = brute_force(p)
     assert r.objective == opt
-    assert r.status == "optimal" and r.gap == 0.0
+    assert r.status == "optimal" and r.gap <= 1e-9  # float round-off only
     assert r.info["incumbent_method"] in {"greedy", "tabu", "reduced-mip"}
     assert r.info["bound_method"]
 
