@@ -177,8 +177,14 @@ def solve_greedy(problem: PlacementProblem, *, time_limit_s: float | None = None
     selected, cov, evaluations, cut = lazy_greedy(problem, lambda c: marginal_gains(problem, c),
                                                   lambda i, c: row_gain(problem, i, c), end=end,
                                                   should_stop=should_stop, progress=progress)
-    order = [int(i) for i in selected]
-    info: dict = {"gain_evaluations": evaluations, "order": order}
+    info: dict = {"gain_evaluations": evaluations, "order": [int(i) for i in selected]}
+    return finish_greedy(problem, selected, info, cut, "greedy", t0, local_search=local_search, end=end,
+                         should_stop=should_stop, on_incumbent=on_incumbent)
+
+
+def finish_greedy(problem: PlacementProblem, selected: list[int], info: dict, cut: bool, name: str, t0: float, *,
+                  local_search: bool, end: float, should_stop=None, on_incumbent=None) -> Placement:
+    """Shared tail of the greedy solvers: report the incumbent, optional 1-swap, status, Placement."""
     if on_incumbent:
         on_incumbent(problem.cost(np.array(selected, np.int64)), None)
     if local_search and not cut:
@@ -191,4 +197,4 @@ def solve_greedy(problem: PlacementProblem, *, time_limit_s: float | None = None
     if cut:
         status = "interrupted" if stopped(should_stop) else "time_limit"
     info["local_search"] = bool(local_search)
-    return Placement(sel, problem.cost(sel), None, status, "greedy", time.perf_counter() - t0, info)
+    return Placement(sel, problem.cost(sel), None, status, name, time.perf_counter() - t0, info)

@@ -141,19 +141,8 @@ def solve_greedy_fast(problem: PlacementProblem, *, time_limit_s: float | None =
             break
     selected = [int(i) for i in order[:n_sel]]
     del col_ptr, col_rows
-    info: dict = {"order": list(selected), "incremental": True}
-    if on_incumbent:
-        on_incumbent(problem.cost(np.array(selected, np.int64)), None)
-    if local_search and not cut:
-        from camplace.solvers.greedy import swap_local_search
+    from camplace.solvers.greedy import finish_greedy
 
-        greedy_cost = problem.cost(np.array(selected, np.int64))
-        selected, moves, cut = swap_local_search(problem, selected, end=end, should_stop=should_stop,
-                                                 on_incumbent=on_incumbent)
-        info.update(local_search_moves=moves, greedy_objective=greedy_cost)
-    sel = np.array(sorted(selected), dtype=np.int64)
-    status = "heuristic"
-    if cut:
-        status = "interrupted" if stopped(should_stop) else "time_limit"
-    info["local_search"] = bool(local_search)
-    return Placement(sel, problem.cost(sel), None, status, "greedy-fast", time.perf_counter() - t0, info)
+    info: dict = {"order": list(selected), "incremental": True}
+    return finish_greedy(problem, selected, info, cut, "greedy-fast", t0, local_search=local_search, end=end,
+                         should_stop=should_stop, on_incumbent=on_incumbent)
