@@ -40,6 +40,7 @@ def main() -> None:
         "exports (opencv + colmap)": lambda: write_exports(out, pd["cameras"]),
         "PNG figures": lambda: write_figures(out, view, t.positions, t.is_surface, cov, pd["cameras"], hists),
         "camera views (1 s budget)": lambda: camera_views(r.scene, vis, sel),
+        "camera views, all (no budget)": lambda: camera_views(r.scene, vis, sel, budget_s=float("inf")),
         "report.html text": lambda: render_report(view, pd, r.metrics.to_dict(), t.positions, t.is_surface, cov,
                                                   t.gamma, t.region_ids, t.region_names, t.region_kinds,
                                                   vis.V.shape[0], [], coverage_slices(view, t.positions,

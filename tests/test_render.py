@@ -53,6 +53,44 @@ def test_floor_seen_when_looking_down(room):
     assert np.allclose(view.hits[..., 2], 0.0, atol=0.051)
 
 
+def test_precomputed_free_distance_gives_the_same_image(room):
+    """render_view with a cached free_distance (and label grid) draws exactly the image it
+    draws computing them itself, from a pose that sees walls, floor and the pillar."""
+    from camplace.visibility_pixel import free_distance
+
+    cam = CameraModel.from_fov("f", "fisheye", (640, 480), (150, 110))
+    pos, rot = np.array([0.7, 0.6, 2.6]), rotation_from_ypr(30, 35, 5)[0]
+    fresh = render_view(room, cam, pos, rot, width=96)
+    cached = render_view(room, cam, pos, rot, width=96, labels=label_grid(room), dist=free_distance(room.occupancy))
+    assert len(set(np.unique(fresh.labels).tolist())) >= 3  # the view is not trivial
+    for a, b in ((fresh.rgb, cached.rgb), (fresh.depth, cached.depth), (fresh.labels, cached.labels),
+                 (fresh.hits, cached.hits)):
+        assert np.array_equal(a, b)
+    with pytest.raises(ValueError, match="shape"):
+        render_view(room, cam, pos, rot, width=96, dist=np.zeros((1, 1, 1), np.uint8))
+
+
+def test_report_views_compute_the_distance_transform_once(demo_run, monkeypatch):
+    """camera_views renders one view per camera but computes free_distance once."""
+    import camplace.render
+    import camplace.visibility_pixel
+    from camplace.report_html import camera_views
+
+    calls = []
+    real = camplace.visibility_pixel.free_distance
+
+    def counting(occ):
+        calls.append(1)
+        return real(occ)
+
+    monkeypatch.setattr(camplace.visibility_pixel, "free_distance", counting)
+    monkeypatch.setattr(camplace.render, "free_distance", counting)
+    sel = demo_run.placement.selected
+    views, skipped = camera_views(demo_run.scene, demo_run.visibility, sel, budget_s=1e9)
+    assert len(views) == len(sel) >= 2 and skipped == 0
+    assert len(calls) == 1
+
+
 def test_label_grid_names_obstacles(room):
     lab, names = label_grid(room)
     assert set(names.values()) >= {"wall", "floor", "ceiling", "pillar"}

@@ -103,12 +103,20 @@ def scaled_camera(cam: CameraModel, width: int) -> CameraModel:
 
 
 def render_view(scene: Scene, camera: CameraModel, position: np.ndarray, rotation: np.ndarray,
-                width: int = 480, labels: tuple[np.ndarray, dict] | None = None) -> RenderedView:
+                width: int = 480, labels: tuple[np.ndarray, dict] | None = None,
+                dist: np.ndarray | None = None) -> RenderedView:
     """Raycast the image of ``camera`` at ``position`` (3,) m with world-from-camera
-    ``rotation`` (3, 3) at ``width`` pixels wide (labels: a cached ``label_grid``)."""
+    ``rotation`` (3, 3) at ``width`` pixels wide. When rendering many views of one scene,
+    pass ``labels`` (a cached ``label_grid(scene)``) and ``dist`` (a cached
+    ``free_distance(scene.occupancy)``, (nx, ny, nz) uint8) so that they are computed
+    once; the image is the same either way."""
     small = scaled_camera(camera, width)
     lab, names = labels if labels is not None else label_grid(scene)
     occ = scene.occupancy
+    if dist is None:
+        dist = free_distance(occ)
+    elif dist.shape != occ.shape:
+        raise ValueError(f"dist: expected the occupancy grid's shape {occ.shape}, got {dist.shape}")
     rays_c = small.pixel_rays(1)
     R = np.asarray(rotation, float)
     dirs = np.ascontiguousarray(rays_c @ R.T)
@@ -118,7 +126,7 @@ def render_view(scene: Scene, camera: CameraModel, position: np.ndarray, rotatio
     axis = np.empty(n, np.int64)
     diag = float(np.linalg.norm(np.array(occ.shape) * occ.resolution)) + 1.0
     p = np.asarray(position, float)
-    _cast_rays(occ.occupied.view(np.uint8), free_distance(occ), occ.origin.astype(np.float64), float(occ.resolution), p, dirs, diag,
+    _cast_rays(occ.occupied.view(np.uint8), dist, occ.origin.astype(np.float64), float(occ.resolution), p, dirs, diag,
                t, cell, axis)
     shape = np.array(occ.shape)
     inside = np.all((cell >= 0) & (cell < shape), axis=1) & np.isfinite(t)

@@ -280,20 +280,22 @@ def camera_views(scene, vis, selected: np.ndarray, width: int = VIEW_WIDTH,
     from PIL import Image
 
     from camplace.render import covered_pixels, label_grid, render_view
+    from camplace.visibility_pixel import free_distance
 
     t0 = time.perf_counter()
     sel = np.asarray(selected, np.int64)
     cov = np.bincount(vis.V[sel].indices, minlength=vis.V.shape[1]) if len(sel) else np.zeros(vis.V.shape[1], int)
     cls = coverage_class(cov)
     colours = np.array([[int(c[1:3], 16), int(c[3:5], 16), int(c[5:7], 16)] for _, c in COVERAGE_CLASSES], np.uint8)
-    labels = label_grid(scene)
+    labels = label_grid(scene)  # once per report: both grids are the same for every view
+    dist = free_distance(scene.occupancy)
     c = vis.candidates
     out = []
     for n, i in enumerate(sel):
         if out and time.perf_counter() - t0 > budget_s:
             return out, len(sel) - n
         cam = c.cameras[int(c.camera_ids[i])]
-        rv = render_view(scene, cam, c.positions[i], c.rotations[i], width, labels)
+        rv = render_view(scene, cam, c.positions[i], c.rotations[i], width, labels, dist)
         grey = np.clip(rv.rgb, 0, 1) @ np.array([0.299, 0.587, 0.114])  # grey scene: the coloured dots stand out
         img = np.repeat((40 + 200 * grey)[:, :, None], 3, axis=2).astype(np.uint8)
         seen = vis.V.indices[vis.V.indptr[i]:vis.V.indptr[i + 1]]
