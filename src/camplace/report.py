@@ -14,6 +14,7 @@ from pathlib import Path
 import numpy as np
 
 from camplace.candidates import Candidates
+from camplace.errors import Interrupted
 from camplace.files import AtomicBatch, atomic_savez, atomic_write_json, atomic_write_text
 from camplace.metrics import Metrics
 from camplace.solvers.base import Placement
@@ -96,33 +97,68 @@ def write_outputs(out_dir: str | Path, scene_name: str, vis: Visibility, placeme
     (report.html, PNG figures, opencv/ and colmap/ exports; camplace.report_html);
     ``scene`` (camplace.scene.Scene) adds the room and obstacles to the pictures;
     ``repeatable`` writes every timing as 0.0 (byte-identical metrics.json for
-    identical runs). Returns name -> path."""
+    identical runs). Returns name -> path.
+
+    The contract files (visibility.npz, placement.json, placement.csv, metrics.json) land
+    first, together (camplace.files.AtomicBatch: all new or all old); the report comes
+    after them, so a report that fails or is interrupted cannot cost the new placement.
+    Then a report.html left from an earlier run (it would show another placement) is
+    removed, and a KeyboardInterrupt comes out as camplace.errors.Interrupted saying so;
+    metrics.json is rewritten at the end with the report's time in ``timings_s.report``."""
     t0 = time.perf_counter()
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     pdict = placement_dict(scene_name, placement, budget, vis.candidates)
     timings = dict(timings)
-    report_paths = {}
-    if report:  # before the contract batch, so a failing report leaves no staged files behind
-        from camplace.figures import SceneView
-        from camplace.report_html import write_report
+    report_timings = {k: round(float(v), 4) for k, v in timings.items()}  # shown in report.html (no "report")
+    with AtomicBatch() as batch:  # the contract files replace the old ones together, once all are written
+        paths = {
+            "visibility.npz": batch.stage_savez(out / "visibility.npz", **visibility_arrays(vis)),
+            "placement.json": batch.stage_json(out / "placement.json", pdict),
+            "placement.csv": batch.stage_text(out / "placement.csv", placement_csv(pdict["cameras"])),
+        }
+        timings["report"] = time.perf_counter() - t0
+        paths["metrics.json"] = batch.stage_json(out / "metrics.json", _metrics_dict(metrics, timings, repeatable))
+    if not report:
+        return paths
+    try:
+        paths.update(_write_report_set(out, vis, placement, pdict, metrics, report_timings, scene))
+    except BaseException as err:
+        if "report.html" not in paths:  # an earlier run's page would contradict the new contract files
+            _unlink_quietly(out / "report.html")
+        if isinstance(err, KeyboardInterrupt):
+            raise Interrupted(f"stopped during the report: the contract files (placement.json, metrics.json, "
+                              f"visibility.npz, placement.csv) are written to {out}; the report set is "
+                              f"incomplete") from err
+        raise
+    if not repeatable:  # repeatable: every timing is 0.0, metrics.json is already final
+        timings["report"] = time.perf_counter() - t0
+        atomic_write_json(out / "metrics.json", _metrics_dict(metrics, timings, repeatable))
+    return paths
 
-        sel = np.asarray(placement.selected, np.int64)
-        cov = np.bincount(vis.V[sel].indices, minlength=vis.V.shape[1]).astype(np.int64)
-        m = dict(metrics.to_dict(), timings_s={k: round(float(v), 4) for k, v in timings.items()})
-        report_paths = write_report(out, vis.targets, cov, pdict, m, SceneView.from_scene(scene) if scene else None,
-                                    n_candidates=int(vis.V.shape[0]), scene=scene, vis=vis, selected=sel)
-    batch = AtomicBatch()  # the contract files replace the old ones together, only once all are written
-    paths = {
-        "visibility.npz": batch.stage_savez(out / "visibility.npz", **visibility_arrays(vis)),
-        "placement.json": batch.stage_json(out / "placement.json", pdict),
-        "placement.csv": batch.stage_text(out / "placement.csv", placement_csv(pdict["cameras"])),
-        **report_paths,
-    }
-    timings["report"] = time.perf_counter() - t0
+
+def _metrics_dict(metrics: Metrics, timings: dict[str, float], repeatable: bool) -> dict:
     m = metrics.to_dict()
     # repeatable: timings written as 0.0 so that metrics.json is byte-identical between runs
     m["timings_s"] = {k: 0.0 if repeatable else round(float(v), 4) for k, v in timings.items()}
-    paths["metrics.json"] = batch.stage_json(out / "metrics.json", m)
-    batch.commit()
-    return paths
+    return m
+
+
+def _write_report_set(out: Path, vis: Visibility, placement: Placement, pdict: dict, metrics: Metrics,
+                      timings: dict[str, float], scene) -> dict[str, Path]:
+    """report.html, PNG figures and exports (camplace.report_html.write_report)."""
+    from camplace.figures import SceneView
+    from camplace.report_html import write_report
+
+    sel = np.asarray(placement.selected, np.int64)
+    cov = np.bincount(vis.V[sel].indices, minlength=vis.V.shape[1]).astype(np.int64)
+    m = dict(metrics.to_dict(), timings_s=timings)
+    return write_report(out, vis.targets, cov, pdict, m, SceneView.from_scene(scene) if scene else None,
+                        n_candidates=int(vis.V.shape[0]), scene=scene, vis=vis, selected=sel)
+
+
+def _unlink_quietly(path: Path) -> None:
+    try:
+        path.unlink()
+    except OSError:
+        pass
