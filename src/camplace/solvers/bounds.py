@@ -395,12 +395,17 @@ def reduce_by_fixing(problem: PlacementProblem, lam: np.ndarray, ub: float, lagr
 
 def solve_reduced_mip(problem: PlacementProblem, red: Reduction, incumbent: np.ndarray | None, *,
                       time_limit_s: float, threads: int | None = 1, seed: int = 0,
-                      should_stop: StopFn | None = None) -> tuple[float, np.ndarray | None, dict]:
+                      should_stop: StopFn | None = None,
+                      mip_rel_gap: float = 0.0) -> tuple[float, np.ndarray | None, dict]:
     """HiGHS branch-and-cut on the convex model restricted to the reduction.
-    Returns (bound, better selection or None, info). The bound min(ub, reduced MIP dual
-    bound) is valid for the whole problem because every selection cheaper than ub lies
-    in the reduced problem."""
+    Returns (bound, better selection or None, info); HiGHS stops at `mip_rel_gap`
+    (0: proven optimal). The bound min(ub, reduced MIP dual bound) is valid for the whole
+    problem because every selection cheaper than ub lies in the reduced problem
+    (docs/certify.md §3). The restricted model is shrunk once more by
+    camplace.problem.reduce_problem (same optimum), and HiGHS prunes with ub as cutoff."""
     import highspy
+
+    from camplace.problem import reduce_problem
 
     t0 = time.perf_counter()
     keep_ids = np.flatnonzero(red.keep)
@@ -417,32 +422,44 @@ def solve_reduced_mip(problem: PlacementProblem, red: Reduction, incumbent: np.n
     const = float(np.dot(problem.weights[unseen], problem.gamma[unseen].astype(np.float64) ** 2))
     sub = PlacementProblem(sp.csr_matrix(V[:, cols]), problem.gamma[cols], problem.weights[cols], problem.budget,
                            problem.location_ids[keep_ids])
-    info["targets_kept"] = int(len(cols))
-    forced = red.forced[np.isin(red.forced, sub.location_ids)]
-    if len(forced) < len(red.forced):
-        info["status"] = "infeasible-forcing"
+    if not np.all(np.isin(red.forced, sub.location_ids)):
+        info["status"] = "infeasible-forcing"  # a forced location has no candidate left
         return red.ub, None, info
-    h, n_x = build_highs(sub, integer=True, threads=threads, time_limit_s=None, seed=seed,
+    rsub = reduce_problem(sub)
+    small = rsub.problem
+    # a forced location whose kept candidates all see nothing vanishes from `small`: any of
+    # them costs the same, so it just holds one camera of the budget
+    blind = np.setdiff1d(red.forced, small.location_ids)
+    forced = red.forced[np.isin(red.forced, small.location_ids)]
+    small = PlacementProblem(small.V, small.gamma, small.weights, problem.budget - len(blind), small.location_ids)
+    info.update(targets_kept=int(small.n_targets), candidates_after_reduction=int(small.n_candidates))
+    h, n_x = build_highs(small, integer=True, threads=threads, time_limit_s=None, seed=seed,
                          forced_locations=forced)
     left = time_limit_s - (time.perf_counter() - t0)  # building counts against the limit
     if left <= 0.05:
         info["status"] = "no time left after building"
         return red.lagrangian, None, info
     h.setOptionValue("time_limit", float(left))
-    h.setOptionValue("mip_rel_gap", 0.0)
+    h.setOptionValue("mip_rel_gap", float(mip_rel_gap))
     h.setOptionValue("mip_abs_gap", 0.5 * float(np.min(problem.weights[problem.weights > 0], initial=1.0)) * 1e-3)
+    # prune everything not cheaper than ub (a tiny slack keeps an incumbent of cost ub)
+    h.setOptionValue("objective_bound", float(red.ub - const + 1e-6 * max(1.0, abs(red.ub))))
     if incumbent is not None and np.all(red.keep[incumbent]):
-        pos = np.searchsorted(keep_ids, incumbent)
-        x = np.zeros(n_x)
-        x[pos] = 1.0
-        cov = sub.coverage(pos)
-        d = np.maximum(sub.gamma - cov, 0)
-        ks = np.concatenate([np.arange(1, g + 1) for g in sub.gamma]) if len(sub.gamma) else np.zeros(0)
-        u = (ks <= np.repeat(d, sub.gamma)).astype(np.float64)
-        sol = highspy.HighsSolution()
-        sol.col_value = list(np.concatenate([x, u]))
-        sol.value_valid = True
-        h.setSolution(sol)
+        where = np.full(problem.n_candidates, -1, np.int64)
+        where[keep_ids[rsub.candidates]] = np.arange(small.n_candidates)
+        pos = where[np.asarray(incumbent, np.int64)]
+        if np.all(pos >= 0):  # no incumbent camera was dropped as blind or dominated
+            x = np.zeros(n_x)
+            x[pos] = 1.0
+            d = np.maximum(small.gamma - small.coverage(pos), 0)
+            ks = np.concatenate([np.arange(1, g + 1) for g in small.gamma]) if len(small.gamma) else np.zeros(0)
+            u = (ks <= np.repeat(d, small.gamma)).astype(np.float64)
+            sol = highspy.HighsSolution()
+            sol.col_value = list(np.concatenate([x, u]))
+            sol.value_valid = True
+            h.setSolution(sol)
+            # with a near-optimal start the proof is the work: spend nothing on heuristics
+            h.setOptionValue("mip_heuristic_effort", 0.0)
     if should_stop is not None:
         try:  # interrupt through the MIP-interrupt callback when this highspy has it
             def _cb(cb_type, message, data_out, data_in, user):  # pragma: no cover - timing dependent
@@ -458,7 +475,7 @@ def solve_reduced_mip(problem: PlacementProblem, red: Reduction, incumbent: np.n
     info.update({"status": h.modelStatusToString(status), "nodes": int(hinfo.mip_node_count),
                  "seconds": round(time.perf_counter() - t0, 2)})
     if status == highspy.HighsModelStatus.kInfeasible:
-        return red.ub, None, info
+        return red.ub, None, info  # nothing at or below the cutoff: ub is optimal
     dual = float(hinfo.mip_dual_bound)
     if not np.isfinite(dual):
         return red.lagrangian, None, info
@@ -467,5 +484,5 @@ def solve_reduced_mip(problem: PlacementProblem, red: Reduction, incumbent: np.n
     sel = None
     if hinfo.primal_solution_status == 2:  # feasible solution available
         col = np.asarray(h.getSolution().col_value[:n_x])
-        sel = keep_ids[np.flatnonzero(col > 0.5)]
+        sel = np.sort(keep_ids[rsub.lift(np.flatnonzero(col > 0.5))])
     return bound, sel, info

@@ -148,10 +148,17 @@ def solve_highs_model(problem: PlacementProblem, h: highspy.Highs, start_cols: n
 def solve_mip(problem: PlacementProblem, *, time_limit_s: float | None = None, threads: int | None = None,
               seed: int = 0, should_stop: ShouldStop | None = None, progress: ProgressFn | None = None,
               on_incumbent: OnIncumbent | None = None, warm_start: bool = True, local_search: bool = True,
-              mip_rel_gap: float | None = None, verbose: bool = False, **_: object) -> Placement:
+              fixing: bool = True, mip_rel_gap: float | None = None, verbose: bool = False,
+              **_: object) -> Placement:
     """Tight convex MIP on HiGHS, warm-started from greedy (+ 1-swap when local_search).
-    Status: 'optimal' (proven within HiGHS' mip_rel_gap, default 1e-4), 'time_limit'
-    or 'interrupted' (best placement returned either way), 'feasible'."""
+
+    With `fixing` (default; not with a money budget) the warm start is improved by a short
+    tabu search and the model is first shrunk by Lagrangian fixing against it
+    (docs/certify.md §2–3: candidates that cannot be in any cheaper selection are dropped,
+    locations every cheaper selection uses are forced), an optimum-preserving reduction;
+    HiGHS then solves the reduced model. Status: 'optimal' (proven within mip_rel_gap,
+    default 1e-4), 'time_limit' or 'interrupted' (best placement returned either way),
+    'feasible'."""
     from camplace.solvers.greedy import solve_greedy
 
     t0 = time.perf_counter()
@@ -171,16 +178,92 @@ def solve_mip(problem: PlacementProblem, *, time_limit_s: float | None = None, t
             return Placement(start, g.objective, None, "interrupted", "mip", time.perf_counter() - t0, info)
     if progress:
         progress("mip", 0, 1)
-    tb = time.perf_counter()
-    arrays, layout = tight_model_arrays(problem)
-    h = highs_from_arrays(arrays)
-    info.update(build_seconds=time.perf_counter() - tb, columns=arrays.shape[1], rows=arrays.shape[0],
-                nonzeros=int(arrays.A.nnz))
-    start_cols = tight_start(problem, layout, start) if warm_start else None
-    left = None if time_limit_s is None else max(0.01, end - time.perf_counter())
-    p = solve_highs_model(problem, h, start_cols, start, layout.n_x, "mip", time_limit_s=left, threads=threads,
-                          seed=seed, should_stop=should_stop, on_incumbent=on_incumbent,
-                          mip_rel_gap=mip_rel_gap, verbose=verbose, t0=time.perf_counter(), info=info)
+    if fixing and warm_start and problem.money_budget is None:
+        p = _solve_fixed(problem, start, end=end, time_limit_s=time_limit_s, threads=threads, seed=seed,
+                         should_stop=should_stop, on_incumbent=on_incumbent,
+                         mip_rel_gap=1e-4 if mip_rel_gap is None else mip_rel_gap, info=info)
+    else:
+        tb = time.perf_counter()
+        arrays, layout = tight_model_arrays(problem)
+        h = highs_from_arrays(arrays)
+        info.update(build_seconds=time.perf_counter() - tb, columns=arrays.shape[1], rows=arrays.shape[0],
+                    nonzeros=int(arrays.A.nnz))
+        start_cols = tight_start(problem, layout, start) if warm_start else None
+        left = None if time_limit_s is None else max(0.01, end - time.perf_counter())
+        p = solve_highs_model(problem, h, start_cols, start, layout.n_x, "mip", time_limit_s=left, threads=threads,
+                              seed=seed, should_stop=should_stop, on_incumbent=on_incumbent,
+                              mip_rel_gap=mip_rel_gap, verbose=verbose, t0=time.perf_counter(), info=info)
     if progress:
         progress("mip", 1, 1)
     return Placement(p.selected, p.objective, p.bound, p.status, "mip", time.perf_counter() - t0, p.info)
+
+
+LP_DUALS_MAX_NNZ = 400_000  # above this the exact LP takes too long to pay for its better fixing
+
+
+def _solve_fixed(problem: PlacementProblem, start: np.ndarray, *, end: float, time_limit_s: float | None,
+                 threads: int | None, seed: int, should_stop: ShouldStop | None,
+                 on_incumbent: OnIncumbent | None, mip_rel_gap: float, info: dict) -> Placement:
+    """Tabu polish of the start, Lagrangian bound and fixing, then HiGHS on the reduced
+    model. Every selection cheaper than the incumbent survives the fixing, so the reduced
+    model's dual bound (capped by the incumbent) is a bound for the whole problem."""
+    from camplace.solvers.bounds import (Lagrangian, Reduction, lagrangian_bound, lp_bound, reduce_by_fixing,
+                                         solve_reduced_mip)
+    from camplace.solvers.tabu import solve_tabu
+
+    def share(frac: float, cap: float) -> float:
+        if time_limit_s is None:
+            return cap
+        return max(0.0, min(cap, frac * time_limit_s, end - time.perf_counter()))
+
+    t_tabu = share(0.1, 2.0)
+    best = np.sort(np.asarray(start, np.int64))
+    best_cost = problem.cost(best)
+    if t_tabu > 0:
+        ts = solve_tabu(problem, time_limit_s=t_tabu, seed=seed, should_stop=should_stop, initial=best,
+                        max_stall_restarts=15)
+        if ts.objective < best_cost - 1e-9 * max(1.0, best_cost):
+            best, best_cost = np.sort(ts.selected), ts.objective
+            if on_incumbent:
+                on_incumbent(best_cost, None)
+        info["tabu_objective"] = ts.objective
+    lagr = Lagrangian(problem)
+    lb = lagrangian_bound(problem, time_limit_s=share(0.1, 3.0), incumbent_cost=best_cost,
+                          coverage=problem.coverage(best), should_stop=should_stop, lagr=lagr)
+    red = reduce_by_fixing(problem, lb.multipliers, best_cost, lagr)
+    bound = min(best_cost, lb.bound)
+    if problem.V.nnz <= LP_DUALS_MAX_NNZ and not (should_stop is not None and should_stop()):
+        # the exact LP's duals are Lagrange multipliers too (certify.md §1); their fixing
+        # differs from the subgradient's, and intersecting two valid reductions is valid
+        lp = lp_bound(problem, time_limit_s=share(0.15, 10.0) or None, threads=threads)
+        if lp.info.get("status") == "optimal":
+            lam = np.maximum(lp.info["row_dual"][:problem.n_targets], 0.0)
+            red2 = reduce_by_fixing(problem, lam, best_cost, lagr)
+            red = Reduction(red.keep & red2.keep, np.union1d(red.forced, red2.forced), red.ub,
+                            max(red.lagrangian, red2.lagrangian))
+            bound = max(bound, min(best_cost, lp.bound))
+            info["lp_bound"] = lp.bound
+    info.update(lagrangian_bound=lb.bound, fixing_kept=int(red.keep.sum()), fixing_forced=int(len(red.forced)),
+                candidates=int(problem.n_candidates))
+    stopped = should_stop is not None and should_stop()
+    if best_cost - bound > mip_rel_gap * best_cost and not stopped:
+        left = 1e9 if time_limit_s is None else end - time.perf_counter()
+        if left > 0.05:
+            b, sel, sub = solve_reduced_mip(problem, red, best, time_limit_s=left, threads=threads, seed=seed,
+                                            should_stop=should_stop, mip_rel_gap=mip_rel_gap)
+            info["reduced_mip"] = sub
+            bound = max(bound, min(b, best_cost))
+            if sel is not None:
+                cand, c = better_selection(problem, best, sel, info, "highs_solution_rejected")
+                if c < best_cost:
+                    best, best_cost = cand, c
+                    if on_incumbent:
+                        on_incumbent(best_cost, bound)
+    bound = min(bound, best_cost)
+    if best_cost - bound <= mip_rel_gap * best_cost + 1e-9:
+        status = "optimal"
+    elif should_stop is not None and should_stop():
+        status = "interrupted"
+    else:
+        status = "time_limit" if time_limit_s is not None else "feasible"
+    return Placement(best, best_cost, bound, status, "mip", 0.0, info)
