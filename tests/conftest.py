@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from camplace.config import parse_scene
@@ -25,6 +26,34 @@ def box_room(obstacles=(), targets=None, mounts=None, footprint=None, height=3.0
         "mounts": mounts or [{"kind": "ceiling_grid", "camera": "cam", "spacing": 1.0,
                               "yaw_deg": [0], "pitch_deg": [45]}],
     })
+
+
+def builtin_inputs(name: str):
+    """(scene, targets, candidates) of a built-in scene, before visibility."""
+    from camplace.builtin import resolve_scene
+    from camplace.cameras import camera_from_spec
+    from camplace.candidates import build_candidates
+    from camplace.scene import build_scene
+    from camplace.targets import build_targets
+
+    spec, _, _ = resolve_scene(name)
+    sc = build_scene(spec)
+    t = build_targets(sc)
+    c = build_candidates(sc, {x.name: camera_from_spec(x) for x in spec.cameras})
+    return sc, t, c
+
+
+def same_csr(a, b) -> None:
+    """Assert two CSR matrices are identical bit for bit (shape, dtype, indptr, indices, data)."""
+    assert a.shape == b.shape and a.dtype == b.dtype
+    assert np.array_equal(a.indptr, b.indptr) and np.array_equal(a.indices, b.indices)
+    assert np.array_equal(a.data, b.data)
+
+
+@pytest.fixture(scope="session")
+def demo_inputs():
+    """(scene, targets, candidates) of the built-in demo (built once per test session)."""
+    return builtin_inputs("demo")
 
 
 @pytest.fixture(scope="session")

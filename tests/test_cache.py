@@ -8,36 +8,20 @@ import dataclasses
 import numpy as np
 import pytest
 
-from camplace.builtin import resolve_scene
 from camplace.cache import BlockStore, content_key, default_cache_dir
-from camplace.cameras import camera_from_spec
-from camplace.candidates import build_candidates
 from camplace.errors import Interrupted
-from camplace.scene import OccupancyGrid, build_scene
-from camplace.targets import build_targets
+from camplace.scene import OccupancyGrid
 from camplace.visibility import compute_visibility
 
+from conftest import same_csr
+
 CHUNK = 64
-
-
-@pytest.fixture(scope="module")
-def demo_inputs():
-    spec, _, _ = resolve_scene("demo")
-    sc = build_scene(spec)
-    t = build_targets(sc)
-    c = build_candidates(sc, {x.name: camera_from_spec(x) for x in spec.cameras})
-    return sc, t, c
 
 
 @pytest.fixture(scope="module")
 def ref_v(demo_inputs):
     sc, t, c = demo_inputs
     return compute_visibility(sc.occupancy, t, c, chunk_size=CHUNK).V
-
-
-def _same(a, b):
-    assert a.shape == b.shape
-    assert np.array_equal(a.indptr, b.indptr) and np.array_equal(a.indices, b.indices)
 
 
 def _blocks(vis):
@@ -57,8 +41,8 @@ def test_hit_after_miss(tmp_path, demo_inputs, ref_v):
     assert first.info["cached_chunks"] == 0 and len(_blocks(first)) == n > 1
     second = compute_visibility(sc.occupancy, t, c, chunk_size=CHUNK, cache_dir=tmp_path)
     assert second.info["cached_chunks"] == n and second.info["cache"] == first.info["cache"]
-    _same(first.V, ref_v)
-    _same(second.V, ref_v)
+    same_csr(first.V, ref_v)
+    same_csr(second.V, ref_v)
 
 
 def test_resume_recomputes_only_missing_blocks(tmp_path, demo_inputs, ref_v):
@@ -74,7 +58,7 @@ def test_resume_recomputes_only_missing_blocks(tmp_path, demo_inputs, ref_v):
         compute_visibility(sc.occupancy, t, c, chunk_size=CHUNK, cache_dir=tmp_path, progress=stop_after_two)
     resumed = compute_visibility(sc.occupancy, t, c, chunk_size=CHUNK, cache_dir=tmp_path)
     assert resumed.info["cached_chunks"] == 2
-    _same(resumed.V, ref_v)
+    same_csr(resumed.V, ref_v)
 
 
 def test_corrupt_block_is_recomputed(tmp_path, demo_inputs, ref_v):
@@ -83,7 +67,7 @@ def test_corrupt_block_is_recomputed(tmp_path, demo_inputs, ref_v):
     (vis_dir(vis) / "block-000001.npz").write_bytes(b"not an npz")
     again = compute_visibility(sc.occupancy, t, c, chunk_size=CHUNK, cache_dir=tmp_path)
     assert again.info["cached_chunks"] == vis.info["chunks"] - 1
-    _same(again.V, ref_v)
+    same_csr(again.V, ref_v)
 
 
 def _changed_inputs(sc, t, c):
@@ -113,11 +97,11 @@ def test_changed_input_never_reuses(tmp_path, demo_inputs):
         assert v.info["cache"] not in dirs, label
         dirs.add(v.info["cache"])
         if label == "occupancy":  # the fresh entry holds the V of the changed input
-            _same(v.V, compute_visibility(occ, tt, cc, chunk_size=CHUNK).V)
+            same_csr(v.V, compute_visibility(occ, tt, cc, chunk_size=CHUNK).V)
     # a different chunking is a different layout: a new entry, same V
     other = compute_visibility(sc.occupancy, t, c, chunk_size=CHUNK + 1, cache_dir=tmp_path)
     assert other.info["cached_chunks"] == 0 and other.info["cache"] not in dirs
-    _same(other.V, base.V)
+    same_csr(other.V, base.V)
 
 
 def test_code_version_is_part_of_the_key(tmp_path, demo_inputs, monkeypatch):

@@ -6,36 +6,18 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from camplace.builtin import resolve_scene
-from camplace.cameras import camera_from_spec
-from camplace.candidates import build_candidates
 from camplace.distributed import (DaskExecutor, InProcessExecutor, ProcessPoolChunkExecutor, SCHEDULER_ENV,
                                   make_executor)
 from camplace.errors import InputError
-from camplace.scene import build_scene
-from camplace.targets import build_targets
 from camplace.visibility import compute_visibility
 
-
-@pytest.fixture(scope="module")
-def demo_inputs():
-    spec, _, _ = resolve_scene("demo")
-    sc = build_scene(spec)
-    t = build_targets(sc)
-    c = build_candidates(sc, {x.name: camera_from_spec(x) for x in spec.cameras})
-    return sc, t, c
+from conftest import same_csr
 
 
 @pytest.fixture(scope="module")
 def local_v(demo_inputs):
     sc, t, c = demo_inputs
     return compute_visibility(sc.occupancy, t, c, chunk_size=37).V
-
-
-def _same(a, b):
-    assert a.shape == b.shape
-    assert np.array_equal(a.indptr, b.indptr) and np.array_equal(a.indices, b.indices)
-    assert np.array_equal(a.data, b.data) and a.dtype == b.dtype
 
 
 def test_dask_local_cluster_equals_local(demo_inputs, local_v):
@@ -55,7 +37,7 @@ def test_dask_local_cluster_equals_local(demo_inputs, local_v):
         assert len({x["worker"] for x in chunk_tasks}) >= 2
     assert vis.info["executor"] == "dask" and vis.info["chunks"] == int(np.ceil(len(c) / 37)) > 3
     assert seen[-1] == (vis.info["chunks"], vis.info["chunks"])
-    _same(vis.V, local_v)
+    same_csr(vis.V, local_v)
 
 
 def test_make_executor_choice(monkeypatch):

@@ -7,32 +7,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from camplace.builtin import resolve_scene
-from camplace.cameras import camera_from_spec
-from camplace.candidates import build_candidates
-from camplace.scene import build_scene
-from camplace.targets import build_targets
 from camplace.visibility import compute_visibility, drop_blind_candidates, target_grid
 
-
-def _inputs(name):
-    spec, _, _ = resolve_scene(name)
-    sc = build_scene(spec)
-    t = build_targets(sc)
-    c = build_candidates(sc, {x.name: camera_from_spec(x) for x in spec.cameras})
-    return sc, t, c
-
-
-@pytest.fixture(scope="module")
-def demo_inputs():
-    return _inputs("demo")
-
-
-def _same(a, b):
-    assert a.shape == b.shape
-    assert np.array_equal(a.indptr, b.indptr)
-    assert np.array_equal(a.indices, b.indices)
-    assert np.array_equal(a.data, b.data)
+from conftest import builtin_inputs, same_csr
 
 
 @pytest.mark.parametrize("cell", [0.3, 0.625, 1.7, 5.0])
@@ -41,19 +18,19 @@ def test_culled_equals_brute_force_demo(demo_inputs, cell):
     brute = compute_visibility(sc.occupancy, t, c, grid_cell=np.inf).V
     culled = compute_visibility(sc.occupancy, t, c, grid_cell=cell, chunk_size=100).V
     assert brute.nnz > 10_000
-    _same(brute, culled)
+    same_csr(brute, culled)
 
 
 def test_culled_equals_brute_force_small_warehouse():
     """A scene much larger than the camera range, where culling actually skips targets."""
-    sc, t, c = _inputs("warehouse:300")
+    sc, t, c = builtin_inputs("warehouse:300")
     c = c.subset(np.arange(0, len(c), 7))  # every 7th pose: all positions, mixed angles
     brute = compute_visibility(sc.occupancy, t, c, grid_cell=np.inf).V
     culled = compute_visibility(sc.occupancy, t, c).V
     assert brute.nnz > 100_000
     # culling matters here: most targets are out of range of most cameras
     assert brute.nnz < 0.5 * brute.shape[0] * brute.shape[1]
-    _same(brute, culled)
+    same_csr(brute, culled)
     # rows are sorted, as the contract's CSR expects
     assert culled.has_sorted_indices
 
@@ -83,6 +60,6 @@ def test_drop_blind_shares_arrays_and_matches_slicing(demo_inputs):
     assert (~keep).sum() > 0  # the demo has blind candidates (into the shelf / walls)
     out = drop_blind_candidates(vis)
     ref = vis.V[keep]
-    _same(out.V, ref)
+    same_csr(out.V, ref)
     assert np.shares_memory(out.V.indices, vis.V.indices)
     assert len(out.candidates) == out.V.shape[0]
