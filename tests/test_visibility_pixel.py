@@ -17,7 +17,7 @@ from camplace.targets import build_targets
 from camplace.visibility import Visibility, compute_visibility
 from camplace.visibility_pixel import compute_pixel_visibility
 
-from conftest import box_room
+from conftest import box_room, same_csr
 
 
 def _poses(cam, positions, ypr) -> Candidates:
@@ -173,3 +173,47 @@ def test_empty_space_skipping_gives_the_same_v():
     a = compute_pixel_visibility(sc.occupancy, t, c, 0.25, stride=8, skip_empty=True).V
     b = compute_pixel_visibility(sc.occupancy, t, c, 0.25, stride=8, skip_empty=False).V
     assert a.nnz > 0 and (a != b).nnz == 0
+
+
+def test_workers_and_cache_give_the_same_v(demo_inputs, tmp_path):
+    """Pixel mode runs on the same executors and block cache as voxel mode: a 2-process
+    pool and a cached / reloaded V equal the in-process V bit for bit (demo, every 4th
+    candidate, stride 16, chunks of 16 candidates)."""
+    from camplace.distributed import InProcessExecutor, ProcessPoolChunkExecutor
+
+    sc, t, c = demo_inputs
+    c = c.subset(np.arange(0, len(c), 4))
+    kw = dict(stride=16, chunk_size=16)
+    ref = compute_pixel_visibility(sc.occupancy, t, c, 0.25, **kw)
+    assert ref.V.nnz > 1000 and ref.info["chunks"] >= 4 and ref.info["executor"] == "in-process"
+    with ProcessPoolChunkExecutor(2) as ex:
+        pooled = compute_pixel_visibility(sc.occupancy, t, c, 0.25, executor=ex, cache_dir=tmp_path, **kw)
+    assert pooled.info["executor"] == "process-pool" and pooled.info["cached_chunks"] == 0
+    again = compute_pixel_visibility(sc.occupancy, t, c, 0.25, executor=InProcessExecutor(), cache_dir=tmp_path, **kw)
+    assert again.info["cached_chunks"] == again.info["chunks"] and again.info["rays_cast"] == 0
+    assert again.info["rays"] == ref.info["rays"] == ref.info["rays_cast"]
+    for v in (pooled, again):
+        same_csr(v.V, ref.V)
+    # other pixel parameters, or voxel mode, never reuse these blocks
+    other = compute_pixel_visibility(sc.occupancy, t, c, 0.25, probe=0.5, cache_dir=tmp_path, **kw)
+    assert other.info["cached_chunks"] == 0 and other.info["cache"] != again.info["cache"]
+    from camplace.visibility import compute_visibility
+
+    vox = compute_visibility(sc.occupancy, t, c, chunk_size=16, cache_dir=tmp_path)
+    assert vox.info["cached_chunks"] == 0 and vox.info["cache"] not in (again.info["cache"], other.info["cache"])
+
+
+def test_pipeline_pixel_mode_uses_workers_and_cache(tmp_path):
+    """prepare(visibility_mode='pixel', workers=2, cache_dir=...) runs the process pool and
+    a second run loads every block; V equals the in-process, uncached one."""
+    from camplace.pipeline import prepare
+
+    kw = dict(visibility_mode="pixel", stride=32)
+    _, ref = prepare("demo", **kw)
+    log: list[str] = []
+    _, pooled = prepare("demo", workers=2, cache_dir=tmp_path, log=log, **kw)
+    _, cached = prepare("demo", cache_dir=tmp_path, **kw)
+    assert pooled.info["executor"] == "process-pool" and any("process-pool" in line for line in log)
+    assert cached.info["cached_chunks"] == cached.info["chunks"] > 0
+    same_csr(pooled.V, ref.V)
+    same_csr(cached.V, ref.V)

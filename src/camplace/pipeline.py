@@ -60,7 +60,8 @@ def prepare(scene: str | Path | SceneSpec, progress: Progress | None = None,
     Visibility chunks run on a Dask cluster when ``scheduler`` (``tcp://host:port``, or
     env CAMPLACE_SCHEDULER) is given, on ``workers`` local processes when > 1, else
     in-process (camplace.distributed); with ``cache_dir`` V is stored / reused in
-    blocks under a content-hash key (camplace.cache). Same V bit for bit either way.
+    blocks under a content-hash key (camplace.cache). Same V bit for bit either way;
+    both visibility modes.
 
     Refuses (InputError) a scene whose grids would exceed ``max_memory_bytes`` (default:
     camplace.config.memory_limit_bytes()) before allocating them. Targets that cannot
@@ -79,8 +80,10 @@ def prepare(scene: str | Path | SceneSpec, progress: Progress | None = None,
     if visibility_mode == "pixel":
         from camplace.visibility_pixel import DEFAULT_PROBE, compute_pixel_visibility
 
-        vis = compute_pixel_visibility(sc.occupancy, targets, cands, sc.spec.voxel_size, stride=stride,
-                                       probe=DEFAULT_PROBE if probe is None else probe, progress=progress)
+        with make_executor(workers, scheduler) as executor:
+            vis = compute_pixel_visibility(sc.occupancy, targets, cands, sc.spec.voxel_size, stride=stride,
+                                           probe=DEFAULT_PROBE if probe is None else probe, progress=progress,
+                                           executor=executor, cache_dir=cache_dir)
     elif visibility_mode == "voxel":
         with make_executor(workers, scheduler) as executor:
             vis = compute_visibility(sc.occupancy, targets, cands, progress=progress, executor=executor,

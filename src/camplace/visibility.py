@@ -295,17 +295,74 @@ def _chunk_task(shared: tuple, bounds: tuple[int, int]) -> tuple[np.ndarray, np.
 
 
 def visibility_cache_key(occupancy: OccupancyGrid, targets: Targets, candidates: Candidates,
-                         mode: str, chunk_size: int) -> str:
-    """Content hash of everything V depends on, code version included."""
+                         mode: str, chunk_size: int, extra_modules: tuple = ()) -> str:
+    """Content hash of everything V depends on, code version included. ``mode`` names the
+    method and its parameters; ``extra_modules``: more modules whose code decides V."""
     from camplace import cameras as _cameras_mod
     from camplace import quality as _quality_mod
     from camplace import visibility as _vis_mod
     from camplace.cache import code_version, content_key
 
-    mods = (_vis_mod, _cameras_mod, _quality_mod)  # the code that decides V: kernel, lenses, per-target limits
+    mods = (_vis_mod, _cameras_mod, _quality_mod, *extra_modules)  # the code that decides V
     occ = OccupancyGrid(np.packbits(occupancy.occupied, axis=None), occupancy.origin, occupancy.resolution)
     return content_key("visibility", code_version(*mods), mode, int(chunk_size),
                        occupancy.occupied.shape, occ, targets, candidates)
+
+
+def chunked_rows(n_cols: int, bounds: list[tuple[int, int]], task: Callable, make_shared: Callable[[], object],
+                 executor=None, store=None, progress: Progress | None = None) -> tuple[sp.csr_matrix, list[int]]:
+    """A CSR 0/1 matrix (uint8) built as row blocks: block k (rows bounds[k]) is
+    ``task(shared, bounds[k])`` -> (indptr (rows + 1,) int64, indices (nnz,) int32).
+
+    The blocks not in ``store`` (a camplace.cache.BlockStore, or None) run on ``executor``
+    (camplace.distributed; default in-process) and are stored as they arrive; ``shared``
+    = ``make_shared()`` is built only when a block must be computed. The matrix is then
+    assembled block by block (from the store when there is one), never densified.
+    Returns (matrix, indices of the blocks loaded from the store)."""
+    from camplace.distributed import InProcessExecutor
+
+    n = bounds[-1][1] if bounds else 0
+    blocks: dict[int, tuple[np.ndarray, np.ndarray]] = {}
+    nnz = np.zeros(len(bounds), np.int64)
+    todo, cached = [], []
+    for k in range(len(bounds)):
+        got = store.nnz(k) if store is not None else None
+        if got is None:
+            todo.append(k)
+        else:
+            nnz[k] = got
+            cached.append(k)
+    done = len(cached)
+    if progress:
+        progress("visibility", done, len(bounds))
+    shared = None
+    if todo:
+        shared = make_shared()
+        ex = executor if executor is not None else InProcessExecutor()
+        for t, (indptr, indices) in ex.map_unordered(task, shared, [bounds[k] for k in todo]):
+            k = todo[t]
+            nnz[k] = len(indices)
+            if store is not None:
+                store.save(k, indptr, indices)
+            else:
+                blocks[k] = (indptr, indices)
+            done += 1
+            if progress:
+                progress("visibility", done, len(bounds))
+    indptr = np.zeros(n + 1, np.int64)
+    indices = np.empty(int(nnz.sum()), np.int32)
+    pos = 0
+    for k, (s, e) in enumerate(bounds):
+        blk = blocks.pop(k) if store is None else store.load(k)
+        if blk is None:  # pragma: no cover - a block vanished from the cache during the run
+            shared = make_shared() if shared is None else shared
+            blk = task(shared, (s, e))
+        bp, bi = blk
+        indptr[s + 1:e + 1] = bp[1:] + pos
+        indices[pos:pos + len(bi)] = bi
+        pos += len(bi)
+    V = sp.csr_matrix((np.ones(len(indices), np.uint8), indices, indptr), shape=(n, n_cols))
+    return V, cached
 
 
 def compute_visibility(occupancy: OccupancyGrid, targets: Targets, candidates: Candidates,
@@ -323,8 +380,6 @@ def compute_visibility(occupancy: OccupancyGrid, targets: Targets, candidates: C
     cache, the blocks and V coexist during the assembly). ``grid_cell``: range-culling
     cell (m; default smallest range / 8; ``np.inf`` disables culling). The result does
     not depend on executor, cache or grid_cell."""
-    from camplace.distributed import InProcessExecutor
-
     t0 = time.perf_counter()
     n, n_p = len(candidates), len(targets)
     bounds = [(s, min(s + chunk_size, n)) for s in range(0, n, chunk_size)]
@@ -334,47 +389,14 @@ def compute_visibility(occupancy: OccupancyGrid, targets: Targets, candidates: C
 
         key = visibility_cache_key(occupancy, targets, candidates, "voxel", chunk_size)
         store = BlockStore(cache_dir, key, bounds, n_p)
-    blocks: dict[int, tuple[np.ndarray, np.ndarray]] = {}
-    nnz = np.zeros(len(bounds), np.int64)
-    todo = []
-    for k in range(len(bounds)):
-        got = store.nnz(k) if store is not None else None
-        if got is None:
-            todo.append(k)
-        else:
-            nnz[k] = got
-    cached = len(bounds) - len(todo)
-    done = cached
-    if progress:
-        progress("visibility", done, len(bounds))
-    if todo:
+
+    def make_shared() -> tuple:
         grid = target_grid(targets, default_grid_cell(candidates) if grid_cell is None else grid_cell)
-        ex = executor if executor is not None else InProcessExecutor()
-        shared = (occupancy, targets, candidates, grid)
-        for t, (indptr, indices) in ex.map_unordered(_chunk_task, shared, [bounds[k] for k in todo]):
-            k = todo[t]
-            nnz[k] = len(indices)
-            if store is not None:
-                store.save(k, indptr, indices)
-            else:
-                blocks[k] = (indptr, indices)
-            done += 1
-            if progress:
-                progress("visibility", done, len(bounds))
-    indptr = np.zeros(n + 1, np.int64)
-    indices = np.empty(int(nnz.sum()), np.int32)
-    pos = 0
-    for k, (s, e) in enumerate(bounds):
-        blk = blocks.pop(k) if store is None else store.load(k)
-        if blk is None:  # pragma: no cover - a block vanished from the cache during the run
-            blk = _block_arrays(occupancy, targets, candidates, s, e)
-        bp, bi = blk
-        indptr[s + 1:e + 1] = bp[1:] + pos
-        indices[pos:pos + len(bi)] = bi
-        pos += len(bi)
-    V = sp.csr_matrix((np.ones(len(indices), np.uint8), indices, indptr), shape=(n, n_p))
+        return occupancy, targets, candidates, grid
+
+    V, cached = chunked_rows(n_p, bounds, _chunk_task, make_shared, executor, store, progress)
     info = {"seconds": time.perf_counter() - t0, "nnz": int(V.nnz), "chunks": len(bounds),
-            "cached_chunks": cached, "executor": getattr(executor, "name", "in-process")}
+            "cached_chunks": len(cached), "executor": getattr(executor, "name", "in-process")}
     if store is not None:
         info["cache"] = str(store.dir)
     return Visibility(V, candidates, targets, "voxel", info)

@@ -23,11 +23,11 @@ from __future__ import annotations
 
 import math
 import time
+from pathlib import Path
 from typing import Callable
 
 import numba
 import numpy as np
-import scipy.sparse as sp
 
 from camplace.cameras import px_per_m_nb
 from camplace.candidates import Candidates
@@ -35,7 +35,7 @@ from camplace.errors import InputError
 from camplace.quality import target_min_px
 from camplace.scene import OccupancyGrid
 from camplace.targets import Targets
-from camplace.visibility import Visibility, target_cos_limits
+from camplace.visibility import Visibility, chunked_rows, target_cos_limits
 
 Progress = Callable[[str, int, int], None]
 DEFAULT_STRIDE = 4
@@ -423,7 +423,8 @@ def camera_rays(candidates: Candidates, stride: int) -> tuple[np.ndarray, np.nda
 def compute_pixel_visibility(occupancy: OccupancyGrid, targets: Targets, candidates: Candidates,
                              voxel_size: float, stride: int | None = None, probe: float = DEFAULT_PROBE,
                              chunk_size: int = 64, progress: Progress | None = None,
-                             skip_empty: bool = True) -> Visibility:
+                             skip_empty: bool = True, executor=None,
+                             cache_dir: str | Path | None = None) -> Visibility:
     """V by per-pixel raycasting (rows in candidate order).
 
     voxel_size: the target voxel edge (m, the scene's ``voxel_size``); stride: cast one
@@ -432,7 +433,12 @@ def compute_pixel_visibility(occupancy: OccupancyGrid, targets: Targets, candida
     voxel, the paper's rule; smaller = closer to the target centre; 0 = "centre": the
     target centre must lie in a ray's pixel footprint, the counterpart of voxel mode's
     centre test; for surfaces, a ray that hits the patch must pass the patch centre
-    within its footprint). skip_empty: jump rays through empty space (same V, faster)."""
+    within its footprint). skip_empty: jump rays through empty space (same V, faster).
+
+    Chunks of ``chunk_size`` candidates run on ``executor`` and are stored in / loaded
+    from the block cache under ``cache_dir`` exactly as in voxel mode
+    (camplace.visibility.chunked_rows; the cache key adds the mode, stride, probe and
+    voxel size). The result does not depend on executor or cache."""
     if stride is None:
         stride = default_stride(candidates)
     if int(stride) < 1:
@@ -441,7 +447,44 @@ def compute_pixel_visibility(occupancy: OccupancyGrid, targets: Targets, candida
         raise InputError(f"probe: expected a fraction in [0, 1], got {probe}")
     t0 = time.perf_counter()
     stride = int(stride)
+    n, n_t = len(candidates), len(targets)
+    bounds = [(s, min(s + chunk_size, n)) for s in range(0, n, chunk_size)]
     rays, ray_start, foot = camera_rays(candidates, stride)
+    rays_per_cam = np.diff(ray_start)
+    store = None
+    if cache_dir is not None:
+        import camplace.visibility_pixel as _this
+        from camplace.cache import BlockStore
+        from camplace.visibility import visibility_cache_key
+
+        mode = f"pixel:stride={stride}:probe={float(probe)!r}:voxel={float(voxel_size)!r}:skip={bool(skip_empty)}"
+        key = visibility_cache_key(occupancy, targets, candidates, mode, chunk_size, (_this,))
+        store = BlockStore(cache_dir, key, bounds, n_t)
+
+    setup: dict = {}
+
+    def make_shared() -> tuple:
+        shared = _pixel_setup(occupancy, targets, candidates, voxel_size, probe, skip_empty, rays, ray_start, foot)
+        setup["surface_face_cells"] = int(len(shared[3][5]))  # s_keys
+        return shared
+
+    V, cached = chunked_rows(n_t, bounds, _pixel_chunk_task, make_shared, executor, store, progress)
+    secs = time.perf_counter() - t0
+    from_cache = set(cached)
+    cast = sum(int(rays_per_cam[candidates.camera_ids[s:e]].sum())
+               for k, (s, e) in enumerate(bounds) if k not in from_cache)
+    info = {"seconds": secs, "nnz": int(V.nnz), "chunks": len(bounds), "stride": stride, "probe": probe,
+            "rays": int(rays_per_cam[candidates.camera_ids].sum()), "rays_cast": cast,
+            "rays_per_s": cast / secs if secs > 0 else 0.0, "cached_chunks": len(cached),
+            "executor": getattr(executor, "name", "in-process"), **setup}
+    if store is not None:
+        info["cache"] = str(store.dir)
+    return Visibility(V, candidates, targets, "pixel", info)
+
+
+def _pixel_setup(occupancy: OccupancyGrid, targets: Targets, candidates: Candidates, voxel_size: float,
+                 probe: float, skip_empty: bool, rays: np.ndarray, ray_start: np.ndarray, foot: np.ndarray) -> tuple:
+    """The arrays every chunk of ``_pixel_kernel`` reads (built once, shipped once per worker)."""
     centre_mode = probe == 0
     reach = max(c.max_range for c in candidates.cameras) * float(foot.max()) if centre_mode else 0.0
     bprobe = min(1.0, 2.0 * reach / voxel_size) if centre_mode else probe
@@ -450,30 +493,23 @@ def compute_pixel_visibility(occupancy: OccupancyGrid, targets: Targets, candida
     occ = occupancy.occupied.view(np.uint8)
     dist = free_distance(occupancy) if skip_empty else np.zeros((1, 1, 1), np.uint8)
     params = np.stack([c.params for c in candidates.cameras])
-    tpos = np.ascontiguousarray(targets.positions, dtype=np.float64)
-    tnrm = np.ascontiguousarray(targets.normals, dtype=np.float64)
-    tcos = target_cos_limits(targets)
-    tpx = target_min_px(targets)
-    n, n_t = len(candidates), len(targets)
-    bounds = [(s, min(s + chunk_size, n)) for s in range(0, n, chunk_size)]
-    blocks, n_rays = [], 0
-    for k, (s, e) in enumerate(bounds):
-        mask = np.zeros((e - s, n_t), np.uint8)
-        counts = _pixel_kernel(occ, dist, occupancy.origin.astype(np.float64), float(occupancy.resolution),
-                               np.ascontiguousarray(candidates.positions[s:e], dtype=np.float64),
-                               np.ascontiguousarray(candidates.rotations[s:e], dtype=np.float64),
-                               np.ascontiguousarray(candidates.camera_ids[s:e], dtype=np.int64), params,
-                               rays, ray_start, bgrid, bshape, b_start, b_ids, thalf, s_keys, s_ids,
-                               tpos, tnrm, tcos, tpx, foot, centre_mode, mask)
-        n_rays += int(counts.sum())
-        blocks.append(sp.csr_matrix(mask == 1, dtype=np.uint8))
-        if progress:
-            progress("visibility", k + 1, len(bounds))
-    V = sp.vstack(blocks, format="csr") if blocks else sp.csr_matrix((0, n_t), dtype=np.uint8)
-    V = V.astype(np.uint8)
-    V.sort_indices()
-    secs = time.perf_counter() - t0
-    return Visibility(V, candidates, targets, "pixel",
-                      {"seconds": secs, "nnz": int(V.nnz), "chunks": len(bounds), "stride": stride, "probe": probe,
-                       "rays": n_rays, "rays_per_s": n_rays / secs if secs > 0 else 0.0,
-                       "surface_face_cells": int(len(s_keys))})
+    world = (occ, dist, occupancy.origin.astype(np.float64), float(occupancy.resolution))
+    poses = (np.ascontiguousarray(candidates.positions, dtype=np.float64),
+             np.ascontiguousarray(candidates.rotations, dtype=np.float64),
+             np.ascontiguousarray(candidates.camera_ids, dtype=np.int64))
+    tgt = (bgrid, bshape, b_start, b_ids, thalf, s_keys, s_ids,
+           np.ascontiguousarray(targets.positions, dtype=np.float64),
+           np.ascontiguousarray(targets.normals, dtype=np.float64), target_cos_limits(targets), target_min_px(targets))
+    return world, poses, (params, rays, ray_start, foot), tgt, centre_mode, len(targets)
+
+
+def _pixel_chunk_task(shared: tuple, bounds: tuple[int, int]) -> tuple[np.ndarray, np.ndarray]:
+    """One unit of work for an executor: V rows [start, stop) as (indptr, indices)."""
+    world, (pos, rot, cam_ids), (params, rays, ray_start, foot), tgt, centre_mode, n_t = shared
+    s, e = bounds
+    mask = np.zeros((e - s, n_t), np.uint8)
+    _pixel_kernel(*world, pos[s:e], rot[s:e], cam_ids[s:e], params, rays, ray_start, *tgt, foot, centre_mode, mask)
+    rows, cols = np.nonzero(mask == 1)
+    indptr = np.zeros(e - s + 1, np.int64)
+    np.cumsum(np.bincount(rows, minlength=e - s), out=indptr[1:])
+    return indptr, cols.astype(np.int32)
