@@ -97,6 +97,23 @@ def _pair_ok(cp, a, b, t, cos_lo, cos_hi):
     return c >= cos_lo - 1e-12 and c <= cos_hi + 1e-12
 
 
+@numba.njit(cache=True, inline="always")
+def _pair_up(i, j, cp, tp, cams_of, n_cams, paired, cos_lo, cos_hi, mark):
+    """The cameras already at target j that pair well with candidate i: returns (i pairs
+    with at least one of them, how many of them had no partner yet); with ``mark`` those
+    are recorded as paired."""
+    own = False
+    new = 0
+    for q in range(n_cams[j]):
+        if _pair_ok(cp, i, cams_of[j, q], tp[j], cos_lo, cos_hi):
+            own = True
+            if not paired[j, q]:
+                new += 1
+                if mark:
+                    paired[j, q] = True
+    return own, new
+
+
 @numba.njit(cache=True)
 def _effective_after_add(i, indptr, indices, cp, tp, cams_of, n_cams, paired, eff, gamma, w, cos_lo, cos_hi, half):
     """Cost drop of adding candidate i on the surrogate coverage e_j + half * (unpaired views
@@ -109,14 +126,7 @@ def _effective_after_add(i, indptr, indices, cp, tp, cams_of, n_cams, paired, ef
         c0 = eff[j] + half * (n_cams[j] - eff[j])
         if gamma[j] <= c0:
             continue
-        add = 0
-        own = False
-        for q in range(n_cams[j]):
-            s = cams_of[j, q]
-            if _pair_ok(cp, i, s, tp[j], cos_lo, cos_hi):
-                own = True
-                if not paired[j, q]:
-                    add += 1
+        own, add = _pair_up(i, j, cp, tp, cams_of, n_cams, paired, cos_lo, cos_hi, False)
         if own:
             add += 1
         e1 = eff[j] + add
@@ -131,14 +141,8 @@ def _effective_after_add(i, indptr, indices, cp, tp, cams_of, n_cams, paired, ef
 def _apply_add(i, indptr, indices, cp, tp, cams_of, n_cams, paired, eff, cos_lo, cos_hi):
     for e in range(indptr[i], indptr[i + 1]):
         j = indices[e]
-        own = False
-        for q in range(n_cams[j]):
-            s = cams_of[j, q]
-            if _pair_ok(cp, i, s, tp[j], cos_lo, cos_hi):
-                own = True
-                if not paired[j, q]:
-                    paired[j, q] = True
-                    eff[j] += 1
+        own, new = _pair_up(i, j, cp, tp, cams_of, n_cams, paired, cos_lo, cos_hi, True)
+        eff[j] += new
         q = n_cams[j]
         if q < cams_of.shape[1]:
             cams_of[j, q] = i
