@@ -117,3 +117,11 @@ def test_any_grid_survives_the_round_trip(tmp_path_factory, seed, shift, share, 
     mark_boxes(back_o, origin, res, om.occupied_lo, om.occupied_size)
     mark_boxes(back_f, origin, res, om.free_lo, om.free_size)
     assert np.array_equal(back_o, occ) and np.array_equal(back_f, free)
+
+
+@pytest.mark.parametrize("body", [b"id OcTree\nres 0.1\n", b"".join(b"k%d 1\n" % k for k in range(20))])
+def test_octomap_header_without_data_line(tmp_path, body):
+    f = tmp_path / "bad.bt"
+    f.write_bytes(b"# Octomap OcTree binary file\n" + body)
+    with pytest.raises(InputError, match="no 'data' line"):
+        load_octomap(f)

@@ -145,3 +145,24 @@ from hypothesis import given, settings, strategies as st  # noqa: E402
 @given(st.binary(min_size=0, max_size=300))
 def test_lzf_literal_stream_round_trip(data):
     assert lzf_decompress(lzf_compress_literal(data), len(data)) == data
+
+
+@pytest.mark.parametrize("head, why", [
+    (b"# .PCD v0.7\nVERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\n", "no DATA line"),  # header cut short
+    (b"# .PCD v0.7\n" + b"".join(b"K%d 1\n" % k for k in range(70)), "not a PCD file"),  # never reaches DATA
+])
+def test_pcd_header_without_data_line(tmp_path, head, why):
+    f = tmp_path / "bad.pcd"
+    f.write_bytes(head)
+    with pytest.raises(InputError, match=why):
+        load_point_cloud(f)
+
+
+def test_pcd_header_viewpoint_comments_and_data_offset(tmp_path):
+    """The header reader keeps camplace's viewpoint comments and stops right after DATA."""
+    from camplace.loaders.pointcloud import _pcd_header
+
+    raw = b"# .PCD v0.7\n# viewpoint 1 2 3\n\nFIELDS x y z\nDATA ascii\n0 0 0\n"
+    head, pos = _pcd_header(tmp_path / "x.pcd", raw)
+    assert head["_VIEWPOINTS"] == [["1", "2", "3"]] and head["FIELDS"] == ["x", "y", "z"]
+    assert raw[pos:] == b"0 0 0\n"

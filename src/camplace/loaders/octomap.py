@@ -22,6 +22,7 @@ import numpy as np
 
 from camplace.errors import InputError
 from camplace.files import atomic_write_bytes
+from camplace.loaders import header_lines
 
 TREE_DEPTH = 16
 KEY_CENTRE = 32768
@@ -146,13 +147,7 @@ def _header(path: Path, raw: bytes) -> tuple[dict, int]:
     if not raw.startswith(b"# Octomap OcTree"):
         raise InputError(f"{path}: not an OctoMap file (first line must start with '# Octomap OcTree')")
     head: dict[str, str] = {}
-    pos = 0
-    while True:
-        end = raw.find(b"\n", pos)
-        if end < 0:
-            raise InputError(f"{path}: OctoMap header has no 'data' line")
-        line = raw[pos:end].decode("ascii", "replace").strip()
-        pos = end + 1
+    for line, pos in header_lines(raw):
         if line.startswith("#") or not line:
             continue
         if line == "data":
@@ -160,7 +155,8 @@ def _header(path: Path, raw: bytes) -> tuple[dict, int]:
         key, _, val = line.partition(" ")
         head[key] = val.strip()
         if len(head) > 16:
-            raise InputError(f"{path}: OctoMap header has no 'data' line")
+            break
+    raise InputError(f"{path}: OctoMap header has no 'data' line")
 
 
 def load_octomap(path: str | Path) -> OctoMap:

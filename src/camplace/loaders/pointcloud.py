@@ -18,7 +18,7 @@ import numpy as np
 
 from camplace.errors import InputError
 from camplace.files import atomic_write_bytes
-from camplace.loaders import Progress
+from camplace.loaders import Progress, header_lines
 from camplace.loaders.lzf import lzf_compress_literal, lzf_decompress
 
 CHUNK_POINTS = 2_000_000
@@ -131,13 +131,7 @@ _PCD_TYPES = {("F", 4): "<f4", ("F", 8): "<f8", ("U", 1): "u1", ("U", 2): "<u2",
 
 def _pcd_header(path: Path, raw: bytes) -> tuple[dict, int]:
     head: dict[str, list[str]] = {"_VIEWPOINTS": []}
-    pos = 0
-    while True:
-        end = raw.find(b"\n", pos)
-        if end < 0:
-            raise InputError(f"{path}: PCD header has no DATA line")
-        line = raw[pos:end].decode("ascii", "replace").strip()
-        pos = end + 1
+    for line, pos in header_lines(raw):
         if line.startswith("# viewpoint ") and len(line.split()) >= 5:  # camplace: one line per scanner
             head["_VIEWPOINTS"].append(line.split()[2:5])
             continue
@@ -149,6 +143,7 @@ def _pcd_header(path: Path, raw: bytes) -> tuple[dict, int]:
             return head, pos
         if len(head) > 64:
             raise InputError(f"{path}: not a PCD file (no DATA line in the header)")
+    raise InputError(f"{path}: PCD header has no DATA line")
 
 
 def _read_pcd(path: Path, r: _Reader, progress: Progress | None) -> tuple[dict, np.ndarray]:
