@@ -1,0 +1,129 @@
+"""The region-decomposition bound (camplace.solvers.region_bound) is <= the brute-force
+optimum on small random instances, for any prices, and beats the LP where it should."""
+
+from __future__ import annotations
+
+import itertools
+
+import numpy as np
+import scipy.sparse as sp
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+from camplace.problem import PlacementProblem
+from camplace.solvers.bounds import Lagrangian, lp_bound
+from camplace.solvers.region_bound import RegionDecomposition, max_over_x, region_bound, target_regions
+
+
+def random_problem(seed: int, n_g: int = 9, n_p: int = 10, budget: int = 3, n_loc: int = 5, density: float = 0.4,
+                   weighted: bool = False) -> PlacementProblem:
+    rng = np.random.default_rng(seed)
+    V = sp.csr_matrix((rng.random((n_g, n_p)) < density).astype(np.uint8))
+    gamma = rng.integers(0, 4, n_p)
+    w = rng.uniform(0.2, 3.0, n_p) if weighted else np.ones(n_p)
+    loc = rng.integers(0, n_loc, n_g)
+    return PlacementProblem(V, gamma, w, budget, loc)
+
+
+def selections(p: PlacementProblem):
+    for k in range(p.budget + 1):
+        for comb in itertools.combinations(range(p.n_candidates), k):
+            if len(set(p.location_ids[list(comb)].tolist())) == len(comb):
+                yield np.array(comb, np.int64)
+
+
+def brute_force(p: PlacementProblem) -> float:
+    return min(p.cost(s) for s in selections(p))
+
+
+problems = st.builds(random_problem, seed=st.integers(0, 10**6), n_g=st.integers(1, 9), n_p=st.integers(1, 10),
+                     budget=st.integers(0, 4), n_loc=st.integers(1, 6), density=st.floats(0.1, 0.8),
+                     weighted=st.booleans())
+FAST = settings(max_examples=25, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+
+
+@FAST
+@given(problems, st.integers(1, 4), st.integers(0, 1000))
+def test_decomposition_below_optimum_for_any_prices(p, k, seed):
+    opt = brute_force(p)
+    labels = target_regions(p, k, seed=seed)
+    dec = RegionDecomposition(p, labels)
+    rng = np.random.default_rng(seed)
+    lam = rng.uniform(0, 6, p.n_targets)
+    for mus in (dec.initial_prices(lam), [rng.normal(0, 4, len(r.cand)) for r in dec.regions]):
+        value, ys, x0, _ = dec.evaluate(mus, region_time_s=5.0)
+        assert value <= opt + 1e-6
+        assert x0.sum() <= p.budget
+        for r, y in zip(dec.regions, ys):
+            assert y.shape == (len(r.cand),)
+
+
+@FAST
+@given(problems, st.integers(1, 3), st.integers(0, 1000))
+def test_region_bound_below_optimum_and_above_its_lagrangian(p, k, seed):
+    opt = brute_force(p)
+    lam = np.random.default_rng(seed).uniform(0, 6, p.n_targets)
+    res = region_bound(p, lam=lam, n_regions=k, time_limit_s=10.0, max_iter=6, seed=seed)
+    assert res.bound <= opt + 1e-6
+    # started from μ_R = V_R λ_R the first evaluation is never below L(λ)
+    L = Lagrangian(p).evaluate(lam)[0]
+    assert res.info["first"] is None or res.info["first"] >= L - 1e-6
+    assert res.bound >= max(L, 0.0) - 1e-9
+
+
+@settings(max_examples=40, deadline=None)
+@given(st.integers(0, 10**6), st.integers(1, 8), st.integers(1, 4), st.integers(0, 3))
+def test_max_over_x_is_exact(seed, n, n_loc, budget):
+    rng = np.random.default_rng(seed)
+    r = rng.normal(0, 2, n)
+    loc = rng.integers(0, n_loc, n)
+    val, x = max_over_x(r, loc, n_loc, budget)
+    best = 0.0
+    for k in range(budget + 1):
+        for comb in itertools.combinations(range(n), k):
+            if len(set(loc[list(comb)].tolist())) == k:
+                best = max(best, float(r[list(comb)].sum()))
+    assert abs(val - best) < 1e-9
+    assert abs(float(np.dot(r, x)) - val) < 1e-9 and x.sum() <= budget
+    assert len(set(loc[x > 0].tolist())) == int(x.sum())
+
+
+def hand_built() -> PlacementProblem:
+    """7 candidates on 5 locations, 6 targets, budget 2: the LP spreads fractions of
+    cameras and reaches 15, every placement costs at least 16."""
+    V = np.array([[0, 1, 1, 1, 0, 1], [1, 1, 0, 0, 0, 1], [0, 0, 0, 0, 0, 0], [0, 0, 0, 0, 1, 1],
+                  [1, 0, 0, 1, 0, 0], [0, 0, 0, 0, 1, 0], [1, 0, 1, 0, 0, 1]], np.uint8)
+    return PlacementProblem(sp.csr_matrix(V), np.array([3, 2, 1, 2, 1, 2]), np.array([3.0, 2, 2, 2, 3, 1]), 2,
+                            np.array([2, 1, 0, 4, 1, 1, 4]))
+
+
+def test_region_bound_strictly_above_lp_on_hand_built_instance():
+    p = hand_built()
+    opt = brute_force(p)
+    lp = lp_bound(p).bound
+    assert opt == 16.0 and lp < 15.0 + 1e-6  # a real integrality gap
+    lpr = lp_bound(p)
+    lam = np.maximum(lpr.info["row_dual"][:p.n_targets], 0.0)  # the LP duals: L(λ) is the LP bound
+    assert abs(Lagrangian(p).evaluate(lam)[0] - lp) < 1e-5
+    labels = np.array([0, 1, 0, 1, 0, 1])  # two regions of three targets
+    res = region_bound(p, lam=lam, labels=labels, time_limit_s=20.0, max_iter=60, incumbent_cost=opt)
+    assert res.info["first"] >= lp - 1e-6  # at the LP duals the decomposition is never below the LP
+    assert res.bound <= opt + 1e-6
+    assert res.bound > lp + 0.5  # strictly past the LP: each region's subproblem is integer
+    assert np.ceil(res.bound - 1e-6) == opt  # integer costs: rounded up, it proves the optimum
+
+
+def test_one_region_at_zero_prices_is_the_exact_optimum():
+    # with a single region and μ = 0 the decomposition is the MIP itself
+    p = hand_built()
+    labels = np.zeros(p.n_targets, np.int64)
+    dec = RegionDecomposition(p, labels)
+    value, _, _, n_opt = dec.evaluate([np.zeros(len(dec.regions[0].cand))], region_time_s=10.0)
+    assert n_opt == 1 and abs(value - brute_force(p)) < 1e-6
+
+
+def test_deterministic():
+    p = random_problem(7, n_g=9, n_p=10, budget=3)
+    a = region_bound(p, n_regions=2, time_limit_s=30.0, max_iter=8, seed=3)
+    b = region_bound(p, n_regions=2, time_limit_s=30.0, max_iter=8, seed=3)
+    assert a.bound == b.bound and a.info["history"] == b.info["history"]
