@@ -99,12 +99,15 @@ def _tabu_worker(ts: TabuSearch, board: _Board, stop: threading.Event, end: floa
 def solve_certify(problem: PlacementProblem, *, time_limit_s: float | None = None, threads: int | None = None,
                   seed: int = 0, should_stop: Callable[[], bool] | None = None, progress=None, on_incumbent=None,
                   on_state: Callable[[dict], None] | None = None, lp: bool | None = None,
-                  reduced_mip: bool = True, **options) -> Placement:
+                  reduced_mip: bool = True, region: bool | None = None, **options) -> Placement:
     """Incumbent by tabu search, bound by Lagrangian (+ LP, + fixing and exact reduced
     MIP), within `time_limit_s` (default 60 s). Placement.bound is the best proven
     bound; info has incumbent_method, bound_method, gap and both sides' history.
     on_incumbent(objective, bound) and on_state(dict) are called whenever a side improves.
-    `lp`: solve the LP by interior point (default: when time_limit_s >= 300)."""
+    `lp`: solve the LP by interior point (default: when time_limit_s >= 300).
+    `region`: after the LP, spend up to a third of the time left on the region
+    decomposition bound (camplace.solvers.region_bound, docs/certify.md §6-8) started
+    from the LP duals (default: off; it needs the LP, so it also turns the LP on)."""
     if problem.money_budget is not None:  # issue 10: tabu and fixing ignore prices; the MIP models the money row
         from dataclasses import replace as _replace
 
@@ -153,13 +156,14 @@ def solve_certify(problem: PlacementProblem, *, time_limit_s: float | None = Non
     lg = Lagrangian(problem) if board.gap() > 0 else None
     lam = None
     lp_info: dict = {}
+    region_info: dict = {}
     red_info: dict = {}
     if lg is not None:
         with board.lock:
             cov = problem.coverage(board.selected)
             ub = board.objective
         remaining = end - time.perf_counter()
-        want_lp = (T >= 300) if lp is None else lp
+        want_lp = ((T >= 300) or bool(region)) if lp is None else lp
         share = 0.1 if want_lp else (0.35 if reduced_mip else 1.0)
         res = lagrangian_bound(problem, time_limit_s=max(0.5, share * remaining), incumbent_cost=ub, coverage=cov,
                                should_stop=stop_now, lagr=lg,
@@ -178,6 +182,17 @@ def solve_certify(problem: PlacementProblem, *, time_limit_s: float | None = Non
                 board.offer_bound(L_lp, "lagrangian (LP duals)")
                 if L_lp >= res.info["raw"]:
                     lam = lam_lp
+                if region and not stop_now() and board.gap() > 0:
+                    from camplace.solvers.region_bound import METHOD, region_bound
+
+                    with board.lock:
+                        ub = board.objective
+                    rres = region_bound(problem, lam=lam_lp, x_frac=lpr.info["x"], incumbent_cost=ub,
+                                        time_limit_s=(end - time.perf_counter()) / 3.0, seed=seed,
+                                        should_stop=stop_now, on_bound=lambda v: board.offer_bound(v, METHOD))
+                    board.offer_bound(rres.bound, METHOD)
+                    region_info = {"bound": rres.bound, "lp": lpr.bound, "iterations": rres.info["iterations"],
+                                   "regions": rres.info["regions"], "seconds": round(rres.seconds, 2)}
         tick()
         if reduced_mip and not stop_now() and board.gap() > 0:
             # polish λ against the current incumbent, then fix and solve exactly
@@ -230,5 +245,6 @@ def solve_certify(problem: PlacementProblem, *, time_limit_s: float | None = Non
     status = "optimal" if gap <= 1e-9 else ("interrupted" if interrupted else "time_limit")
     info = {"incumbent_method": board.incumbent_method, "bound_method": board.bound_method, "gap": gap,
             "tabu_iterations": ts.iterations, "tabu_restarts": ts.restarts, "seed": int(seed),
-            "threads": n_threads, "history": history, "lp": lp_info, "fixing": red_info}
+            "threads": n_threads, "history": history, "lp": lp_info, "fixing": red_info,
+            "region": region_info}
     return Placement(board.selected, board.objective, board.bound, status, "certify", time.perf_counter() - t0, info)
