@@ -137,3 +137,26 @@ def test_segment_clear_matches_exact_cell_test(cells_fracs, seed):
     occ[tuple(np.floor(p1).astype(int))] = 0
     want = not any(_segment_hits_box(p0, p1, np.array(c, float), np.array(c, float) + 1) for c in np.argwhere(occ))
     assert segment_clear(occ, 0.0, 0.0, 0.0, 1.0, *p0, *p1) == want
+
+
+def test_dda_walks_the_cells_a_ray_crosses():
+    """dda_axis / dda_step (shared by segment_clear and the pixel-mode kernels): a ray from
+    (0.05, 0.05, 0.05) along (2, 1, 0) / sqrt(5) through 0.1 m cells crosses x = 0.1 at
+    t = 0.05 sqrt(5) / 2 = 0.056, then y = 0.1 at 0.05 sqrt(5) = 0.112, then x = 0.2 at
+    0.15 sqrt(5) / 2 = 0.168; it never steps along z (parallel: both t are 1e30)."""
+    from camplace.visibility import dda_axis, dda_step
+
+    d = np.array([2.0, 1.0, 0.0]) / math.sqrt(5.0)
+    p = np.array([0.05, 0.05, 0.05])
+    (sx, tmx, tdx), (sy, tmy, tdy), (sz, tmz, tdz) = (dda_axis(0, p[a], d[a], 0.0, 0.1) for a in range(3))
+    assert (sx, sy, sz) == (1, 1, -1) and tmz == tdz == 1e30
+    assert math.isclose(tmx, 0.05 / d[0]) and math.isclose(tdx, 0.1 / d[0]) and math.isclose(tmy, 0.05 / d[1])
+    ix = iy = iz = 0
+    cells, ts = [], []
+    for _ in range(3):
+        ix, iy, iz, tmx, tmy, tmz, axis, t = dda_step(ix, iy, iz, tmx, tmy, tmz, sx, sy, sz, tdx, tdy, tdz)
+        cells.append((ix, iy, iz, axis))
+        ts.append(t)
+    assert cells == [(1, 0, 0, 0), (1, 1, 0, 1), (2, 1, 0, 0)]
+    assert np.allclose(ts, [0.05 / d[0], 0.05 / d[1], 0.15 / d[0]])
+    assert dda_axis(3, 0.35, -0.5, 0.0, 0.1)[:2] == (-1, (3 * 0.1 + 0.0 - 0.35) / -0.5)

@@ -42,6 +42,30 @@ class Visibility:
     info: dict = field(default_factory=dict)
 
 
+@numba.njit(cache=True, inline="always")
+def dda_axis(i: int, p: float, d: float, o: float, size: float) -> tuple[int, float, float]:
+    """3D DDA (Amanatides & Woo) set-up along one axis for the ray p + t d through cells of
+    ``size`` (m) from origin ``o``, the ray being in cell ``i``: (step +1/-1, t of the next
+    cell boundary, t from one boundary to the next); both t are 1e30 (never) when d == 0."""
+    step = 1 if d > 0 else -1
+    if d != 0.0:
+        return step, ((i + (1 if d > 0 else 0)) * size + o - p) / d, size / abs(d)
+    return step, 1e30, 1e30
+
+
+@numba.njit(cache=True, inline="always")
+def dda_step(ix: int, iy: int, iz: int, tmx: float, tmy: float, tmz: float, sx: int, sy: int, sz: int,
+             tdx: float, tdy: float, tdz: float):
+    """One DDA step into the next cell (set-up: ``dda_axis`` per axis): crosses the nearest
+    cell boundary. Returns (ix, iy, iz, tmx, tmy, tmz) after the step, the axis stepped
+    along (0, 1, 2) and t of the boundary crossed (the ray's entry into the new cell)."""
+    if tmx <= tmy and tmx <= tmz:
+        return ix + sx, iy, iz, tmx + tdx, tmy, tmz, 0, tmx
+    if tmy <= tmz:
+        return ix, iy + sy, iz, tmx, tmy + tdy, tmz, 1, tmy
+    return ix, iy, iz + sz, tmx, tmy, tmz + tdz, 2, tmz
+
+
 @numba.njit(cache=True, nogil=True)
 def segment_clear(occ: np.ndarray, ox: float, oy: float, oz: float, res: float,
                   x0: float, y0: float, z0: float, x1: float, y1: float, z1: float) -> bool:
@@ -53,26 +77,9 @@ def segment_clear(occ: np.ndarray, ox: float, oy: float, oz: float, res: float,
     ex = int(math.floor((x1 - ox) / res))
     ey = int(math.floor((y1 - oy) / res))
     ez = int(math.floor((z1 - oz) / res))
-    dx, dy, dz = x1 - x0, y1 - y0, z1 - z0
-    inf = 1e30
-    sx = 1 if dx > 0 else -1
-    sy = 1 if dy > 0 else -1
-    sz = 1 if dz > 0 else -1
-    if dx != 0.0:
-        tmx = ((ix + (1 if dx > 0 else 0)) * res + ox - x0) / dx
-        tdx = res / abs(dx)
-    else:
-        tmx, tdx = inf, inf
-    if dy != 0.0:
-        tmy = ((iy + (1 if dy > 0 else 0)) * res + oy - y0) / dy
-        tdy = res / abs(dy)
-    else:
-        tmy, tdy = inf, inf
-    if dz != 0.0:
-        tmz = ((iz + (1 if dz > 0 else 0)) * res + oz - z0) / dz
-        tdz = res / abs(dz)
-    else:
-        tmz, tdz = inf, inf
+    sx, tmx, tdx = dda_axis(ix, x0, x1 - x0, ox, res)
+    sy, tmy, tdy = dda_axis(iy, y0, y1 - y0, oy, res)
+    sz, tmz, tdz = dda_axis(iz, z0, z1 - z0, oz, res)
     n_max = abs(ex - ix) + abs(ey - iy) + abs(ez - iz) + 1
     for _ in range(n_max):
         if ix < 0 or iy < 0 or iz < 0 or ix >= nx or iy >= ny or iz >= nz:
@@ -81,21 +88,10 @@ def segment_clear(occ: np.ndarray, ox: float, oy: float, oz: float, res: float,
             return False
         if ix == ex and iy == ey and iz == ez:
             return True
-        if tmx <= tmy and tmx <= tmz:
-            if tmx > 1.0:
-                return True
-            ix += sx
-            tmx += tdx
-        elif tmy <= tmz:
-            if tmy > 1.0:
-                return True
-            iy += sy
-            tmy += tdy
-        else:
-            if tmz > 1.0:
-                return True
-            iz += sz
-            tmz += tdz
+        jx, jy, jz, ux, uy, uz, _, t = dda_step(ix, iy, iz, tmx, tmy, tmz, sx, sy, sz, tdx, tdy, tdz)
+        if t > 1.0:
+            return True
+        ix, iy, iz, tmx, tmy, tmz = jx, jy, jz, ux, uy, uz
     return True
 
 

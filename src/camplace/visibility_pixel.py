@@ -35,7 +35,7 @@ from camplace.errors import InputError
 from camplace.quality import target_min_px
 from camplace.scene import OccupancyGrid
 from camplace.targets import Targets
-from camplace.visibility import Visibility, chunked_rows, target_cos_limits
+from camplace.visibility import Visibility, chunked_rows, dda_axis, dda_step, target_cos_limits
 
 Progress = Callable[[str, int, int], None]
 DEFAULT_STRIDE = 4
@@ -62,28 +62,9 @@ def _first_hit(occ, dist, ox, oy, oz, res, px, py, pz, dx, dy, dz, rng):
     iz = int(math.floor((pz - oz) / res))
     if ix < 0 or iy < 0 or iz < 0 or ix >= nx or iy >= ny or iz >= nz or occ[ix, iy, iz]:
         return 0.0, ix, iy, iz, BOUNDARY, 0
-    inf = 1e30
-    sx = 1 if dx > 0 else -1
-    sy = 1 if dy > 0 else -1
-    sz = 1 if dz > 0 else -1
-    bx = 1 if dx > 0 else 0
-    by = 1 if dy > 0 else 0
-    bz = 1 if dz > 0 else 0
-    if dx != 0.0:
-        tmx = ((ix + bx) * res + ox - px) / dx
-        tdx = res / abs(dx)
-    else:
-        tmx, tdx = inf, inf
-    if dy != 0.0:
-        tmy = ((iy + by) * res + oy - py) / dy
-        tdy = res / abs(dy)
-    else:
-        tmy, tdy = inf, inf
-    if dz != 0.0:
-        tmz = ((iz + bz) * res + oz - pz) / dz
-        tdz = res / abs(dz)
-    else:
-        tmz, tdz = inf, inf
+    sx, tmx, tdx = dda_axis(ix, px, dx, ox, res)
+    sy, tmy, tdy = dda_axis(iy, py, dy, oy, res)
+    sz, tmz, tdz = dda_axis(iz, pz, dz, oz, res)
     t_in = 0.0  # ray parameter where it entered the current cell
     while True:
         if skip:
@@ -96,34 +77,16 @@ def _first_hit(occ, dist, ox, oy, oz, res, px, py, pz, dx, dy, dz, rng):
                 iy = int(math.floor((py + t_in * dy - oy) / res))
                 iz = int(math.floor((pz + t_in * dz - oz) / res))
                 # next boundaries ahead; max() guards rays running along a cell boundary,
-                # where rounding can put the recomputed cell behind the ray
-                if dx != 0.0:
-                    tmx = max(((ix + bx) * res + ox - px) / dx, t_in)
-                if dy != 0.0:
-                    tmy = max(((iy + by) * res + oy - py) / dy, t_in)
-                if dz != 0.0:
-                    tmz = max(((iz + bz) * res + oz - pz) / dz, t_in)
-        if tmx <= tmy and tmx <= tmz:
-            t = tmx
-            if t > rng:
-                return rng, ix, iy, iz, NO_HIT, 0
-            ix += sx
-            tmx += tdx
-            axis, step = 0, sx
-        elif tmy <= tmz:
-            t = tmy
-            if t > rng:
-                return rng, ix, iy, iz, NO_HIT, 0
-            iy += sy
-            tmy += tdy
-            axis, step = 1, sy
-        else:
-            t = tmz
-            if t > rng:
-                return rng, ix, iy, iz, NO_HIT, 0
-            iz += sz
-            tmz += tdz
-            axis, step = 2, sz
+                # where rounding can put the recomputed cell behind the ray (an axis the
+                # ray is parallel to keeps its 1e30)
+                tmx = max(dda_axis(ix, px, dx, ox, res)[1], t_in)
+                tmy = max(dda_axis(iy, py, dy, oy, res)[1], t_in)
+                tmz = max(dda_axis(iz, pz, dz, oz, res)[1], t_in)
+        jx, jy, jz, ux, uy, uz, axis, t = dda_step(ix, iy, iz, tmx, tmy, tmz, sx, sy, sz, tdx, tdy, tdz)
+        if t > rng:
+            return rng, ix, iy, iz, NO_HIT, 0
+        ix, iy, iz, tmx, tmy, tmz = jx, jy, jz, ux, uy, uz
+        step = sx if axis == 0 else (sy if axis == 1 else sz)
         t_in = t
         if ix < 0 or iy < 0 or iz < 0 or ix >= nx or iy >= ny or iz >= nz:
             return t, ix, iy, iz, BOUNDARY, 0
@@ -245,25 +208,9 @@ def _pixel_kernel(occ, dist, origin, res, cam_pos, cam_rot, cam_ids, cam_params,
             jz = int(math.floor((pz - boz) / bc))
             if jx < 0 or jy < 0 or jz < 0 or jx >= bnx or jy >= bny or jz >= bnz:
                 continue
-            inf = 1e30
-            sx = 1 if dx > 0 else -1
-            sy = 1 if dy > 0 else -1
-            sz = 1 if dz > 0 else -1
-            if dx != 0.0:
-                tmx = ((jx + (1 if dx > 0 else 0)) * bc + box - px) / dx
-                tdx = bc / abs(dx)
-            else:
-                tmx, tdx = inf, inf
-            if dy != 0.0:
-                tmy = ((jy + (1 if dy > 0 else 0)) * bc + boy - py) / dy
-                tdy = bc / abs(dy)
-            else:
-                tmy, tdy = inf, inf
-            if dz != 0.0:
-                tmz = ((jz + (1 if dz > 0 else 0)) * bc + boz - pz) / dz
-                tdz = bc / abs(dz)
-            else:
-                tmz, tdz = inf, inf
+            sx, tmx, tdx = dda_axis(jx, px, dx, box, bc)
+            sy, tmy, tdy = dda_axis(jy, py, dy, boy, bc)
+            sz, tmz, tdz = dda_axis(jz, pz, dz, boz, bc)
             while True:
                 cell = (jx * bny + jy) * bnz + jz
                 for q in range(b_start[cell], b_start[cell + 1]):
@@ -276,27 +223,9 @@ def _pixel_kernel(occ, dist, origin, res, cam_pos, cam_rot, cam_ids, cam_params,
                         hit = _ray_hits_cube(px, py, pz, dx, dy, dz, tpos[j, 0], tpos[j, 1], tpos[j, 2], thalf[j], t_end)
                     if hit:
                         row[j] = 1 if _density_ok(p, R, params, tpos, tnrm, j, tpx[j]) else 2
-                if tmx <= tmy and tmx <= tmz:
-                    if tmx > t_end:
-                        break
-                    jx += sx
-                    tmx += tdx
-                    if jx < 0 or jx >= bnx:
-                        break
-                elif tmy <= tmz:
-                    if tmy > t_end:
-                        break
-                    jy += sy
-                    tmy += tdy
-                    if jy < 0 or jy >= bny:
-                        break
-                else:
-                    if tmz > t_end:
-                        break
-                    jz += sz
-                    tmz += tdz
-                    if jz < 0 or jz >= bnz:
-                        break
+                jx, jy, jz, tmx, tmy, tmz, _, t = dda_step(jx, jy, jz, tmx, tmy, tmz, sx, sy, sz, tdx, tdy, tdz)
+                if t > t_end or jx < 0 or jy < 0 or jz < 0 or jx >= bnx or jy >= bny or jz >= bnz:
+                    break
         counts[i] = ray_start[cid + 1] - ray_start[cid]
     return counts
 
