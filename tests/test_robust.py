@@ -125,7 +125,7 @@ from hypothesis import HealthCheck, given, settings  # noqa: E402
 from hypothesis import strategies as st  # noqa: E402
 
 from camplace.problem import feasible_selections  # noqa: E402
-from camplace.robust import _ScenarioModel, robust_lns, scenario_mip  # noqa: E402
+from camplace.robust import _ScenarioModel, mean_failure_bound, robust_lns, scenario_mip  # noqa: E402
 
 
 def _brute_robust(prob, keep=None, pool=None):
@@ -162,6 +162,8 @@ def test_scenario_mip_matches_brute_force(prob):
     assert worst_case(prob, res.selected)[0] == pytest.approx(res.worst_case)  # recomputed from V
     assert res.cost == pytest.approx(prob.cost(res.selected))
     assert res.bound is not None and res.bound <= best + 1e-6
+    mb = mean_failure_bound(prob, time_limit_s=10.0)
+    assert mb is None or mb <= best + 1e-6
 
 
 @pytest.mark.parametrize("seed", range(6))

@@ -277,18 +277,62 @@ def robust_bound(problem: PlacementProblem, coverage_hint: np.ndarray | None = N
     return max(0.0, float(res.bound))
 
 
+def mean_failure_bound(problem: PlacementProblem, *, time_limit_s: float | None = 60.0,
+                       threads: int | None = None) -> float | None:
+    """Lower bound on min_S W(S) from the mean failure: for 1 <= |S| <= N_s,
+    W(S) >= mean_s cost(S minus s) >= cost(S) + (1/N_s) Σ_s loss_s(S) = Σ_j w_j g_j(c_j) with
+    g(c) = (Γ − c)+² + (c / N_s) ((Γ − c + 1)+² − (Γ − c)+²), a convex function of the coverage
+    c (for N_s >= 2; proof in docs/beyond-the-grid.md), so min Σ_j w_j g_j(c_j) is a placement
+    problem of the tight convex form with Γ_j + 1 units per target; its LP relaxation
+    (HiGHS interior point + crossover) is the bound. None if the LP does not finish in
+    time or N_s < 2."""
+    from dataclasses import replace as _replace
+
+    from camplace.solvers.mip import tight_model_arrays
+
+    n = problem.budget
+    if n < 2:
+        return None
+    g = np.asarray(problem.gamma, np.int64)
+    arrays, lay = tight_model_arrays(_replace(problem, gamma=np.where(g > 0, g + 1, 0)))
+    G = g[lay.u_target].astype(np.float64)
+    k = lay.u_k
+    c = G + 1 - k  # unit k is the step from coverage c + 1 down to c
+    d = G - c
+    slope = np.where(k == 1, G / n, (2 * d - 1) + (2 * c - 2 * d + 1) / n)
+    arrays.c[lay.n_x:] = problem.weights[lay.u_target] * slope
+    h = highs_from_arrays(arrays, integer=False)
+    out = run_highs(h, time_limit_s=time_limit_s, threads=threads, options={"solver": "ipm"})
+    if out.status != "optimal" or out.objective is None:
+        return None
+    val = float(out.objective)
+    val -= 1e-7 * max(1.0, abs(val))  # the dual objective equals it up to HiGHS's tolerances
+    return _round_up(problem, max(val, 0.0))
+
+
+def _round_up(problem: PlacementProblem, bound: float) -> float:
+    """Integer weights make every cost an integer: a bound may then be rounded up."""
+    w = np.asarray(problem.weights)
+    if np.all(w == np.round(w)):
+        return float(np.ceil(bound - 1e-6))
+    return bound
+
+
 def robust_placement(problem: PlacementProblem, nominal: Placement, *, time_limit_s: float | None = 60.0,
                      bound_time_s: float = 10.0, pool: int = 24, max_stall: int = 20, method: str = "auto",
-                     exact_max_nnz: int = 200_000, bound_mip_s: float = 0.0, seed: int = 0,
+                     exact_max_nnz: int = 200_000, bound_mip_s: float = 0.0, mean_bound_s: float = 60.0,
+                     seed: int = 0,
                      should_stop=None) -> RobustResult:
     """``--robust 1`` from the nominal placement, with figures for both placements and a
     lower bound on the optimal worst case. method 'auto': the swap/tabu heuristic
     (``robust_search``, 30 % of the time), then the exact scenario MIP on the whole problem
-    when V has at most ``exact_max_nnz`` nonzeros (optimal when it finishes), else the
-    scenario-MIP large-neighbourhood search (``robust_lns``) with the rest of the time.
+    when V has at most ``exact_max_nnz`` nonzeros (half of the time left; optimal when it
+    finishes), then, unless that proved optimality, the scenario-MIP large-neighbourhood
+    search (``robust_lns``) with the rest of the time. info['method'] says which ran.
     'heuristic': the swap/tabu search alone. The bound is the best of the Lagrangian bound
-    of the problem with one camera fewer (``bound_time_s``) and the scenario-MIP dual bound
-    (from the exact solve, or from ``bound_mip_s`` seconds of it on the whole problem)."""
+    of the problem with one camera fewer (``bound_time_s``), the mean-failure LP bound
+    (``mean_failure_bound``, ``mean_bound_s``) and the scenario-MIP dual bound (from the
+    exact solve, or from ``bound_mip_s`` seconds of it on the whole problem)."""
     if method not in ("auto", "heuristic"):
         raise ValueError(f"robust_placement: method must be 'auto' or 'heuristic', got {method!r}")
     t0 = time.perf_counter()
@@ -307,11 +351,17 @@ def robust_placement(problem: PlacementProblem, nominal: Placement, *, time_limi
         keep = sel[sel != who]
         lag = robust_bound(problem, problem.coverage(keep), bound_time_s, w_now)
         if lag is not None:
-            bounds["lagrangian_fewer_camera"] = lag
+            bounds["lagrangian_fewer_camera"] = _round_up(problem, lag)
+    if mean_bound_s > 0 and not stopped(should_stop):
+        mb = mean_failure_bound(problem, time_limit_s=mean_bound_s)
+        if mb is not None:
+            bounds["mean_failure_lp"] = mb
+    lag = max(bounds.values()) if bounds else None  # t >= lag in every scenario MIP below
     exact_done = False
     if method == "auto" and len(sel) and not stopped(should_stop):
-        if problem.V.nnz <= exact_max_nnz:
-            res = scenario_mip(problem, sel, time_limit_s=left(), t_lower=lag or 0.0, init_scenarios=None,
+        if problem.V.nnz <= exact_max_nnz:  # exact first, with half of the time left
+            half = None if end is None else 0.5 * left()
+            res = scenario_mip(problem, sel, time_limit_s=half, t_lower=lag or 0.0, init_scenarios=None,
                                mip_rel_gap=0.0, seed=seed, should_stop=should_stop)
             info["scenario_mip"] = dict(res.info, status=res.status)
             if res.bound is not None and res.bound > (lag or 0.0):
@@ -319,12 +369,12 @@ def robust_placement(problem: PlacementProblem, nominal: Placement, *, time_limi
             if _better((res.worst_case, res.cost), _key(problem, sel)):
                 sel = res.selected
             exact_done = res.status == "optimal"
-            used = "scenario-mip" + (" (optimal)" if exact_done else "")
-        else:
+            used = "scenario-mip (optimal)" if exact_done else "heuristic+scenario-mip"
+        if not exact_done and not stopped(should_stop) and (left() is None or left() > 1.0):
             sel, lns = robust_lns(problem, sel, time_limit_s=left(), t_lower=lag or 0.0, seed=seed,
                                   should_stop=should_stop)
             info["lns"] = lns
-            used = "heuristic+scenario-mip-lns"
+            used += "+lns" if used != "heuristic" else "+scenario-mip-lns"
     if method == "auto" and bound_mip_s > 0 and not exact_done and not stopped(should_stop):
         res = scenario_mip(problem, sel, time_limit_s=bound_mip_s, t_lower=lag or 0.0, seed=seed,
                            should_stop=should_stop)
@@ -668,7 +718,7 @@ FAST_SUB_MIP = {"presolve": "off", "mip_heuristic_effort": 0.0, "mip_heuristic_r
 
 
 def robust_lns(problem: PlacementProblem, start: np.ndarray, *, time_limit_s: float | None = 60.0,
-               sub_time_s: float = 10.0, free_sizes: tuple[int, ...] = (3, 5, 8), pool_size: int = 120,
+               sub_time_s: float = 20.0, free_sizes: tuple[int, ...] = (2, 3, 5), pool_size: int = 30,
                anchors: int = 3, donors: int = 2, seed: int = 0, t_lower: float = 0.0, should_stop=None) -> tuple[np.ndarray, dict]:
     """Large-neighbourhood search with the scenario MIP: pick an anchor (one of the
     ``anchors`` cameras whose failure costs most), free the k selected cameras sharing
