@@ -236,8 +236,9 @@ def improve_placement(sc: Scene, vis: Visibility, problem: PlacementProblem, pla
                       time_limit_s: float | None = None, should_stop: Callable[[], bool] | None = None,
                       progress: Progress | None = None,
                       log: list | None = None) -> tuple[Visibility, PlacementProblem, Placement]:
-    """Beyond the grid (issue 10), after the discrete solve: ``robust`` = 1 swaps toward the
-    best worst case over single camera failures (camplace.robust); ``adaptive`` rounds of
+    """Beyond the grid (issue 10), after the discrete solve: ``robust`` = 1 minimises the
+    worst case over single camera failures (camplace.robust: swap/tabu heuristic, then the
+    scenario MIP, exact on small V, as a large-neighbourhood search on large V); ``adaptive`` rounds of
     finer candidates (camplace.adaptive), then ``refine`` moves each camera off the grid
     (camplace.refine). Adaptive and refine append rows to V, so the returned visibility /
     problem replace the grid ones (the placement stays a selection of V rows). time_limit_s
@@ -256,7 +257,8 @@ def improve_placement(sc: Scene, vis: Visibility, problem: PlacementProblem, pla
         placement = rr.placement
         log.append(f"robust: nominal {rr.nominal['cost']:.6g} -> {rr.robust['cost']:.6g}, worst single failure "
                    f"{rr.nominal['worst_case_cost']:.6g} -> {rr.robust['worst_case_cost']:.6g}"
-                   + ("" if rr.bound is None else f" (lower bound {rr.bound:.6g})"))
+                   + ("" if rr.bound is None else f" (lower bound {rr.bound:.6g}, {rr.info['bound_method']})")
+                   + f" by {rr.info['method']}")
     if adaptive:
         from camplace.adaptive import adaptive_rounds
 
