@@ -82,7 +82,7 @@ def run_papermip(problem, time_s: float) -> dict:
             "status": p.status, "seconds": round(time.perf_counter() - t0, 2)}
 
 
-def run_engine(problem, time_s: float) -> dict:
+def run_engine(problem, time_s: float, **options) -> dict:
     from camplace.solvers.certify import solve_certify
 
     import scipy.sparse as sp
@@ -100,7 +100,7 @@ def run_engine(problem, time_s: float) -> dict:
     def on_state(state: dict) -> None:
         trace.append({"t": round(time.perf_counter() - t0, 2), **state})
 
-    p = solve_certify(problem, time_limit_s=time_s, threads=2, seed=0, on_state=on_state)
+    p = solve_certify(problem, time_limit_s=time_s, threads=2, seed=0, on_state=on_state, **options)
     snaps = {}
     for mark in (10, 60, time_s):
         before = [s for s in trace if s["t"] <= mark + 1e-9]
@@ -109,7 +109,8 @@ def run_engine(problem, time_s: float) -> dict:
             snaps[str(int(mark))] = {"objective": s["objective"], "bound": s["bound"]}
     return {"method": "certify", "objective": p.objective, "bound": p.bound, "gap": p.gap,
             "incumbent_method": p.info.get("incumbent_method"), "bound_method": p.info.get("bound_method"),
-            "snapshots": snaps, "seconds": round(time.perf_counter() - t0, 2), "trace": trace[-200:]}
+            "snapshots": snaps, "seconds": round(time.perf_counter() - t0, 2), "trace": trace[-200:],
+            "lp": p.info.get("lp"), "region": p.info.get("region")}
 
 
 def _ceil(b):
@@ -163,6 +164,7 @@ def main(argv: list[str] | None = None) -> None:
     ap.add_argument("--out", required=True)
     ap.add_argument("--time", type=float, default=600.0)
     ap.add_argument("--only", action="append", default=None, help="scene:N, repeatable")
+    ap.add_argument("--region", action="store_true", help="engine: also the region decomposition bound")
     a = ap.parse_args(argv)
     todo = INSTANCES if not a.only else [(s.split(":")[0], int(s.split(":")[1])) for s in a.only]
     out = Path(a.out)
@@ -175,7 +177,7 @@ def main(argv: list[str] | None = None) -> None:
         elif a.what == "papermip":
             res = run_papermip(prob, a.time)
         else:
-            res = run_engine(prob, a.time)
+            res = run_engine(prob, a.time, **({"region": True} if a.region else {}))
         res.update({"scene": scene, "budget": n, "time_limit_s": a.time,
                     "wall_s": round(time.perf_counter() - t0, 2)})
         with out.open("a") as f:

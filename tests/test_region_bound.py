@@ -138,4 +138,16 @@ def test_certify_with_region_bound_proves_the_hand_built_optimum():
     assert res.objective == p.cost(res.selected) == 16.0
     assert res.bound <= 16.0 + 1e-9
     assert res.status == "optimal" and res.info["bound_method"] == METHOD  # the LP alone proves only 15
-    assert res.info["region"]["bound"] > res.info["region"]["lp"] + 0.5
+    assert res.info["region"]["start"] == "lp duals"
+    assert res.info["region"]["bound"] > res.info["region"]["start_bound"] + 0.5
+
+
+@settings(max_examples=6, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(problems, st.booleans())
+def test_certify_with_region_bound_below_optimum(p, use_lp):
+    from camplace.solvers.certify import solve_certify
+
+    opt = brute_force(p)
+    res = solve_certify(p, time_limit_s=1.0, threads=1, seed=0, region=True, lp=use_lp, reduced_mip=False)
+    assert res.bound <= opt + 1e-6
+    assert res.objective == p.cost(res.selected) and res.objective >= opt - 1e-9

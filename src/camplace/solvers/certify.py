@@ -107,7 +107,8 @@ def solve_certify(problem: PlacementProblem, *, time_limit_s: float | None = Non
     `lp`: solve the LP by interior point (default: when time_limit_s >= 300).
     `region`: after the LP, spend up to a third of the time left on the region
     decomposition bound (camplace.solvers.region_bound, docs/certify.md §6-8) started
-    from the LP duals (default: off; it needs the LP, so it also turns the LP on)."""
+    from the LP duals when the LP finished, else from the Lagrangian multipliers
+    (default: off; it also turns the LP on)."""
     if problem.money_budget is not None:  # issue 10: tabu and fixing ignore prices; the MIP models the money row
         from dataclasses import replace as _replace
 
@@ -157,6 +158,7 @@ def solve_certify(problem: PlacementProblem, *, time_limit_s: float | None = Non
     lam = None
     lp_info: dict = {}
     region_info: dict = {}
+    x_lp = None  # the LP primal, when the LP finished
     red_info: dict = {}
     if lg is not None:
         with board.lock:
@@ -182,17 +184,21 @@ def solve_certify(problem: PlacementProblem, *, time_limit_s: float | None = Non
                 board.offer_bound(L_lp, "lagrangian (LP duals)")
                 if L_lp >= res.info["raw"]:
                     lam = lam_lp
-                if region and not stop_now() and board.gap() > 0:
-                    from camplace.solvers.region_bound import METHOD, region_bound
+                    x_lp = lpr.info["x"]
+        if region and lam is not None and not stop_now() and board.gap() > 0:
+            # from the LP duals and primal when the LP finished, else from the Lagrangian's λ
+            from camplace.solvers.region_bound import METHOD, region_bound
 
-                    with board.lock:
-                        ub = board.objective
-                    rres = region_bound(problem, lam=lam_lp, x_frac=lpr.info["x"], incumbent_cost=ub,
-                                        time_limit_s=(end - time.perf_counter()) / 3.0, seed=seed,
-                                        should_stop=stop_now, on_bound=lambda v: board.offer_bound(v, METHOD))
-                    board.offer_bound(rres.bound, METHOD)
-                    region_info = {"bound": rres.bound, "lp": lpr.bound, "iterations": rres.info["iterations"],
-                                   "regions": rres.info["regions"], "seconds": round(rres.seconds, 2)}
+            with board.lock:
+                ub = board.objective
+            start_lp = x_lp is not None
+            rres = region_bound(problem, lam=lam, x_frac=x_lp, incumbent_cost=ub,
+                                time_limit_s=(end - time.perf_counter()) / 3.0, seed=seed,
+                                should_stop=stop_now, on_bound=lambda v: board.offer_bound(v, METHOD))
+            board.offer_bound(rres.bound, METHOD)
+            region_info = {"bound": rres.bound, "start": "lp duals" if start_lp else "lagrangian",
+                           "start_bound": rres.info["lagrangian"], "iterations": rres.info["iterations"],
+                           "regions": rres.info["regions"], "seconds": round(rres.seconds, 2)}
         tick()
         if reduced_mip and not stop_now() and board.gap() > 0:
             # polish λ against the current incumbent, then fix and solve exactly
