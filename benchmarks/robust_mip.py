@@ -64,6 +64,7 @@ def main() -> None:
                    "lns_tries": lns.get("tries"), "lns_accepted": lns.get("accepted"), "lns_stopped": lns.get("stopped"),
                    "lns_optimal_subproblems": sum(h["status"] == "optimal" for h in lns.get("history", [])),
                    "bounds": rb.info["bounds"], "bound": rb.bound, "bound_mip": rb.info.get("bound_mip"),
+                   "bound_s": rb.info.get("bound_seconds"), "lns_s": lns.get("seconds"),
                    "robust_s": sec, "load_start": load0, "load_end": os.getloadavg()[0]}
             rows.append(row)
             print(json.dumps(row), flush=True)
