@@ -61,7 +61,8 @@ def main() -> None:
                    "heuristic_s": heur["seconds"], "robust_cost": rb.robust["cost"],
                    "robust_worst": rb.robust["worst_case_cost"], "robust_gap": rb.robust["coverage_gap"],
                    "robust_worst_gap": rb.robust["worst_case_gap"], "method": rb.info["method"],
-                   "lns_tries": lns.get("tries"), "lns_accepted": lns.get("accepted"), "lns_stopped": lns.get("stopped"),
+                   "lns_tries": lns.get("tries"), "lns_accepted": lns.get("accepted"),
+                   "lns_stopped": lns.get("stopped"),
                    "lns_optimal_subproblems": sum(h["status"] == "optimal" for h in lns.get("history", [])),
                    "bounds": rb.info["bounds"], "bound": rb.bound, "bound_mip": rb.info.get("bound_mip"),
                    "bound_s": rb.info.get("bound_seconds"), "lns_s": lns.get("seconds"),
@@ -76,7 +77,8 @@ def main() -> None:
 
 def markdown(rows: list[dict]) -> str:
     out = ["| scene | N_s | nominal: cost / W | heuristic: cost / W | + scenario-MIP LNS: cost / W | "
-           "LNS tries (optimal, accepted) | Lagrangian bound (N_s − 1) | mean-failure LP bound | scenario-MIP bound | "
+           "LNS tries (optimal, accepted) | Lagrangian bound (N_s − 1) | mean-failure LP bound | "
+           "scenario-MIP bound | "
            "gap W to bound | s | load |", "|---|---|---|---|---|---|---|---|---|---|---|---|"]
     for r in rows:
         b = r["bounds"]

@@ -6,17 +6,19 @@ over the selected rows gives all of them: removing i raises the cost by
 Σ_{j in row i} w_j (max(Γ_j − c_j + 1, 0)² − max(Γ_j − c_j, 0)²)).
 Worst case: W(S) = max_i cost(S minus i).
 
-``robust_search`` (the ``--robust 1`` heuristic) minimises W(S) by best-improvement swap
-local search started from the nominal placement: a move removes one selected camera and
-adds one candidate drawn from a pool ranked by its gain in the current worst failure
-scenario and by its nominal gain; moves are compared lexicographically by (W, second and
-third worst failure costs, nominal cost). When no move improves it continues as a short
-tabu search (least-bad move, the removed camera tabu for a few passes) and returns the
-best selection seen, so the robust placement's worst case is <= the nominal placement's.
-A valid lower bound on the optimal worst case: for any S,
-W(S) >= cost(S minus i) >= OPT(N_s − 1), the optimum with one camera fewer, so any lower
-bound on OPT(N_s − 1) (Lagrangian, ``camplace.solvers.bounds``) bounds the robust
-optimum from below.
+``robust_placement`` (``--robust 1``) minimises W:
+
+- ``robust_search``: best-improvement swap local search from the nominal placement on
+  (W, second and third worst failure costs, nominal cost) in lexicographic order, continued
+  as a short tabu search; it returns the best selection seen, so W never rises.
+- ``scenario_mip``: the exact scenario MIP (one coverage scenario per failure, no big-M),
+  solved by lazy scenario generation on HiGHS; a model with a subset of the scenarios is a
+  relaxation, so its dual bound is a lower bound on the optimal W*. Whole problem when V
+  is small; on store-sized V, ``robust_lns`` solves it on neighbourhoods of the costliest
+  failures (most cameras fixed).
+- Lower bounds on W*: ``robust_bound`` (Lagrangian bound with one camera fewer: W(S) >=
+  OPT(N_s − 1)) and ``mean_failure_bound`` (W(S) >= cost(S) + mean loss, a convex placement
+  problem, by LP). Proofs in docs/beyond-the-grid.md.
 """
 
 from __future__ import annotations
@@ -722,7 +724,8 @@ FAST_SUB_MIP = {"presolve": "off", "mip_heuristic_effort": 0.0, "mip_heuristic_r
 
 def robust_lns(problem: PlacementProblem, start: np.ndarray, *, time_limit_s: float | None = 60.0,
                sub_time_s: float = 20.0, free_sizes: tuple[int, ...] = (2, 3, 5, 8), pool_size: int = 30,
-               anchors: int = 3, donors: int = 2, seed: int = 0, t_lower: float = 0.0, should_stop=None) -> tuple[np.ndarray, dict]:
+               anchors: int = 3, donors: int = 2, seed: int = 0, t_lower: float = 0.0,
+               should_stop=None) -> tuple[np.ndarray, dict]:
     """Large-neighbourhood search with the scenario MIP: pick an anchor (one of the
     ``anchors`` cameras whose failure costs most), free the k selected cameras sharing
     the most targets with it (k from ``free_sizes``), keep the others fixed, and solve the
@@ -828,5 +831,6 @@ def essential_from_folder(out_dir) -> tuple[list[dict], dict]:
                      "coverage_gap": cost / problem.normalizer if problem.normalizer > 0 else 0.0}
 
 
-__all__ = ["RobustResult", "essential_from_folder", "essential_cameras", "removal_losses", "robust_bound", "robust_placement",
-           "robust_search", "worst_case"]
+__all__ = ["RobustResult", "ScenarioResult", "essential_from_folder", "essential_cameras", "mean_failure_bound",
+           "removal_losses", "robust_bound", "robust_lns", "robust_placement", "robust_search", "scenario_mip",
+           "worst_case"]
