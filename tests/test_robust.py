@@ -219,3 +219,18 @@ def test_robust_lns_never_worsens_and_is_deterministic():
     assert res.info["method"] == "heuristic+scenario-mip-lns"
     assert res.robust["worst_case_cost"] == pytest.approx(worst_case(prob, res.placement.selected)[0])
     assert res.robust["worst_case_cost"] <= res.nominal["worst_case_cost"] + 1e-9
+
+
+def test_improve_placement_robust_logs_method_bound_and_gaps():
+    from camplace.pipeline import improve_placement
+
+    prob = _random_problem(4, n_g=9, n_p=20, budget=3)
+    nominal = solve_greedy(prob)
+    log: list[str] = []
+    _, _, p = improve_placement(None, None, prob, nominal, robust=1, time_limit_s=5.0, log=log)
+    info = p.info["robust"]
+    assert info["method"] == "scenario-mip (optimal)" and info["worst_case_bound"] == pytest.approx(
+        info["robust"]["worst_case_cost"])
+    line = [x for x in log if x.startswith("robust:")][0]
+    assert "by scenario-mip (optimal)" in line and "worst-case gap" in line and "lower bound" in line
+    assert info["robust"]["worst_case_cost"] <= info["nominal"]["worst_case_cost"] + 1e-9

@@ -258,7 +258,9 @@ def improve_placement(sc: Scene, vis: Visibility, problem: PlacementProblem, pla
         log.append(f"robust: nominal {rr.nominal['cost']:.6g} -> {rr.robust['cost']:.6g}, worst single failure "
                    f"{rr.nominal['worst_case_cost']:.6g} -> {rr.robust['worst_case_cost']:.6g}"
                    + ("" if rr.bound is None else f" (lower bound {rr.bound:.6g}, {rr.info['bound_method']})")
-                   + f" by {rr.info['method']}")
+                   + f" by {rr.info['method']}; coverage gap {rr.nominal['coverage_gap']:.4f} -> "
+                   f"{rr.robust['coverage_gap']:.4f}, worst-case gap {rr.nominal['worst_case_gap']:.4f} -> "
+                   f"{rr.robust['worst_case_gap']:.4f}")
     if adaptive:
         from camplace.adaptive import adaptive_rounds
 
