@@ -50,9 +50,14 @@ def test_decomposition_below_optimum_for_any_prices(p, k, seed):
     dec = RegionDecomposition(p, labels)
     rng = np.random.default_rng(seed)
     lam = rng.uniform(0, 6, p.n_targets)
-    for mus in (dec.initial_prices(lam), [rng.normal(0, 4, len(r.cand)) for r in dec.regions]):
-        value, ys, x0, _ = dec.evaluate(mus, region_time_s=5.0)
+    price_sets = [dec.initial_prices(lam)] + [[rng.normal(0, 4, len(r.cand)) for r in dec.regions] for _ in range(2)]
+    for mus in price_sets:
+        value, ys, x0, n_opt = dec.evaluate(mus, region_time_s=5.0)
         assert value <= opt + 1e-6
+        # the HiGHS models are re-used across prices: a fresh decomposition gives the same value
+        fresh, _, _, n_fresh = RegionDecomposition(p, labels).evaluate(mus, region_time_s=5.0)
+        if n_opt == n_fresh == len(dec.regions):
+            assert abs(fresh - value) <= 1e-6 * max(1.0, abs(value))
         assert x0.sum() <= p.budget
         for r, y in zip(dec.regions, ys):
             assert y.shape == (len(r.cand),)

@@ -191,6 +191,7 @@ class RegionDecomposition:
             h.setOptionValue("mip_rel_gap", 1e-6)
             reg.highs, reg.n_x = h, n_x
         h, n_x = reg.highs, reg.n_x
+        h.clearSolver()  # no incumbent or basis from the previous prices may prune this run
         h.changeColsCost(n_x, np.arange(n_x, dtype=np.int32), np.asarray(mu, np.float64))
         h.setOptionValue("time_limit", float(max(0.01, time_limit_s)))
         if start is not None:
