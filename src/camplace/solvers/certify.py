@@ -105,8 +105,9 @@ def solve_certify(problem: PlacementProblem, *, time_limit_s: float | None = Non
     bound; info has incumbent_method, bound_method, gap and both sides' history.
     on_incumbent(objective, bound) and on_state(dict) are called whenever a side improves.
     `lp`: solve the LP by interior point (default: when time_limit_s >= 300).
-    `region`: after the LP, spend up to a third of the time left on the region
-    decomposition bound (camplace.solvers.region_bound, docs/certify.md §6-8) started
+    `region`: after the LP, spend a third of the time left on the partial Lagrangian
+    bound (one costly target region exact) and a quarter of the rest on the region
+    decomposition bound (camplace.solvers.region_bound, docs/certify.md §6-9), started
     from the LP duals when the LP finished, else from the Lagrangian multipliers
     (default: off; it also turns the LP on)."""
     if problem.money_budget is not None:  # issue 10: tabu and fixing ignore prices; the MIP models the money row
@@ -187,18 +188,30 @@ def solve_certify(problem: PlacementProblem, *, time_limit_s: float | None = Non
                     x_lp = lpr.info["x"]
         if region and lam is not None and not stop_now() and board.gap() > 0:
             # from the LP duals and primal when the LP finished, else from the Lagrangian's λ
-            from camplace.solvers.region_bound import METHOD, region_bound
+            from camplace.solvers.region_bound import (METHOD, PARTIAL_METHOD, costly_region,
+                                                        partial_lagrangian_bound, region_bound)
 
             with board.lock:
                 ub = board.objective
             start_lp = x_lp is not None
-            rres = region_bound(problem, lam=lam, x_frac=x_lp, incumbent_cost=ub,
-                                time_limit_s=(end - time.perf_counter()) / 3.0, seed=seed,
+            # one costly region exact, the rest Lagrangian (the budget binds there) ...
+            pres = partial_lagrangian_bound(problem, lam, costly_region(problem, lam, seed=seed),
+                                            time_limit_s=(end - time.perf_counter()) / 3.0, seed=seed,
+                                            should_stop=stop_now)
+            board.offer_bound(pres.bound, PARTIAL_METHOD)
+            # ... then the decomposition over all regions with subgradient ascent
+            rres = None if stop_now() or board.gap() <= 0 else region_bound(problem, lam=lam, x_frac=x_lp, incumbent_cost=ub,
+                                time_limit_s=(end - time.perf_counter()) / 4.0, seed=seed,
                                 should_stop=stop_now, on_bound=lambda v: board.offer_bound(v, METHOD))
-            board.offer_bound(rres.bound, METHOD)
-            region_info = {"bound": rres.bound, "start": "lp duals" if start_lp else "lagrangian",
-                           "start_bound": rres.info["lagrangian"], "iterations": rres.info["iterations"],
-                           "regions": rres.info["regions"], "seconds": round(rres.seconds, 2)}
+            if rres is not None:
+                board.offer_bound(rres.bound, METHOD)
+            region_info = {"bound": rres.bound if rres else None, "start": "lp duals" if start_lp else "lagrangian",
+                           "start_bound": pres.info["lagrangian"],
+                           "iterations": rres.info["iterations"] if rres else 0,
+                           "regions": rres.info["regions"] if rres else 0,
+                           "seconds": round(rres.seconds, 2) if rres else 0.0,
+                           "partial_bound": pres.bound, "partial_targets": pres.info["region_targets"],
+                           "partial_seconds": round(pres.seconds, 2)}
         tick()
         if reduced_mip and not stop_now() and board.gap() > 0:
             # polish λ against the current incumbent, then fix and solve exactly

@@ -313,3 +313,82 @@ def region_bound(problem: PlacementProblem, *, lam: np.ndarray | None = None, n_
     return BoundResult(max(out, 0.0), METHOD, time.perf_counter() - t0, lam,
                        {"iterations": it, "regions": len(dec.regions), "lagrangian": L0, "first": first,
                         "history": history, "region_solves_optimal": n_solved})
+
+
+PARTIAL_METHOD = "partial Lagrangian (one region exact, HiGHS)"
+
+
+def partial_lagrangian_bound(problem: PlacementProblem, lam: np.ndarray, region: np.ndarray, *,
+                             time_limit_s: float = 60.0, threads: int | None = 1, seed: int = 0,
+                             should_stop: StopFn | None = None) -> BoundResult:
+    """Dualize only the coverage rows of the targets outside `region` (bool (N_p,) or ids)
+    with multipliers λ ≥ 0 and keep the region's rows, the budget and the locations
+    exact (docs/certify.md §9):
+
+        OPT ≥ U_out(λ) + min over integer x ∈ X of F_region(x) − Σ_i r_i x_i,
+        r_i = Σ_{j ∉ region} V_ij λ_j,
+
+    the min solved by HiGHS (its dual bound is used, valid whenever it stops). The budget
+    binds in this subproblem, unlike in small decomposition regions, so it can pass the LP;
+    it is never below L(λ) (the value reported is max(L(λ), that bound))."""
+    t0 = time.perf_counter()
+    lam = np.maximum(np.asarray(lam, np.float64), 0.0)
+    mask = np.zeros(problem.n_targets, bool)
+    mask[np.asarray(region)] = True
+    cols, out = np.flatnonzero(mask), np.flatnonzero(~mask)
+    L = Lagrangian(problem).evaluate(lam)[0]
+    u_out, _ = _u_part(lam[out], problem.gamma[out].astype(np.int64), problem.weights[out].astype(np.float64))
+    V = sp.csr_matrix(problem.V)
+    r = np.asarray(V[:, out].astype(np.float64) @ lam[out]).ravel()
+    sub = PlacementProblem(sp.csr_matrix(V[:, cols]), problem.gamma[cols].astype(np.int64),
+                           problem.weights[cols].astype(np.float64), problem.budget, problem.location_ids)
+    info: dict = {"region_targets": int(len(cols)), "lagrangian": L}
+    dual = -np.inf
+    left = time_limit_s - (time.perf_counter() - t0)
+    if left > 0.05 and problem.n_candidates:
+        import highspy
+
+        h, n_x = build_highs(sub, integer=True, threads=threads, seed=seed, time_limit_s=left)
+        h.setOptionValue("mip_rel_gap", 1e-6)
+        h.changeColsCost(n_x, np.arange(n_x, dtype=np.int32), -r)
+        if should_stop is not None:
+            try:
+                def _cb(cb_type, message, data_out, data_in, user):  # pragma: no cover - timing dependent
+                    if should_stop():
+                        data_in.user_interrupt = True
+                h.setCallback(_cb, None)
+                h.startCallback(highspy.cb.HighsCallbackType.kCallbackMipInterrupt)
+            except Exception:  # noqa: BLE001 - optional feature
+                pass
+        h.run()
+        hinfo = h.getInfo()
+        info.update(status=h.modelStatusToString(h.getModelStatus()), nodes=int(hinfo.mip_node_count))
+        d = float(hinfo.mip_dual_bound)
+        if np.isfinite(d):
+            dual = d
+    value = max(L, float(u_out) + dual)
+    value -= 1e-7 * max(1.0, abs(value))  # HiGHS's tolerances (certify.md §5)
+    info["raw"] = float(u_out) + dual if np.isfinite(dual) else None
+    return BoundResult(max(value, 0.0), PARTIAL_METHOD, time.perf_counter() - t0, lam, info)
+
+
+def costly_region(problem: PlacementProblem, lam: np.ndarray, share: float = 0.3, n_regions: int = 16,
+                  seed: int = 0) -> np.ndarray:
+    """(N_p,) bool: whole k-means regions (target_regions) with the largest Lagrangian
+    u-part cost per target, added until they hold `share` of the targets."""
+    labels = target_regions(problem, n_regions, seed=seed)
+    lam = np.maximum(np.asarray(lam, np.float64), 0.0)
+    mask = np.zeros(problem.n_targets, bool)
+    if labels.max() < 0:
+        return mask
+    per = np.zeros(int(labels.max()) + 1)
+    cnt = np.bincount(labels[labels >= 0], minlength=len(per))
+    for R in range(len(per)):
+        cols = np.flatnonzero(labels == R)
+        per[R] = _u_part(lam[cols], problem.gamma[cols].astype(np.int64), problem.weights[cols].astype(np.float64))[0]
+    order = np.argsort(-(per / np.maximum(cnt, 1)), kind="stable")
+    for R in order:
+        mask[labels == R] = True
+        if mask.sum() >= share * problem.n_targets:
+            break
+    return mask
