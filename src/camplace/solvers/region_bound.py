@@ -16,6 +16,11 @@ region subproblem is integer it cannot spread fractional cameras, so the bound c
 exceed the LP; started from μ_R = V_R λ_R (λ: Lagrange multipliers of the coverage
 rows) it is never below the Lagrangian bound L(λ). The multipliers μ are then improved
 by subgradient ascent (the bound reported is the best evaluation, each one valid).
+
+`partial_lagrangian_bound` is the other bound here (§9): one region's coverage rows kept
+exact together with the budget and the locations, the other rows dualized with λ; the
+budget binds in that single MIP, so it passes the LP where small decomposition regions
+cannot.
 """
 
 from __future__ import annotations
