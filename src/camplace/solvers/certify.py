@@ -106,7 +106,7 @@ def solve_certify(problem: PlacementProblem, *, time_limit_s: float | None = Non
     on_incumbent(objective, bound) and on_state(dict) are called whenever a side improves.
     `lp`: solve the LP by interior point (default: when time_limit_s >= 300).
     `region`: after the LP, spend a third of the time left on the partial Lagrangian
-    bound (one costly target region exact) and a quarter of the rest on the region
+    bound (costly target regions holding 60 % of the targets exact) and a quarter of the rest on the region
     decomposition bound (camplace.solvers.region_bound, docs/certify.md §6-9), started
     from the LP duals when the LP finished, else from the Lagrangian multipliers
     (default: off; it also turns the LP on)."""
@@ -195,7 +195,7 @@ def solve_certify(problem: PlacementProblem, *, time_limit_s: float | None = Non
                 ub = board.objective
             start_lp = x_lp is not None
             # one costly region exact, the rest Lagrangian (the budget binds there) ...
-            pres = partial_lagrangian_bound(problem, lam, costly_region(problem, lam, seed=seed),
+            pres = partial_lagrangian_bound(problem, lam, costly_region(problem, lam, share=0.6, seed=seed),
                                             time_limit_s=(end - time.perf_counter()) / 3.0, seed=seed,
                                             should_stop=stop_now)
             board.offer_bound(pres.bound, PARTIAL_METHOD)
