@@ -106,8 +106,8 @@ def solve_certify(problem: PlacementProblem, *, time_limit_s: float | None = Non
     on_incumbent(objective, bound) and on_state(dict) are called whenever a side improves.
     `lp`: solve the LP by interior point (default: when time_limit_s >= 300).
     `region`: after the LP, spend a third of the time left on the partial Lagrangian
-    bound (costly target regions holding 60 % of the targets exact) and a quarter of the rest on the region
-    decomposition bound (camplace.solvers.region_bound, docs/certify.md §6-9), started
+    bound (costly target regions holding 60 % of the targets exact) and a quarter of
+    the rest on the region decomposition bound (camplace.solvers.region_bound, docs/certify.md §6-9), started
     from the LP duals when the LP finished, else from the Lagrangian multipliers
     (default: off; it also turns the LP on)."""
     if problem.money_budget is not None:  # issue 10: tabu and fixing ignore prices; the MIP models the money row
@@ -200,9 +200,11 @@ def solve_certify(problem: PlacementProblem, *, time_limit_s: float | None = Non
                                             should_stop=stop_now)
             board.offer_bound(pres.bound, PARTIAL_METHOD)
             # ... then the decomposition over all regions with subgradient ascent
-            rres = None if stop_now() or board.gap() <= 0 else region_bound(problem, lam=lam, x_frac=x_lp, incumbent_cost=ub,
-                                time_limit_s=(end - time.perf_counter()) / 4.0, seed=seed,
-                                should_stop=stop_now, on_bound=lambda v: board.offer_bound(v, METHOD))
+            rres = None
+            if not stop_now() and board.gap() > 0:
+                rres = region_bound(problem, lam=lam, x_frac=x_lp, incumbent_cost=ub,
+                                    time_limit_s=(end - time.perf_counter()) / 4.0, seed=seed,
+                                    should_stop=stop_now, on_bound=lambda v: board.offer_bound(v, METHOD))
             if rres is not None:
                 board.offer_bound(rres.bound, METHOD)
             region_info = {"bound": rres.bound if rres else None, "start": "lp duals" if start_lp else "lagrangian",
