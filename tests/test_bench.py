@@ -83,3 +83,25 @@ def test_cli_bench_writes_the_three_files(tmp_path):
     bad = subprocess.run([sys.executable, "-m", "camplace.cli", "bench", "demo", "--budgets", "x"],
                          capture_output=True, text=True, timeout=60)
     assert bad.returncode == 2 and "--budgets" in bad.stderr
+
+
+def test_bench_certify_adds_a_row_with_a_proven_bound():
+    _, _, rows = run_bench("demo", [3], ["greedy"], certify_s=3.0)
+    assert [r.method for r in rows] == ["greedy", "certify"]
+    cert = rows[1]
+    assert cert.bound is not None and 0.0 <= cert.bound <= cert.cost + 1e-6
+    assert cert.cost <= rows[0].cost + 1e-9  # tabu starts from greedy and never returns worse
+    assert cert.seconds < 20
+    with pytest.raises(InputError, match="--certify"):
+        run_bench("demo", [2], ["greedy"], certify_s=0.0)
+
+
+def test_cli_bench_certify_bad_value_is_a_one_line_error(tmp_path):
+    import subprocess
+    import sys
+
+    r = subprocess.run([sys.executable, "-m", "camplace.cli", "bench", "demo", "--budgets", "2", "--methods", "greedy",
+                        "--certify", "-1", "--out", str(tmp_path / "b")], capture_output=True, text=True, timeout=120)
+    assert r.returncode == 2
+    assert "--certify" in r.stderr and "Traceback" not in r.stderr
+    assert not (tmp_path / "b").exists()

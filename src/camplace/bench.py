@@ -25,8 +25,8 @@ from camplace.files import atomic_write_bytes, atomic_write_text
 from camplace.problem import PlacementProblem
 
 DEFAULT_METHODS = ("greedy", "mip", "paper-mip", "zhao", "horster")
-LABELS = {"greedy": "Proposed Greedy", "mip": "Proposed MIP", "paper-mip": "Proposed MIP (paper model, CBC)",
-          "zhao": "Zhao et al.", "horster": "Greedy (Hörster)", "greedy+ls": "Proposed Greedy + 1-swap"}
+LABELS = {"certify": "Certified (tabu + bounds)", "greedy": "Proposed Greedy", "mip": "Proposed MIP",
+          "paper-mip": "Proposed MIP (paper model, CBC)", "zhao": "Zhao et al.", "horster": "Greedy (Hörster)", "greedy+ls": "Proposed Greedy + 1-swap"}
 
 # Coverage optimality gap from the paper (Tables I and II), method -> {N_s: gap}.
 PAPER_TABLES: dict[str, dict[str, dict[int, float]]] = {
@@ -85,12 +85,19 @@ def run_bench(scene: str | Path, budgets: Sequence[int], methods: Sequence[str] 
               time_limit_s: float | None = 60.0, threads: int | None = None, targets: str = "volume",
               progress: Callable[[str, int, int], None] | None = None,
               should_stop: Callable[[], bool] | None = None,
-              on_row: Callable[[list[BenchRow]], None] | None = None) -> tuple[str, dict, list[BenchRow]]:
+              on_row: Callable[[list[BenchRow]], None] | None = None,
+              certify_s: float | None = None) -> tuple[str, dict, list[BenchRow]]:
     """Every method at every budget on one V. Returns (scene name, instance info, rows).
-    on_row(rows so far) is called after each run (e.g. to save partial results)."""
+    on_row(rows so far) is called after each run (e.g. to save partial results).
+    certify_s: also run the 'certify' solver (tabu + proven bounds) for that many seconds
+    per budget (its row carries the bound and proven gap)."""
     from camplace.pipeline import prepare, problem_from_visibility
     from camplace.solvers import SOLVERS
 
+    if certify_s is not None:
+        if not certify_s > 0:
+            raise InputError(f"--certify: expected seconds > 0, got {certify_s}")
+        methods = [m for m in methods if m != "certify"] + ["certify"]
     for m in methods:
         if m not in SOLVERS and m != "greedy+ls":
             raise InputError(f"--methods: unknown method '{m}'; expected some of {', '.join(sorted(SOLVERS))}")
@@ -113,7 +120,8 @@ def run_bench(scene: str | Path, budgets: Sequence[int], methods: Sequence[str] 
                 return sc.name, info, rows
             if progress:
                 progress("bench", len(rows), total)
-            rows.append(bench_problem(problem, b, m, time_limit_s=time_limit_s, threads=threads,
+            limit = certify_s if (m == "certify" and certify_s is not None) else time_limit_s
+            rows.append(bench_problem(problem, b, m, time_limit_s=limit, threads=threads,
                                       should_stop=should_stop, scene=sc.name))
             if on_row:
                 on_row(rows)

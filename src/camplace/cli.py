@@ -369,6 +369,8 @@ def bench(scene: str = typer.Argument(..., help="Scene YAML file or built-in nam
           time_limit: float = typer.Option(60.0, "--time-limit", help="Time limit per solver run, seconds."),
           threads: Optional[int] = typer.Option(None, "--threads", min=1, help="Solver threads."),
           targets: str = typer.Option("volume", "--targets", help="volume (the paper's walkable grid) or all."),
+          certify: Optional[float] = typer.Option(None, "--certify", help="Also run solver 'certify' for SECONDS per "
+                                                  "budget: best placement, proven bound and gap."),
           out: Optional[Path] = typer.Option(None, "--out", help="Output folder (default camplace-out/bench-<scene>).")) -> None:
     """The paper's experiments: every method at every budget on the same V; writes bench.csv,
     bench.md (beside the paper's Tables I/II) and bench.png (gap and % non-triangulatable)."""
@@ -382,7 +384,8 @@ def bench(scene: str = typer.Argument(..., help="Scene YAML file or built-in nam
     with stop.installed(), _progress() as prog:
         name, info, rows = run_bench(scene, budget_list, method_list, time_limit_s=time_limit, threads=threads,
                                      targets=targets, progress=_RichProgress(prog, stop), should_stop=stop,
-                                     on_row=lambda rows: write_bench(out_dir, Path(scene).stem, {}, rows))
+                                     on_row=lambda rows: write_bench(out_dir, Path(scene).stem, {}, rows),
+                                     certify_s=certify)
     paths = write_bench(out_dir, name, info, rows)
     if _state["json"]:
         from dataclasses import asdict
