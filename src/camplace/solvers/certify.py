@@ -109,7 +109,8 @@ def solve_certify(problem: PlacementProblem, *, time_limit_s: float | None = Non
     bound (costly target regions holding 60 % of the targets exact) and a quarter of
     the rest on the region decomposition bound (camplace.solvers.region_bound, docs/certify.md §6-9), started
     from the LP duals when the LP finished, else from the Lagrangian multipliers
-    (default: off; it also turns the LP on)."""
+    (it also turns the LP on). Default (None): the partial bound alone, when
+    time_limit_s >= 300 and the LP finished; False: neither."""
     if problem.money_budget is not None:  # issue 10: tabu and fixing ignore prices; the MIP models the money row
         from dataclasses import replace as _replace
 
@@ -186,7 +187,8 @@ def solve_certify(problem: PlacementProblem, *, time_limit_s: float | None = Non
                 if L_lp >= res.info["raw"]:
                     lam = lam_lp
                     x_lp = lpr.info["x"]
-        if region and lam is not None and not stop_now() and board.gap() > 0:
+        partial_on = (T >= 300 and x_lp is not None) if region is None else bool(region)
+        if partial_on and lam is not None and not stop_now() and board.gap() > 0:
             # from the LP duals and primal when the LP finished, else from the Lagrangian's λ
             from camplace.solvers.region_bound import (METHOD, PARTIAL_METHOD, costly_region,
                                                         partial_lagrangian_bound, region_bound)
@@ -201,7 +203,7 @@ def solve_certify(problem: PlacementProblem, *, time_limit_s: float | None = Non
             board.offer_bound(pres.bound, PARTIAL_METHOD)
             # ... then the decomposition over all regions with subgradient ascent
             rres = None
-            if not stop_now() and board.gap() > 0:
+            if region and not stop_now() and board.gap() > 0:  # only on request: it rarely passes the LP
                 rres = region_bound(problem, lam=lam, x_frac=x_lp, incumbent_cost=ub,
                                     time_limit_s=(end - time.perf_counter()) / 4.0, seed=seed,
                                     should_stop=stop_now, on_bound=lambda v: board.offer_bound(v, METHOD))
