@@ -104,7 +104,7 @@ def solve_certify(problem: PlacementProblem, *, time_limit_s: float | None = Non
     MIP), within `time_limit_s` (default 60 s). Placement.bound is the best proven
     bound; info has incumbent_method, bound_method, gap and both sides' history.
     on_incumbent(objective, bound) and on_state(dict) are called whenever a side improves.
-    `lp`: solve the LP by interior point (default: when time_limit_s >= 300).
+    `lp`: solve the LP by interior point (default: when time_limit_s >= 60).
     `region`: after the LP, spend a third of the time left on the partial Lagrangian
     bound (costly target regions holding 60 % of the targets exact) and a quarter of
     the rest on the region decomposition bound (camplace.solvers.region_bound, docs/certify.md §6-9), started
@@ -167,7 +167,7 @@ def solve_certify(problem: PlacementProblem, *, time_limit_s: float | None = Non
             cov = problem.coverage(board.selected)
             ub = board.objective
         remaining = end - time.perf_counter()
-        want_lp = ((T >= 300) or bool(region)) if lp is None else lp
+        want_lp = ((T >= 60) or bool(region)) if lp is None else lp
         share = 0.1 if want_lp else (0.35 if reduced_mip else 1.0)
         res = lagrangian_bound(problem, time_limit_s=max(0.5, share * remaining), incumbent_cost=ub, coverage=cov,
                                should_stop=stop_now, lagr=lg,
@@ -176,7 +176,8 @@ def solve_certify(problem: PlacementProblem, *, time_limit_s: float | None = Non
         lam = res.multipliers
         if want_lp and not stop_now() and board.gap() > 0:
             remaining = end - time.perf_counter()
-            lpr = lp_bound(problem, time_limit_s=0.5 * remaining, threads=1)
+            # under 5 minutes the LP is the best bound in reach: give it most of the time
+            lpr = lp_bound(problem, time_limit_s=(0.5 if T >= 300 else 0.75) * remaining, threads=1)
             lp_info = {"status": lpr.info.get("status"), "seconds": round(lpr.seconds, 2)}
             if lpr.info.get("status") == "optimal":
                 board.offer_bound(lpr.bound, "lp")
