@@ -73,3 +73,28 @@ def demo_out(tmp_path_factory, demo_run):
     r = demo_run
     write_outputs(out, r.scene.name, r.visibility, r.placement, r.problem.budget, r.metrics, r.timings_s)
     return out
+
+
+def small_random_problem(seed: int, n_g: int = 9, n_p: int = 10, budget: int = 3, n_loc: int = 5,
+                         density: float = 0.4, weighted: bool = False):
+    """A random PlacementProblem small enough for brute force (bound tests)."""
+    import numpy as np
+    import scipy.sparse as sp
+
+    from camplace.problem import PlacementProblem
+
+    rng = np.random.default_rng(seed)
+    V = sp.csr_matrix((rng.random((n_g, n_p)) < density).astype(np.uint8))
+    gamma = rng.integers(0, 4, n_p)
+    w = rng.uniform(0.2, 3.0, n_p) if weighted else np.ones(n_p)
+    loc = rng.integers(0, n_loc, n_g)
+    return PlacementProblem(V, gamma, w, budget, loc)
+
+
+def small_problems():
+    """Hypothesis strategy over small_random_problem (up to 9 candidates, 10 targets)."""
+    from hypothesis import strategies as st
+
+    return st.builds(small_random_problem, seed=st.integers(0, 10**6), n_g=st.integers(1, 9),
+                     n_p=st.integers(1, 10), budget=st.integers(0, 4), n_loc=st.integers(1, 6),
+                     density=st.floats(0.1, 0.8), weighted=st.booleans())

@@ -2,49 +2,21 @@
 
 from __future__ import annotations
 
-import itertools
-
 import numpy as np
 import pytest
-import scipy.sparse as sp
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from camplace.problem import PlacementProblem
+from conftest import small_problems, small_random_problem
+
+from camplace.problem import brute_force_optimum, feasible_selections
 from camplace.solvers.bounds import (Lagrangian, fixing_bounds, lagrangian_bound, lp_bound, reduce_by_fixing,
                                      solve_reduced_mip)
 
 
-def random_problem(seed: int, n_g: int = 9, n_p: int = 10, budget: int = 3, n_loc: int = 5, density: float = 0.4,
-                   weighted: bool = False) -> PlacementProblem:
-    rng = np.random.default_rng(seed)
-    V = sp.csr_matrix((rng.random((n_g, n_p)) < density).astype(np.uint8))
-    gamma = rng.integers(0, 4, n_p)
-    w = rng.uniform(0.2, 3.0, n_p) if weighted else np.ones(n_p)
-    loc = rng.integers(0, n_loc, n_g)
-    return PlacementProblem(V, gamma, w, budget, loc)
-
-
-def all_selections(p: PlacementProblem):
-    for k in range(p.budget + 1):
-        for comb in itertools.combinations(range(p.n_candidates), k):
-            locs = p.location_ids[list(comb)]
-            if len(set(locs.tolist())) == len(comb):
-                yield np.array(comb, np.int64)
-
-
-def brute_force(p: PlacementProblem) -> tuple[float, np.ndarray]:
-    best, arg = np.inf, None
-    for s in all_selections(p):
-        c = p.cost(s)
-        if c < best:
-            best, arg = c, s
-    return best, arg
-
-
-problems = st.builds(random_problem, seed=st.integers(0, 10**6), n_g=st.integers(1, 9), n_p=st.integers(1, 10),
-                     budget=st.integers(0, 4), n_loc=st.integers(1, 6), density=st.floats(0.1, 0.8),
-                     weighted=st.booleans())
+random_problem = small_random_problem
+problems = small_problems()
+brute_force = brute_force_optimum  # (optimal cost, one optimal selection)
 FAST = settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 
 
@@ -90,7 +62,7 @@ def test_fixing_bounds_below_restricted_optima(p, seed):
     uniq = np.unique(p.location_ids)
     best_in = np.full(p.n_candidates, np.inf)
     best_out = np.full(len(uniq), np.inf)
-    for s in all_selections(p):
+    for s in feasible_selections(p):
         c = p.cost(s)
         for i in s:
             best_in[i] = min(best_in[i], c)

@@ -10,35 +10,21 @@ import scipy.sparse as sp
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from camplace.problem import PlacementProblem
+from conftest import small_problems, small_random_problem
+
+from camplace.problem import PlacementProblem, brute_force_optimum
 from camplace.solvers.bounds import Lagrangian, lp_bound
 from camplace.solvers.region_bound import RegionDecomposition, max_over_x, region_bound, target_regions
 
 
-def random_problem(seed: int, n_g: int = 9, n_p: int = 10, budget: int = 3, n_loc: int = 5, density: float = 0.4,
-                   weighted: bool = False) -> PlacementProblem:
-    rng = np.random.default_rng(seed)
-    V = sp.csr_matrix((rng.random((n_g, n_p)) < density).astype(np.uint8))
-    gamma = rng.integers(0, 4, n_p)
-    w = rng.uniform(0.2, 3.0, n_p) if weighted else np.ones(n_p)
-    loc = rng.integers(0, n_loc, n_g)
-    return PlacementProblem(V, gamma, w, budget, loc)
-
-
-def selections(p: PlacementProblem):
-    for k in range(p.budget + 1):
-        for comb in itertools.combinations(range(p.n_candidates), k):
-            if len(set(p.location_ids[list(comb)].tolist())) == len(comb):
-                yield np.array(comb, np.int64)
+random_problem = small_random_problem
+problems = small_problems()
 
 
 def brute_force(p: PlacementProblem) -> float:
-    return min(p.cost(s) for s in selections(p))
+    return brute_force_optimum(p)[0]
 
 
-problems = st.builds(random_problem, seed=st.integers(0, 10**6), n_g=st.integers(1, 9), n_p=st.integers(1, 10),
-                     budget=st.integers(0, 4), n_loc=st.integers(1, 6), density=st.floats(0.1, 0.8),
-                     weighted=st.booleans())
 FAST = settings(max_examples=25, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 
 
