@@ -301,6 +301,18 @@ def tight_model_arrays(problem: PlacementProblem, forced_locations: np.ndarray |
     return A, cost, col_lo, col_hi, row_lo, row_hi, n_g
 
 
+def convex_start(problem: PlacementProblem, x: np.ndarray) -> np.ndarray:
+    """Column vector (x, u) of the convex model (tight_model_arrays' layout) for a 0/1
+    selection x (N_g,): u_jk = 1 for the k <= deficit of target j."""
+    x = np.asarray(x, np.float64)
+    cov = np.rint(np.asarray(problem.V.T @ x).ravel())
+    d = np.maximum(problem.gamma - cov, 0)
+    g = problem.gamma.astype(np.int64)
+    starts = np.cumsum(g) - g
+    ks = np.arange(int(g.sum())) - np.repeat(starts, g) + 1
+    return np.concatenate([x, (ks <= np.repeat(d, g)).astype(np.float64)])
+
+
 def build_highs(problem: PlacementProblem, *, integer: bool, threads: int | None = 1, time_limit_s: float | None = None,
                 log_file: str | None = None, solver: str | None = None, seed: int = 0,
                 forced_locations: np.ndarray | None = None):
@@ -406,6 +418,7 @@ def solve_reduced_mip(problem: PlacementProblem, red: Reduction, incumbent: np.n
     import highspy
 
     from camplace.problem import reduce_problem
+    from camplace.solvers.highs_util import set_start, subscribe_stop
 
     t0 = time.perf_counter()
     keep_ids = np.flatnonzero(red.keep)
@@ -451,24 +464,10 @@ def solve_reduced_mip(problem: PlacementProblem, red: Reduction, incumbent: np.n
         if np.all(pos >= 0):  # no incumbent camera was dropped as blind or dominated
             x = np.zeros(n_x)
             x[pos] = 1.0
-            d = np.maximum(small.gamma - small.coverage(pos), 0)
-            ks = np.concatenate([np.arange(1, g + 1) for g in small.gamma]) if len(small.gamma) else np.zeros(0)
-            u = (ks <= np.repeat(d, small.gamma)).astype(np.float64)
-            sol = highspy.HighsSolution()
-            sol.col_value = list(np.concatenate([x, u]))
-            sol.value_valid = True
-            h.setSolution(sol)
+            set_start(h, convex_start(small, x))
             # with a near-optimal start the proof is the work: spend nothing on heuristics
             h.setOptionValue("mip_heuristic_effort", 0.0)
-    if should_stop is not None:
-        try:  # interrupt through the MIP-interrupt callback when this highspy has it
-            def _cb(cb_type, message, data_out, data_in, user):  # pragma: no cover - timing dependent
-                if should_stop():
-                    data_in.user_interrupt = True
-            h.setCallback(_cb, None)
-            h.startCallback(highspy.cb.HighsCallbackType.kCallbackMipInterrupt)
-        except Exception:  # noqa: BLE001 - optional feature
-            pass
+    subscribe_stop(h, should_stop)
     h.run()
     status = h.getModelStatus()
     hinfo = h.getInfo()

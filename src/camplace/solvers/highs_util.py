@@ -111,6 +111,31 @@ class HighsOutcome:
     model_status: str
 
 
+def subscribe_stop(h: highspy.Highs, should_stop: ShouldStop | None) -> dict:
+    """Poll should_stop from HiGHS' MIP, simplex and IPM interrupt callbacks. Returns a
+    dict whose "stop" turns True once HiGHS was interrupted."""
+    flag = {"stop": False}
+
+    def interrupt(e) -> None:
+        if stopped(should_stop):
+            flag["stop"] = True
+            e.interrupt()
+
+    if should_stop is not None:
+        h.cbMipInterrupt.subscribe(interrupt)
+        h.cbSimplexInterrupt.subscribe(interrupt)
+        h.cbIpmInterrupt.subscribe(interrupt)
+    return flag
+
+
+def set_start(h: highspy.Highs, values: np.ndarray) -> None:
+    """Hand HiGHS a full column vector as its starting solution."""
+    sol = highspy.HighsSolution()
+    sol.col_value = list(map(float, values))
+    sol.value_valid = True
+    h.setSolution(sol)
+
+
 def run_highs(h: highspy.Highs, *, time_limit_s: float | None = None, threads: int | None = None, seed: int = 0,
               should_stop: ShouldStop | None = None, on_incumbent: OnIncumbent | None = None,
               start: np.ndarray | None = None, mip_rel_gap: float | None = None,
@@ -128,17 +153,7 @@ def run_highs(h: highspy.Highs, *, time_limit_s: float | None = None, threads: i
         h.setOptionValue(key, value)
     if verbose:
         h.setOptionValue("output_flag", True)
-    flag = {"stop": False}
-
-    def interrupt(e) -> None:
-        if stopped(should_stop):
-            flag["stop"] = True
-            e.interrupt()
-
-    if should_stop is not None:
-        h.cbMipInterrupt.subscribe(interrupt)
-        h.cbSimplexInterrupt.subscribe(interrupt)
-        h.cbIpmInterrupt.subscribe(interrupt)
+    flag = subscribe_stop(h, should_stop)
     if on_incumbent is not None:
         def improving(e) -> None:
             out = e.data_out
@@ -146,10 +161,7 @@ def run_highs(h: highspy.Highs, *, time_limit_s: float | None = None, threads: i
 
         h.cbMipImprovingSolution.subscribe(improving)
     if start is not None:
-        sol = highspy.HighsSolution()
-        sol.col_value = list(map(float, start))
-        sol.value_valid = True
-        h.setSolution(sol)
+        set_start(h, start)
     t0 = time.perf_counter()
     h.run()
     seconds = time.perf_counter() - t0

@@ -34,7 +34,8 @@ import numpy as np
 import scipy.sparse as sp
 
 from camplace.problem import PlacementProblem
-from camplace.solvers.bounds import BoundResult, Lagrangian, _u_part, build_highs, lagrangian_bound
+from camplace.solvers.bounds import BoundResult, Lagrangian, _u_part, build_highs, convex_start, lagrangian_bound
+from camplace.solvers.highs_util import set_start, subscribe_stop
 
 StopFn = Callable[[], bool]
 METHOD = "region decomposition (Lagrangian + HiGHS on target regions)"
@@ -200,24 +201,8 @@ class RegionDecomposition:
         h.changeColsCost(n_x, np.arange(n_x, dtype=np.int32), np.asarray(mu, np.float64))
         h.setOptionValue("time_limit", float(max(0.01, time_limit_s)))
         if start is not None:
-            q = reg.sub
-            cov = np.asarray(reg.Vr.T @ start).ravel()
-            d = np.maximum(q.gamma - np.round(cov), 0)
-            u = np.concatenate([(np.arange(1, g + 1) <= dj) for g, dj in zip(q.gamma, d)]).astype(np.float64) \
-                if len(q.gamma) else np.zeros(0)
-            sol = highspy.HighsSolution()
-            sol.col_value = list(np.concatenate([start, u]))
-            sol.value_valid = True
-            h.setSolution(sol)
-        if should_stop is not None:
-            try:
-                def _cb(cb_type, message, data_out, data_in, user):  # pragma: no cover - timing dependent
-                    if should_stop():
-                        data_in.user_interrupt = True
-                h.setCallback(_cb, None)
-                h.startCallback(highspy.cb.HighsCallbackType.kCallbackMipInterrupt)
-            except Exception:  # noqa: BLE001 - optional feature
-                pass
+            set_start(h, convex_start(reg.sub, start))
+        subscribe_stop(h, should_stop)
         h.run()
         info = h.getInfo()
         status = h.getModelStatus()
@@ -351,20 +336,10 @@ def partial_lagrangian_bound(problem: PlacementProblem, lam: np.ndarray, region:
     dual = -np.inf
     left = time_limit_s - (time.perf_counter() - t0)
     if left > 0.05 and problem.n_candidates:
-        import highspy
-
         h, n_x = build_highs(sub, integer=True, threads=threads, seed=seed, time_limit_s=left)
         h.setOptionValue("mip_rel_gap", 1e-6)
         h.changeColsCost(n_x, np.arange(n_x, dtype=np.int32), -r)
-        if should_stop is not None:
-            try:
-                def _cb(cb_type, message, data_out, data_in, user):  # pragma: no cover - timing dependent
-                    if should_stop():
-                        data_in.user_interrupt = True
-                h.setCallback(_cb, None)
-                h.startCallback(highspy.cb.HighsCallbackType.kCallbackMipInterrupt)
-            except Exception:  # noqa: BLE001 - optional feature
-                pass
+        subscribe_stop(h, should_stop)
         h.run()
         hinfo = h.getInfo()
         info.update(status=h.modelStatusToString(h.getModelStatus()), nodes=int(hinfo.mip_node_count))
