@@ -1,10 +1,34 @@
 """camplace: choose where to mount cameras so every place gets the coverage it needs.
 
 The pipeline (see docs/design.md): scene -> targets -> candidates -> visibility ->
-problem -> solvers -> metrics -> report. ``camplace.pipeline.run`` chains them.
+problem -> solvers -> metrics -> outputs. The public API is importable from here:
+``camplace.run`` (every stage on a scene), ``camplace.evaluate`` (score a placement
+file), ``camplace.solve`` (a solver on a PlacementProblem), the types
+``PlacementProblem`` and ``Placement``, and the solver registry ``SOLVERS``. They are
+loaded lazily, so ``import camplace`` stays cheap.
 """
 
 from camplace.errors import CamplaceError, InputError
 
 __version__ = "0.1.0"
-__all__ = ["CamplaceError", "InputError", "__version__"]
+
+_LAZY = {
+    "run": ("camplace.pipeline", "run"),
+    "evaluate": ("camplace.evaluate", "evaluate"),
+    "solve": ("camplace.solvers", "solve"),
+    "SOLVERS": ("camplace.solvers", "SOLVERS"),
+    "Placement": ("camplace.solvers.base", "Placement"),
+    "PlacementProblem": ("camplace.problem", "PlacementProblem"),
+}
+
+
+def __getattr__(name: str):
+    if name in _LAZY:
+        import importlib
+
+        module, attr = _LAZY[name]
+        return getattr(importlib.import_module(module), attr)
+    raise AttributeError(f"module 'camplace' has no attribute {name!r}")
+
+
+__all__ = ["CamplaceError", "InputError", "__version__", *_LAZY]
