@@ -4,7 +4,7 @@ robustness against the best grid incumbent, on the built-in stores.
 For each scene and budget: the grid incumbent is the better of greedy + 1-swap and tabu
 (``--tabu-s`` seconds); then pose refinement, adaptive candidates (and adaptive followed
 by refinement) start from it. Every off-grid placement is written as a run folder and
-scored again from scratch by ``camplace.evaluate.evaluate`` (the library behind
+scored again from scratch by ``camplace.workflows.evaluate.evaluate`` (the library behind
 ``camplace evaluate``: the poses are raycast afresh), and that fresh cost is what the
 table reports. The robust placement (``--robust 1``) starts from the same incumbent.
 
@@ -26,13 +26,13 @@ from pathlib import Path
 
 import numpy as np
 
-from camplace.adaptive import adaptive_rounds
-from camplace.evaluate import evaluate
-from camplace.metrics import compute_metrics
-from camplace.pipeline import problem_from_visibility, prepare
-from camplace.refine import refine_placement
-from camplace.report import write_outputs
-from camplace.robust import robust_placement
+from camplace.improve.adaptive import adaptive_rounds
+from camplace.workflows.evaluate import evaluate
+from camplace.metrics.coverage import compute_metrics
+from camplace.workflows.run import problem_from_visibility, prepare
+from camplace.improve.refine import refine_placement
+from camplace.outputs.write import write_outputs
+from camplace.solvers.robust import robust_placement
 from camplace.solvers import solve
 
 
@@ -124,8 +124,8 @@ def robust_row(a, problem, grid, row) -> None:
 
 def triangulation_table(scenes: list[str], budgets: list[int]) -> str:
     """Plain greedy against the triangulation-aware greedy (--well-triangulated)."""
-    from camplace.problem import shortfall_cost
-    from camplace.triangulation import effective_coverage, solve_greedy_triangulated, well_triangulated_of_selection
+    from camplace.problem.model import shortfall_cost
+    from camplace.metrics.triangulation import effective_coverage, solve_greedy_triangulated, well_triangulated_of_selection
 
     out = ["| scene | N_s | greedy | cost | triangulation-aware cost | well triangulated | non-triangulatable | s |",
            "|---|---|---|---|---|---|---|---|"]

@@ -29,11 +29,11 @@ CACHE = Path(__file__).resolve().parent / "results" / "instances"
 def _problem(scene: str, budget: int):
     """The instance, from a cached visibility.npz when present (the same matrix for
     every method of a session), else built (and cached)."""
-    from camplace.instance import load_problem_npz, save_problem_npz
+    from camplace.problem.instance import load_problem_npz, save_problem_npz
 
     path = CACHE / f"{scene}.npz"
     if not path.is_file():
-        from camplace.pipeline import prepare, problem_from_visibility
+        from camplace.workflows.run import prepare, problem_from_visibility
 
         _, vis = prepare(scene)
         CACHE.mkdir(parents=True, exist_ok=True)
@@ -87,7 +87,7 @@ def run_engine(problem, time_s: float, **options) -> dict:
 
     import scipy.sparse as sp
 
-    from camplace.problem import PlacementProblem
+    from camplace.problem.model import PlacementProblem
 
     # warm the numba caches (compiled once per install; not part of the solve)
     rng = np.random.default_rng(0)

@@ -21,7 +21,7 @@ from certify import INSTANCES, _problem  # noqa: E402
 
 
 def main(argv: list[str] | None = None) -> None:
-    from camplace.problem import reduce_problem
+    from camplace.problem.model import reduce_problem
     from camplace.solvers.bounds import lp_bound
     from camplace.solvers.region_bound import costly_region, partial_lagrangian_bound
 

@@ -26,7 +26,7 @@ from certify import INSTANCES, _problem  # noqa: E402  (the same cached instance
 
 
 def run(scene: str, budget: int, time_s: float, regions: int | None, region_time_s: float, ub: float | None) -> dict:
-    from camplace.problem import reduce_problem
+    from camplace.problem.model import reduce_problem
     from camplace.solvers.bounds import lp_bound
     from camplace.solvers.region_bound import region_bound
 

@@ -22,11 +22,11 @@ def main() -> None:
     scene = sys.argv[1] if len(sys.argv) > 1 else "standard-store"
     budget = int(sys.argv[2]) if len(sys.argv) > 2 else 40
     reps = int(sys.argv[3]) if len(sys.argv) > 3 else 3
-    from camplace.exports import write_exports
-    from camplace.figures import SceneView, coverage_slices, write_figures
-    from camplace.pipeline import run
-    from camplace.report import placement_dict, write_outputs
-    from camplace.report_html import camera_views, render_report
+    from camplace.outputs.exports import write_exports
+    from camplace.outputs.figures import SceneView, coverage_slices, write_figures
+    from camplace.workflows.run import run
+    from camplace.outputs.write import placement_dict, write_outputs
+    from camplace.outputs.report_html import camera_views, render_report
 
     r = run(scene, budget=budget, solver="greedy")
     vis, t = r.visibility, r.visibility.targets

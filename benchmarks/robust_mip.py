@@ -20,8 +20,8 @@ import platform
 import time
 from pathlib import Path
 
-from camplace.instance import load_problem_npz
-from camplace.robust import robust_placement, worst_case
+from camplace.problem.instance import load_problem_npz
+from camplace.solvers.robust import robust_placement, worst_case
 from camplace.solvers import solve
 
 CACHE = Path(__file__).resolve().parent / "results" / "instances"

@@ -17,11 +17,11 @@ import tempfile
 import time
 from pathlib import Path
 
-from camplace.builtin import resolve_scene
-from camplace.loaders.pointcloud import write_point_cloud
-from camplace.pipeline import run
-from camplace.scene import build_scene
-from camplace.synthetic_scan import evaluate_selection, export_mesh, export_octomap, roundtrip_spec, scan_scene
+from camplace.spec.builtin import resolve_scene
+from camplace.scene.loaders.pointcloud import write_point_cloud
+from camplace.workflows.run import run
+from camplace.scene.build import build_scene
+from camplace.workflows.scan import evaluate_selection, export_mesh, export_octomap, roundtrip_spec, scan_scene
 
 
 def main() -> None:

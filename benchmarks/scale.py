@@ -42,15 +42,15 @@ def _v_hash(V) -> str:
 
 def one(size: float, mode: str, dask_workers: int, solvers: list[str], budget: int | None) -> dict:
     """Run the stages of one warehouse size in this process; return the measurements."""
-    from camplace.builtin import resolve_scene
-    from camplace.cameras import camera_from_spec
-    from camplace.candidates import build_candidates
-    from camplace.metrics import compute_metrics
-    from camplace.pipeline import problem_from_visibility
-    from camplace.scene import build_scene
+    from camplace.spec.builtin import resolve_scene
+    from camplace.cameras.models import camera_from_spec
+    from camplace.cameras.candidates import build_candidates
+    from camplace.metrics.coverage import compute_metrics
+    from camplace.workflows.run import problem_from_visibility
+    from camplace.scene.build import build_scene
     from camplace.solvers import SOLVERS, solve
-    from camplace.targets import build_targets
-    from camplace.visibility import compute_visibility, drop_blind_candidates
+    from camplace.targets.build import build_targets
+    from camplace.visibility.voxel import compute_visibility, drop_blind_candidates
 
     out: dict = {"size_m2": size, "mode": mode, "stages": {}, "load_avg_start": os.getloadavg()[0]}
     st = out["stages"]
@@ -73,7 +73,7 @@ def one(size: float, mode: str, dask_workers: int, solvers: list[str], budget: i
     if mode == "dask":
         from dask.distributed import Client, LocalCluster
 
-        from camplace.distributed import DaskExecutor
+        from camplace.visibility.executors import DaskExecutor
 
         t = time.perf_counter()
         cluster = LocalCluster(n_workers=dask_workers, threads_per_worker=1, processes=True,

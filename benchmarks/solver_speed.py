@@ -11,7 +11,7 @@ from __future__ import annotations
 import json
 import sys
 
-from camplace.pipeline import prepare, problem_from_visibility
+from camplace.workflows.run import prepare, problem_from_visibility
 from camplace.solvers import solve
 
 

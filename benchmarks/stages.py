@@ -14,7 +14,7 @@ import os
 import platform
 import time
 
-from camplace.pipeline import run
+from camplace.workflows.run import run
 
 
 def main() -> None:

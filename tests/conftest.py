@@ -4,10 +4,12 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import sys
+
 import numpy as np
 import pytest
 
-from camplace.config import parse_scene
+from camplace.spec.schema import parse_scene
 
 REPO = Path(__file__).resolve().parents[1]
 SHARED = REPO.parent / "shared"
@@ -30,11 +32,11 @@ def box_room(obstacles=(), targets=None, mounts=None, footprint=None, height=3.0
 
 def builtin_inputs(name: str):
     """(scene, targets, candidates) of a built-in scene, before visibility."""
-    from camplace.builtin import resolve_scene
-    from camplace.cameras import camera_from_spec
-    from camplace.candidates import build_candidates
-    from camplace.scene import build_scene
-    from camplace.targets import build_targets
+    from camplace.spec.builtin import resolve_scene
+    from camplace.cameras.models import camera_from_spec
+    from camplace.cameras.candidates import build_candidates
+    from camplace.scene.build import build_scene
+    from camplace.targets.build import build_targets
 
     spec, _, _ = resolve_scene(name)
     sc = build_scene(spec)
@@ -59,7 +61,7 @@ def demo_inputs():
 @pytest.fixture(scope="session")
 def demo_run():
     """The whole pipeline on the built-in demo scene (run once per test session)."""
-    from camplace.pipeline import run
+    from camplace.workflows.run import run
 
     return run("demo")
 
@@ -67,7 +69,7 @@ def demo_run():
 @pytest.fixture(scope="session")
 def demo_out(tmp_path_factory, demo_run):
     """The demo run's output folder (contract files)."""
-    from camplace.report import write_outputs
+    from camplace.outputs.write import write_outputs
 
     out = tmp_path_factory.mktemp("demo-out")
     r = demo_run
@@ -81,7 +83,7 @@ def small_random_problem(seed: int, n_g: int = 9, n_p: int = 10, budget: int = 3
     import numpy as np
     import scipy.sparse as sp
 
-    from camplace.problem import PlacementProblem
+    from camplace.problem.model import PlacementProblem
 
     rng = np.random.default_rng(seed)
     V = sp.csr_matrix((rng.random((n_g, n_p)) < density).astype(np.uint8))
@@ -98,3 +100,34 @@ def small_problems():
     return st.builds(small_random_problem, seed=st.integers(0, 10**6), n_g=st.integers(1, 9),
                      n_p=st.integers(1, 10), budget=st.integers(0, 4), n_loc=st.integers(1, 6),
                      density=st.floats(0.1, 0.8), weighted=st.booleans())
+
+
+# A tiny valid scene (bad-input, config and fuzz tests mutate copies of it) and the CLI in-process.
+BASE = {
+    "name": "tiny",
+    "voxel_size": 0.5,
+    "occupancy_resolution": 0.1,
+    "room": {"footprint": [[0, 0], [3, 0], [3, 3], [0, 3]], "height": 3.0},
+    "obstacles": [{"name": "crate", "box": {"min": [1.0, 1.0, 0.0], "max": [2.0, 2.0, 1.0]}}],
+    "targets": [{"name": "walk", "kind": "volume", "heights": [1.5], "coverage": 1}],
+    "cameras": [{"name": "cam", "resolution": [640, 480], "fov_deg": [90, 70], "max_range": 10.0}],
+    "mounts": [{"kind": "ceiling_grid", "camera": "cam", "spacing": 1.0,
+                "yaw_deg": {"start": 0, "stop": 180, "step": 180}, "pitch_deg": [45]}],
+    "placement": {"budget": 2, "solver": "greedy"},
+}
+
+
+def run_cli(args, monkeypatch, capsys) -> tuple[int, str]:
+    """camplace.cli.main() with argv = ['camplace', *args] -> (exit code, stdout + stderr)."""
+    monkeypatch.setattr(sys, "argv", ["camplace", *map(str, args)])
+    from camplace.cli import main
+
+    code = 0
+    try:
+        main()
+    except SystemExit as e:
+        code = e.code if isinstance(e.code, int) else (0 if e.code is None else 1)
+    cap = capsys.readouterr()
+    return code, cap.out + cap.err
+
+

@@ -2,23 +2,23 @@
 
 The pipeline (see docs/design.md): scene -> targets -> candidates -> visibility ->
 problem -> solvers -> metrics -> outputs. The public API is importable from here:
-``camplace.run`` (every stage on a scene), ``camplace.evaluate`` (score a placement
+``camplace.run`` (every stage on a scene), ``camplace.workflows.evaluate`` (score a placement
 file), ``camplace.solve`` (a solver on a PlacementProblem), the types
 ``PlacementProblem`` and ``Placement``, and the solver registry ``SOLVERS``. They are
 loaded lazily, so ``import camplace`` stays cheap.
 """
 
-from camplace.errors import CamplaceError, InputError
+from camplace.core.errors import CamplaceError, InputError
 
 __version__ = "0.1.0"
 
 _LAZY = {
-    "run": ("camplace.pipeline", "run"),
-    "evaluate": ("camplace.evaluate", "evaluate"),
+    "run": ("camplace.workflows.run", "run"),
+    "evaluate": ("camplace.workflows.evaluate", "evaluate"),
     "solve": ("camplace.solvers", "solve"),
     "SOLVERS": ("camplace.solvers", "SOLVERS"),
     "Placement": ("camplace.solvers.base", "Placement"),
-    "PlacementProblem": ("camplace.problem", "PlacementProblem"),
+    "PlacementProblem": ("camplace.problem.model", "PlacementProblem"),
 }
 
 

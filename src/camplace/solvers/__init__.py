@@ -8,8 +8,8 @@ from __future__ import annotations
 
 from typing import Callable
 
-from camplace.errors import InputError
-from camplace.problem import PlacementProblem
+from camplace.core.errors import InputError
+from camplace.problem.model import PlacementProblem
 from camplace.solvers.base import Placement
 from camplace.solvers.certify import solve_certify
 from camplace.solvers.greedy import solve_greedy
@@ -38,7 +38,7 @@ SOLVERS: dict[str, Callable[..., Placement]] = {
 
 def solve(problem: PlacementProblem, solver: str = "greedy", *, reduce: bool = True, **options) -> Placement:
     """Run the named solver on the problem. With reduce=True (default) the solver sees
-    camplace.problem.reduce_problem(problem) (same optimum, fewer rows/columns); the
+    camplace.problem.model.reduce_problem(problem) (same optimum, fewer rows/columns); the
     selection is mapped back, the objective recomputed on the original problem, and
     the sizes before/after are in placement.info['reduction']."""
     try:
@@ -49,7 +49,7 @@ def solve(problem: PlacementProblem, solver: str = "greedy", *, reduce: bool = T
         return fn(problem, **options)
     from dataclasses import replace
 
-    from camplace.problem import reduce_problem
+    from camplace.problem.model import reduce_problem
 
     red = reduce_problem(problem)
     p = fn(red.problem, **options)

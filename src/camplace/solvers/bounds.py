@@ -16,7 +16,7 @@ import numba
 import numpy as np
 import scipy.sparse as sp
 
-from camplace.problem import PlacementProblem
+from camplace.problem.model import PlacementProblem
 
 StopFn = Callable[[], bool]
 
@@ -414,10 +414,10 @@ def solve_reduced_mip(problem: PlacementProblem, red: Reduction, incumbent: np.n
     (0: proven optimal). The bound min(ub, reduced MIP dual bound) is valid for the whole
     problem because every selection cheaper than ub lies in the reduced problem
     (docs/certify.md §3). The restricted model is shrunk once more by
-    camplace.problem.reduce_problem (same optimum), and HiGHS prunes with ub as cutoff."""
+    camplace.problem.model.reduce_problem (same optimum), and HiGHS prunes with ub as cutoff."""
     import highspy
 
-    from camplace.problem import reduce_problem
+    from camplace.problem.model import reduce_problem
     from camplace.solvers.highs_util import set_start, subscribe_stop
 
     t0 = time.perf_counter()

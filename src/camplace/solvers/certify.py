@@ -20,7 +20,7 @@ from typing import Callable
 
 import numpy as np
 
-from camplace.problem import PlacementProblem
+from camplace.problem.model import PlacementProblem
 from camplace.solvers.base import Placement
 from camplace.solvers.bounds import Lagrangian, lagrangian_bound, lp_bound, reduce_by_fixing, solve_reduced_mip
 from camplace.solvers.tabu import TabuSearch

@@ -13,7 +13,7 @@ from typing import Callable
 
 import numpy as np
 
-from camplace.problem import PlacementProblem
+from camplace.problem.model import PlacementProblem
 from camplace.solvers.base import OnIncumbent, Placement, ProgressFn, ShouldStop, deadline, stopped
 
 

@@ -19,7 +19,7 @@ import time
 import numba
 import numpy as np
 
-from camplace.problem import PlacementProblem
+from camplace.problem.model import PlacementProblem
 from camplace.solvers.base import OnIncumbent, Placement, ProgressFn, ShouldStop, deadline, stopped
 
 STEPS_PER_CALL = 32  # steps between should_stop / time-limit polls

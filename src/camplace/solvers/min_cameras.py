@@ -25,7 +25,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from camplace.problem import PlacementProblem
+from camplace.problem.model import PlacementProblem
 from camplace.solvers.base import OnIncumbent, Placement, ProgressFn, ShouldStop, stopped
 from camplace.solvers.highs_util import INF, highs_from_arrays, run_highs
 from camplace.solvers.mip import tight_model_arrays, tight_start
@@ -138,7 +138,7 @@ def solve_min_cameras(problem: PlacementProblem, *, time_limit_s: float | None =
         if sel is None:
             sel = best.selected
     if sel is None:
-        from camplace.errors import InputError
+        from camplace.core.errors import InputError
 
         raise InputError(f"min-cameras: no placement with cost <= {target:g} found (HiGHS: {out.model_status})")
     value = float(prices[sel].sum())

@@ -29,7 +29,7 @@ import warnings
 import numpy as np
 import scipy.sparse as sp
 
-from camplace.problem import PlacementProblem
+from camplace.problem.model import PlacementProblem
 from camplace.solvers.base import OnIncumbent, Placement, ProgressFn, ShouldStop, stopped, trivial_placement
 from camplace.solvers.highs_util import INF, MilpArrays, highs_from_arrays, location_rows, run_highs
 from camplace.solvers.mip import better_selection, solve_highs_model

@@ -23,7 +23,7 @@ import time
 
 import numpy as np
 
-from camplace.problem import PlacementProblem
+from camplace.problem.model import PlacementProblem
 from camplace.solvers.base import OnIncumbent, Placement, ProgressFn, ShouldStop, deadline, stopped
 from camplace.solvers.greedy_fast import solve_greedy_fast
 

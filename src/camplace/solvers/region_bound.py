@@ -33,7 +33,7 @@ from typing import Callable
 import numpy as np
 import scipy.sparse as sp
 
-from camplace.problem import PlacementProblem
+from camplace.problem.model import PlacementProblem
 from camplace.solvers.bounds import BoundResult, Lagrangian, _u_part, build_highs, convex_start, lagrangian_bound
 from camplace.solvers.highs_util import set_start, subscribe_stop
 

@@ -21,7 +21,7 @@ import numba
 import numpy as np
 import scipy.sparse as sp
 
-from camplace.problem import PlacementProblem
+from camplace.problem.model import PlacementProblem
 from camplace.solvers.base import Placement
 
 # state vector slots (int64)

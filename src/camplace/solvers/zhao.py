@@ -21,7 +21,7 @@ import time
 import numpy as np
 import scipy.sparse as sp
 
-from camplace.problem import PlacementProblem
+from camplace.problem.model import PlacementProblem
 from camplace.solvers.base import OnIncumbent, Placement, ProgressFn, ShouldStop, trivial_placement
 from camplace.solvers.highs_util import INF, MilpArrays, highs_from_arrays, location_rows, run_highs
 

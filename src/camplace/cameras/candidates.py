@@ -1,0 +1,164 @@
+"""Stage 3 - candidate poses: where a camera may be mounted and how it may point.
+
+Angles (degrees): yaw about world z, 0 = +x, counter-clockwise; pitch = downward tilt
+below the horizon; roll about the optical axis (positive turns the image x axis
+toward the image y axis). Rotations are world-from-camera (columns = camera x, y, z
+axes in world), OpenCV camera frame.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+import shapely
+
+from camplace.cameras.models import CameraModel
+from camplace.spec.schema import Mount, angle_values
+from camplace.core.errors import InputError
+from camplace.scene.build import Scene
+
+
+def rotation_from_ypr(yaw_deg, pitch_deg, roll_deg) -> np.ndarray:
+    """Vectorized world-from-camera rotations: inputs broadcast to (N,) -> (N, 3, 3)."""
+    y, p, r = (np.radians(np.atleast_1d(np.asarray(a, float))) for a in (yaw_deg, pitch_deg, roll_deg))
+    y, p, r = np.broadcast_arrays(y, p, r)
+    fwd = np.stack([np.cos(p) * np.cos(y), np.cos(p) * np.sin(y), -np.sin(p)], axis=-1)
+    right0 = np.stack([np.sin(y), -np.cos(y), np.zeros_like(y)], axis=-1)
+    down0 = np.cross(fwd, right0)
+    cr, sr = np.cos(r)[..., None], np.sin(r)[..., None]
+    right = cr * right0 + sr * down0
+    down = -sr * right0 + cr * down0
+    return np.stack([right, down, fwd], axis=-1)
+
+
+def ypr_from_rotation(R: np.ndarray) -> np.ndarray:
+    """Inverse of rotation_from_ypr: (N, 3, 3) -> (N, 3) yaw, pitch, roll in degrees."""
+    R = np.asarray(R, float).reshape(-1, 3, 3)
+    fwd = R[:, :, 2]
+    pitch = np.degrees(np.arcsin(np.clip(-fwd[:, 2], -1, 1)))
+    yaw = np.degrees(np.arctan2(fwd[:, 1], fwd[:, 0]))
+    R0 = rotation_from_ypr(yaw, pitch, 0.0)
+    right = R[:, :, 0]
+    roll = np.degrees(np.arctan2(np.einsum("ij,ij->i", right, R0[:, :, 1]), np.einsum("ij,ij->i", right, R0[:, :, 0])))
+    return np.c_[yaw % 360.0, pitch, roll]
+
+
+@dataclass(frozen=True)
+class Candidates:
+    """N_g candidate poses. positions: (N, 3) m; rotations: (N, 3, 3) world-from-camera;
+    angles_deg: (N, 3) yaw, pitch, roll; camera_ids: (N,) int32 index into ``cameras``;
+    location_ids: (N,) int64 (same position = same location)."""
+
+    positions: np.ndarray
+    rotations: np.ndarray
+    angles_deg: np.ndarray
+    camera_ids: np.ndarray
+    location_ids: np.ndarray
+    cameras: tuple[CameraModel, ...]
+    info: dict = field(default_factory=dict)
+
+    def __len__(self) -> int:
+        return len(self.positions)
+
+    def subset(self, keep: np.ndarray) -> "Candidates":
+        """Rows ``keep`` (bool mask or index array), location ids unchanged."""
+        return replace(self, positions=self.positions[keep], rotations=self.rotations[keep],
+                       angles_deg=self.angles_deg[keep], camera_ids=self.camera_ids[keep],
+                       location_ids=self.location_ids[keep])
+
+
+def location_ids_of(positions: np.ndarray) -> np.ndarray:
+    """(N, 3) metres -> (N,) int64: equal (to 1 mm) positions share an id, ids in first-seen order."""
+    key = np.round(np.asarray(positions, float) * 1000.0).astype(np.int64)
+    _, first, inv = np.unique(key, axis=0, return_index=True, return_inverse=True)
+    order = np.argsort(np.argsort(first, kind="stable"), kind="stable")  # rank by first appearance
+    return order[inv.ravel()].astype(np.int64)
+
+
+def ceiling_grid_positions(scene: Scene, mount: Mount) -> np.ndarray:
+    """Grid points (multiples of ``spacing`` from the footprint's min corner) inside the
+    footprint at least ``wall_clearance`` from its boundary: (M, 3) metres."""
+    s = float(mount.spacing)
+    lo, hi = scene.footprint.min(0), scene.footprint.max(0)
+    xs = lo[0] + s * np.arange(int(np.floor((hi[0] - lo[0]) / s + 1e-9)) + 1)
+    ys = lo[1] + s * np.arange(int(np.floor((hi[1] - lo[1]) / s + 1e-9)) + 1)
+    gx, gy = np.meshgrid(xs, ys, indexing="ij")
+    region = scene.polygon.buffer(-mount.wall_clearance) if mount.wall_clearance > 0 else scene.polygon
+    inside = shapely.contains_xy(region, gx, gy)
+    z = scene.height - mount.offset_below_ceiling
+    return np.c_[gx[inside], gy[inside], np.full(int(inside.sum()), z)]
+
+
+def wall_positions(scene: Scene, mount: Mount) -> tuple[np.ndarray, np.ndarray]:
+    """Mount points along walls: every ``spacing`` m (the first half a spacing from a
+    wall's end) on each wall segment - ``mount.walls`` or, by default, the footprint's
+    edges - moved ``wall_clearance`` m inward, at z = ``height``.
+
+    Returns (positions (M, 3) m, inward-facing yaw (M,) degrees). Points outside the
+    footprint are dropped. The inward side of a given segment is the one whose offset
+    midpoint lies inside the footprint."""
+    poly = scene.polygon
+    fp = scene.footprint
+    if mount.walls is not None:
+        segs = np.asarray(mount.walls, float).reshape(-1, 2, 2)
+    else:
+        segs = np.stack([fp, np.roll(fp, -1, axis=0)], axis=1)
+    s = float(mount.spacing)
+    out_p, out_yaw = [], []
+    for a, b in segs:
+        d = b - a
+        length = float(np.hypot(*d))
+        if length < 1e-9:
+            continue
+        u = d / length
+        n = np.array([-u[1], u[0]])  # left normal; flip if it points out of the room
+        mid = (a + b) / 2
+        probe = max(mount.wall_clearance, 0.05)
+        if not shapely.contains_xy(poly, *(mid + n * probe)) and shapely.contains_xy(poly, *(mid - n * probe)):
+            n = -n
+        k = max(int(np.floor(length / s + 1e-9)), 1)
+        t = (np.arange(k) + 0.5) * (length / k)
+        xy = a + np.outer(t, u) + n * mount.wall_clearance
+        out_p.append(np.c_[xy, np.full(k, float(mount.height))])
+        out_yaw.append(np.full(k, np.degrees(np.arctan2(n[1], n[0]))))
+    if not out_p:
+        return np.zeros((0, 3)), np.zeros(0)
+    p, yaw = np.concatenate(out_p), np.concatenate(out_yaw)
+    keep = shapely.contains_xy(poly, p[:, 0], p[:, 1])
+    return p[keep], yaw[keep]
+
+
+def build_candidates(scene: Scene, cameras: dict[str, CameraModel]) -> Candidates:
+    """Every mount of the scene expanded into poses; poses inside an obstacle are dropped."""
+    cam_list = tuple(cameras.values())
+    cam_index = {c.name: k for k, c in enumerate(cam_list)}
+    pos, ang, cid = [], [], []
+    for mount in scene.spec.mounts:
+        if mount.kind == "wall":  # yaw relative to the inward normal of each wall
+            p, base_yaw = wall_positions(scene, mount)
+        else:
+            p, base_yaw = ceiling_grid_positions(scene, mount), None
+        yaws, pitches, rolls = (angle_values(a) for a in (mount.yaw_deg, mount.pitch_deg, mount.roll_deg))
+        yy, pp, rr = np.meshgrid(yaws, pitches, rolls, indexing="ij")
+        a = np.c_[yy.ravel(), pp.ravel(), rr.ravel()]
+        pos.append(np.repeat(p, len(a), axis=0))
+        a_all = np.tile(a, (len(p), 1))
+        if base_yaw is not None:
+            a_all[:, 0] = (a_all[:, 0] + np.repeat(base_yaw, len(a))) % 360.0
+        ang.append(a_all)
+        cid.append(np.full(len(p) * len(a), cam_index[mount.camera], dtype=np.int32))
+    positions = np.concatenate(pos) if pos else np.zeros((0, 3))
+    angles = np.concatenate(ang) if ang else np.zeros((0, 3))
+    camera_ids = np.concatenate(cid) if cid else np.zeros(0, np.int32)
+    n_all = len(positions)
+    inside_obstacle = scene.occupancy.is_occupied(positions)
+    if getattr(scene, "free_space", None) is not None:  # scans: not in space no scanner saw (inside things)
+        inside_obstacle |= ~scene.free_space.observed_at(positions)
+    positions, angles, camera_ids = positions[~inside_obstacle], angles[~inside_obstacle], camera_ids[~inside_obstacle]
+    if len(positions) == 0:
+        raise InputError(f"scene '{scene.name}': mounts: no candidate pose lies in free space "
+                         f"({n_all} generated, {int(inside_obstacle.sum())} inside obstacles or walls)")
+    rot = rotation_from_ypr(angles[:, 0], angles[:, 1], angles[:, 2])
+    return Candidates(positions, rot, angles, camera_ids, location_ids_of(positions), cam_list,
+                      {"generated": n_all, "dropped_inside_obstacle": int(inside_obstacle.sum())})

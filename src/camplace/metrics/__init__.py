@@ -1,0 +1,1 @@
+"""camplace.metrics.coverage."""

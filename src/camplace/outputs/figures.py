@@ -1,0 +1,216 @@
+"""PNG figures of a placement (matplotlib, Agg canvas; no pyplot, no global state).
+
+- ``coverage_slice_z<h>m.png``: one per volume-target height, the achieved coverage of
+  each target voxel at that height (the paper's Fig. 1 middle), coloured by class
+  0 / 1 / 2 / >= 3 (Fig. 2 colours: 1 = blue, 2 = cyan; 0 = red, >= 3 = green), with
+  the obstacles that cross the height and the selected cameras (position, heading, id).
+- ``coverage_histogram.png``: targets per achieved coverage count, stacked by region.
+
+The slice grids (``coverage_slices``) are shared with the HTML report.
+"""
+
+from __future__ import annotations
+
+import io
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from camplace.core.files import atomic_write_bytes
+
+COVERAGE_CLASSES: tuple[tuple[str, str], ...] = (
+    ("0 (not seen)", "#d62728"), ("1", "#1f4fd1"), ("2", "#17becf"), ("\u2265 3", "#2ca02c"))
+REGION_COLOURS = ("#4c78a8", "#f58518", "#54a24b", "#b279a2", "#e45756", "#72b7b2", "#eeca3b", "#9d755d")
+
+
+def coverage_class(coverage: np.ndarray) -> np.ndarray:
+    """(N,) int achieved coverage -> (N,) int class 0, 1, 2, 3 (3 = three or more)."""
+    return np.minimum(np.asarray(coverage, np.int64), 3)
+
+
+@dataclass(frozen=True)
+class SceneView:
+    """What the pictures need of a scene. footprint: (K, 2) m; height: m; boxes: name ->
+    (min (3,), max (3,)) m; voxel_size: target grid step (m)."""
+
+    name: str
+    footprint: np.ndarray
+    height: float
+    voxel_size: float
+    boxes: dict = field(default_factory=dict)
+
+    @classmethod
+    def from_scene(cls, scene) -> "SceneView":
+        """From a camplace.scene.build.Scene."""
+        return cls(scene.name, np.asarray(scene.footprint, float), float(scene.height),
+                   float(scene.spec.voxel_size), dict(scene.boxes))
+
+    @classmethod
+    def from_targets(cls, name: str, positions: np.ndarray, cameras: list[dict] = ()) -> "SceneView":
+        """A stand-in when no scene is at hand: the bounding rectangle of the targets."""
+        p = np.asarray(positions, float).reshape(-1, 3)
+        cams = np.array([c["position"] for c in cameras], float).reshape(-1, 3)
+        allp = np.vstack([p, cams]) if len(cams) else p
+        lo, hi = allp.min(0), allp.max(0)
+        xs = np.unique(np.round(p[:, 0], 6))
+        step = float(np.min(np.diff(xs))) if len(xs) > 1 else 0.25
+        fp = np.array([[lo[0], lo[1]], [hi[0], lo[1]], [hi[0], hi[1]], [lo[0], hi[1]]])
+        return cls(name, fp, float(max(hi[2], 1e-3)), step, {})
+
+
+@dataclass(frozen=True)
+class CoverageSlice:
+    """Coverage of the volume targets at one height. x: (nx,), y: (ny,) voxel centres
+    (m); coverage: (ny, nx) float, NaN where there is no target; boxes: (name, xmin,
+    ymin, xmax, ymax) of the obstacles that cross this height."""
+
+    height: float
+    x: np.ndarray
+    y: np.ndarray
+    coverage: np.ndarray
+    boxes: list
+
+
+def coverage_slices(view: SceneView, positions: np.ndarray, is_surface: np.ndarray,
+                    coverage: np.ndarray) -> list[CoverageSlice]:
+    """One CoverageSlice per distinct height of the volume targets (ascending)."""
+    pos = np.asarray(positions, float)
+    vol = ~np.asarray(is_surface, bool)
+    if not vol.any():
+        return []
+    p, c = pos[vol], np.asarray(coverage, float)[vol]
+    v = float(view.voxel_size)
+    x0, y0 = p[:, 0].min(), p[:, 1].min()
+    ix = np.rint((p[:, 0] - x0) / v).astype(np.int64)
+    iy = np.rint((p[:, 1] - y0) / v).astype(np.int64)
+    nx, ny = int(ix.max()) + 1, int(iy.max()) + 1
+    xs, ys = x0 + v * np.arange(nx), y0 + v * np.arange(ny)
+    zr = np.round(p[:, 2], 6)
+    out = []
+    for h in np.unique(zr):
+        m = zr == h
+        grid = np.full((ny, nx), np.nan)
+        grid[iy[m], ix[m]] = c[m]
+        boxes = [(name, float(b[0][0]), float(b[0][1]), float(b[1][0]), float(b[1][1]))
+                 for name, b in view.boxes.items() if b[0][2] <= h <= b[1][2]]
+        out.append(CoverageSlice(float(h), xs, ys, grid, boxes))
+    return out
+
+
+def _png(fig) -> bytes:
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+    if not isinstance(fig.canvas, FigureCanvasAgg):
+        FigureCanvasAgg(fig)
+    buf = io.BytesIO()
+    fig.savefig(buf, format="png", dpi=110, pil_kwargs={"compress_level": 2})
+    return buf.getvalue()
+
+
+def slice_figures_png(slices: list[CoverageSlice], view: SceneView, cameras: list[dict] = ()) -> list[bytes]:
+    """PNG bytes of each coverage slice (obstacles hatched, cameras as arrows with ids).
+
+    One figure is built and only the per-height parts (image, obstacles, legend, title)
+    change between slices: several times faster than a figure per slice."""
+    from matplotlib.colors import BoundaryNorm, ListedColormap
+    from matplotlib.figure import Figure
+    from matplotlib.patches import Patch, Polygon, Rectangle
+
+    if not slices:
+        return []
+    v = view.voxel_size
+    fp = np.asarray(view.footprint, float)
+    w, h = np.ptp(fp[:, 0]), np.ptp(fp[:, 1])
+    fig = Figure(figsize=(min(12.0, 2.0 + 7.5 * w / max(w, h)) + 1.8, min(10.0, 1.2 + 7.5 * h / max(w, h))))
+    ax = fig.add_subplot(1, 1, 1)
+    cmap = ListedColormap([c for _, c in COVERAGE_CLASSES]).with_extremes(bad=(0.0, 0.0, 0.0, 0.0))
+    sl0 = slices[0]
+    im = ax.imshow(np.ma.masked_invalid(sl0.coverage), origin="lower", cmap=cmap,
+                   norm=BoundaryNorm([-0.5, 0.5, 1.5, 2.5, 3.5], 4), interpolation="nearest",
+                   extent=(sl0.x[0] - v / 2, sl0.x[-1] + v / 2, sl0.y[0] - v / 2, sl0.y[-1] + v / 2))
+    ax.add_patch(Polygon(fp, closed=True, fill=False, edgecolor="black", linewidth=1.2))
+    if cameras:
+        pos = np.array([c["position"] for c in cameras], float)
+        fwd = np.array([np.asarray(c["rotation"], float)[:2, 2] for c in cameras])
+        fwd /= np.maximum(np.linalg.norm(fwd, axis=1, keepdims=True), 1e-9)
+        ax.quiver(pos[:, 0], pos[:, 1], fwd[:, 0], fwd[:, 1], angles="xy", scale_units="xy",
+                  scale=1.0 / (0.06 * max(w, h)), width=0.003, color="black", zorder=3)
+        ax.plot(pos[:, 0], pos[:, 1], "o", color="black", markersize=3, zorder=3)
+        for cam, (x, y) in zip(cameras, pos[:, :2]):
+            ax.text(x, y, f" {cam.get('candidate_id', '')}", fontsize=6, color="black", va="bottom", clip_on=False)
+    ax.set_xlim(fp[:, 0].min() - 0.2, fp[:, 0].max() + 0.2)
+    ax.set_ylim(fp[:, 1].min() - 0.2, fp[:, 1].max() + 0.2)
+    ax.set_aspect("equal")
+    ax.set_xlabel("x (m)")
+    ax.set_ylabel("y (m)")
+    fig.subplots_adjust(left=0.07, right=0.80, bottom=0.08, top=0.93)
+    out = []
+    for sl in slices:
+        cls = np.where(np.isnan(sl.coverage), np.nan, np.minimum(sl.coverage, 3))
+        im.set_data(np.ma.masked_invalid(cls))
+        boxes = [ax.add_patch(Rectangle((x0, y0), x1 - x0, y1 - y0, facecolor="#bdbdbd", edgecolor="#555555",
+                                        hatch="//", linewidth=0.8, zorder=2)) for _, x0, y0, x1, y1 in sl.boxes]
+        counts = np.bincount(cls[~np.isnan(cls)].astype(np.int64), minlength=4)
+        ax.legend(handles=[Patch(color=c, label=f"{lab}: {n}") for (lab, c), n in zip(COVERAGE_CLASSES, counts)],
+                  title="cameras seeing", loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8, title_fontsize=8)
+        ax.set_title(f"{view.name}: coverage at z = {sl.height:.2f} m")
+        out.append(_png(fig))
+        for b in boxes:
+            b.remove()
+    return out
+
+
+def slice_figure_png(sl: CoverageSlice, view: SceneView, cameras: list[dict] = ()) -> bytes:
+    """PNG bytes of one coverage slice."""
+    return slice_figures_png([sl], view, cameras)[0]
+
+
+def histogram_figure_png(histograms: dict[str, dict[str, int]], gammas: dict[str, int] | None = None,
+                         title: str = "") -> bytes:
+    """PNG bytes of the coverage histogram: histograms = region -> {"k": targets seen by k
+    cameras}; bars stacked by region; a dashed line at each region's required Γ."""
+    from matplotlib.figure import Figure
+
+    kmax = max([int(k) for h in histograms.values() for k in h] + [0])
+    ks = np.arange(kmax + 1)
+    fig = Figure(figsize=(7.5, 4.0))
+    ax = fig.add_subplot(1, 1, 1)
+    bottom = np.zeros(len(ks))
+    for n, (name, hist) in enumerate(histograms.items()):
+        vals = np.array([hist.get(str(k), 0) for k in ks], float)
+        ax.bar(ks, vals, bottom=bottom, color=REGION_COLOURS[n % len(REGION_COLOURS)], label=name, width=0.8)
+        bottom += vals
+        if gammas and name in gammas:
+            ax.axvline(gammas[name] - 0.5, color=REGION_COLOURS[n % len(REGION_COLOURS)], linestyle="--", linewidth=1)
+    ax.set_xticks(ks)
+    ax.set_xlabel("cameras seeing the target (achieved coverage)")
+    ax.set_ylabel("targets")
+    ax.set_title(title or "coverage histogram (dashed: required \u0393 per region)")
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    return _png(fig)
+
+
+def slice_png_name(height: float) -> str:
+    return f"coverage_slice_z{height:.2f}m.png"
+
+
+def write_figures(out_dir: str | Path, view: SceneView, positions: np.ndarray, is_surface: np.ndarray,
+                  coverage: np.ndarray, cameras: list[dict], histograms: dict[str, dict[str, int]],
+                  gammas: dict[str, int] | None = None,
+                  slices: list[CoverageSlice] | None = None) -> dict[str, Path]:
+    """Write the slice PNGs and coverage_histogram.png into out_dir; name -> path."""
+    out = Path(out_dir)
+    if slices is None:
+        slices = coverage_slices(view, positions, is_surface, coverage)
+    paths = {}
+    names = {slice_png_name(s.height) for s in slices}
+    for stale in out.glob("coverage_slice_z*m.png"):  # heights of an earlier run into the same folder
+        if stale.name not in names:
+            stale.unlink()
+    for s, png in zip(slices, slice_figures_png(slices, view, cameras)):
+        paths[slice_png_name(s.height)] = atomic_write_bytes(out / slice_png_name(s.height), png)
+    paths["coverage_histogram.png"] = atomic_write_bytes(
+        out / "coverage_histogram.png", histogram_figure_png(histograms, gammas, f"{view.name}: coverage histogram"))
+    return paths

@@ -1,0 +1,522 @@
+"""report.html: one self-contained page that shows a placement (opens offline, no CDN).
+
+plotly.js is embedded in the page (the bundle of plotly's offline mode, as with
+``include_plotlyjs=True``); the figures are plain plotly JSON specs built here from
+arrays (no plotly Python object validation, so the page is written in well under a
+second for a store). Sections: summary, interactive 3D view (room, obstacle boxes,
+target voxels coloured by achieved coverage class 0 / 1 / 2 / >= 3 with one trace per
+class, selected cameras as frusta with ids), coverage slices per target height,
+coverage histogram, per-region table, mount list, links to the other outputs.
+
+``write_report`` writes the whole report set: exports (OpenCV YAML, COLMAP), PNG
+figures and report.html.
+"""
+
+from __future__ import annotations
+
+import html
+import json
+import time
+from pathlib import Path
+
+import numpy as np
+
+from camplace.outputs.figures import (COVERAGE_CLASSES, REGION_COLOURS, CoverageSlice, SceneView, coverage_class,
+                              coverage_slices)
+from camplace.core.files import atomic_write_text
+
+MAX_POINTS = 60_000  # target markers drawn in the 3D view at most (uniform subsample above)
+_PLOTLY_JS: str | None = None
+
+
+def plotly_js() -> str:
+    """The plotly.js bundle shipped with the plotly package (cached)."""
+    global _PLOTLY_JS
+    if _PLOTLY_JS is None:
+        from plotly.offline import get_plotlyjs
+
+        _PLOTLY_JS = get_plotlyjs()
+    return _PLOTLY_JS
+
+
+def _r(a, nd: int = 3) -> list:
+    """Rounded floats for JSON; None (line breaks) and NaN come out as null."""
+    v = np.round(np.asarray(a, float), nd)
+    if np.isnan(v).any():
+        return [None if x != x else x for x in v.tolist()]
+    return v.tolist()
+
+
+def _nan_to_none(grid: np.ndarray) -> list:
+    """Integer grid for JSON, NaN -> null (heatmap gaps)."""
+    g = np.asarray(grid, float)
+    return np.where(np.isnan(g), None, np.nan_to_num(g).astype(np.int64).astype(object)).tolist()
+
+
+# ----------------------------------------------------------------------------- 3D view
+def _room_lines(view: SceneView) -> dict:
+    fp = np.asarray(view.footprint, float)
+    ring = np.vstack([fp, fp[:1]])
+    xs, ys, zs = [], [], []
+    for z in (0.0, view.height):
+        xs += ring[:, 0].tolist() + [None]
+        ys += ring[:, 1].tolist() + [None]
+        zs += [z] * len(ring) + [None]
+    for x, y in fp:
+        xs += [x, x, None]
+        ys += [y, y, None]
+        zs += [0.0, view.height, None]
+    return {"type": "scatter3d", "mode": "lines", "x": xs, "y": ys, "z": zs, "name": "room",
+            "line": {"color": "#888888", "width": 2}, "hoverinfo": "skip"}
+
+
+_BOX_TRI = np.array([[0, 1, 2], [0, 2, 3], [4, 5, 6], [4, 6, 7], [0, 1, 5], [0, 5, 4],
+                     [1, 2, 6], [1, 6, 5], [2, 3, 7], [2, 7, 6], [3, 0, 4], [3, 4, 7]])
+_BOX_EDGES = [(0, 1), (1, 2), (2, 3), (3, 0), (4, 5), (5, 6), (6, 7), (7, 4), (0, 4), (1, 5), (2, 6), (3, 7)]
+
+
+def _box_corners(bmin, bmax, height: float) -> np.ndarray:
+    (x0, y0, z0), (x1, y1, z1) = np.asarray(bmin, float), np.asarray(bmax, float)
+    z0, z1 = max(z0, 0.0), min(z1, height)
+    return np.array([[x0, y0, z0], [x1, y0, z0], [x1, y1, z0], [x0, y1, z0],
+                     [x0, y0, z1], [x1, y0, z1], [x1, y1, z1], [x0, y1, z1]])
+
+
+def _obstacle_traces(view: SceneView) -> list[dict]:
+    if not view.boxes:
+        return []
+    verts, tris, names = [], [], []
+    ex, ey, ez = [], [], []
+    for k, (name, (bmin, bmax)) in enumerate(view.boxes.items()):
+        c = _box_corners(bmin, bmax, view.height)
+        verts.append(c)
+        tris.append(_BOX_TRI + 8 * k)
+        names += [name] * 8
+        for a, b in _BOX_EDGES:
+            ex += [c[a, 0], c[b, 0], None]
+            ey += [c[a, 1], c[b, 1], None]
+            ez += [c[a, 2], c[b, 2], None]
+    v, t = np.vstack(verts), np.vstack(tris)
+    mesh = {"type": "mesh3d", "x": _r(v[:, 0]), "y": _r(v[:, 1]), "z": _r(v[:, 2]),
+            "i": t[:, 0].tolist(), "j": t[:, 1].tolist(), "k": t[:, 2].tolist(), "text": names,
+            "color": "#a1887f", "opacity": 0.35, "flatshading": True, "name": "obstacles", "showlegend": True,
+            "hovertemplate": "%{text}<extra>obstacle</extra>"}
+    edges = {"type": "scatter3d", "mode": "lines", "x": _r(ex), "y": _r(ey), "z": _r(ez), "name": "obstacle edges",
+             "line": {"color": "#5d4037", "width": 2}, "hoverinfo": "skip", "showlegend": False}
+    return [mesh, edges]
+
+
+def _target_traces(positions: np.ndarray, coverage: np.ndarray, gamma: np.ndarray, region_ids: np.ndarray,
+                   region_names, max_points: int) -> tuple[list[dict], int]:
+    n = len(positions)
+    idx = np.arange(n)
+    if n > max_points:
+        idx = np.sort(np.random.default_rng(0).choice(n, max_points, replace=False))
+    cls = coverage_class(coverage)
+    names = np.asarray([str(r) for r in region_names], dtype=object)
+    traces = []
+    for c, (label, colour) in enumerate(COVERAGE_CLASSES):
+        sel = idx[cls[idx] == c]
+        total = int((cls == c).sum())
+        traces.append({
+            "type": "scatter3d", "mode": "markers", "name": f"targets seen by {label} ({total})",
+            "x": _r(positions[sel, 0]), "y": _r(positions[sel, 1]), "z": _r(positions[sel, 2]),
+            "marker": {"size": 2.5, "color": colour, "opacity": 0.85 if c == 0 else 0.6},
+            "customdata": np.c_[coverage[sel], gamma[sel]].astype(int).tolist(),
+            "text": names[region_ids[sel]].tolist(),
+            "hovertemplate": "%{text}: coverage %{customdata[0]} of \u0393 %{customdata[1]}"
+                             "<br>(%{x}, %{y}, %{z}) m<extra></extra>",
+        })
+    return traces, len(idx)
+
+
+def frustum_depth(view: SceneView) -> float:
+    """Drawn depth of the camera frusta (m): 8 % of the larger room side, in [0.3, 1.5]."""
+    fp = np.asarray(view.footprint, float)
+    return float(np.clip(0.08 * max(np.ptp(fp[:, 0]), np.ptp(fp[:, 1]), view.height), 0.3, 1.5))
+
+
+def _corner_rays(intr: dict) -> np.ndarray:
+    """(4, 3) camera-frame rays through the image corners, z = 1 where possible; through the
+    lens model (camplace.cameras.models) so distorted and fisheye lenses get their true extent."""
+    W, H = intr["width"], intr["height"]
+    uv = np.array([[-0.5, -0.5], [W - 0.5, -0.5], [W - 0.5, H - 0.5], [-0.5, H - 0.5]])
+    pinhole = np.c_[(uv[:, 0] - intr["cx"]) / intr["fx"], (uv[:, 1] - intr["cy"]) / intr["fy"], np.ones(4)]
+    if intr.get("model", "pinhole") == "pinhole" or not intr.get("distortion"):
+        return pinhole
+    try:
+        from camplace.cameras.models import CameraModel
+
+        cam = CameraModel("frustum", intr["model"], int(W), int(H), intr["fx"], intr["fy"], intr["cx"], intr["cy"],
+                          distortion=tuple(intr.get("distortion", ())))
+        rays = np.asarray(cam.unproject(uv), float)
+    except Exception:  # noqa: BLE001 - a lens this version cannot invert: draw the pinhole extent
+        return pinhole
+    z = rays[:, 2:3]
+    return np.where(z > 0.2, rays / np.maximum(z, 1e-9), rays * 1.5)  # very wide lenses: unit-ish rays
+
+
+def frustum_corners(cam: dict, depth: float) -> np.ndarray:
+    """(5, 3) world points: camera centre and the 4 image corners at ``depth`` (m)."""
+    R = np.asarray(cam["rotation"], float)
+    C = np.asarray(cam["position"], float)
+    d = _corner_rays(cam["intrinsics"]) * depth
+    return np.vstack([C, C + d @ R.T])
+
+
+def _camera_traces(cameras: list[dict], depth: float) -> list[dict]:
+    if not cameras:
+        return []
+    xs, ys, zs = [], [], []
+    for cam in cameras:
+        p = frustum_corners(cam, depth)
+        for a, b in ((0, 1), (0, 2), (0, 3), (0, 4), (1, 2), (2, 3), (3, 4), (4, 1)):
+            xs += [p[a, 0], p[b, 0], None]
+            ys += [p[a, 1], p[b, 1], None]
+            zs += [p[a, 2], p[b, 2], None]
+    pos = np.array([c["position"] for c in cameras], float)
+    ids = [str(c.get("candidate_id")) for c in cameras]
+    hover = [f"camera {c.get('candidate_id')} ({html.escape(str(c.get('camera', '')))})<br>"
+             f"yaw {c['yaw_deg']:.1f}\u00b0 pitch {c['pitch_deg']:.1f}\u00b0 roll {c['roll_deg']:.1f}\u00b0"
+             for c in cameras]
+    return [
+        {"type": "scatter3d", "mode": "lines", "x": _r(xs), "y": _r(ys), "z": _r(zs), "name": "camera frusta",
+         "line": {"color": "#000000", "width": 3}, "hoverinfo": "skip"},
+        {"type": "scatter3d", "mode": "markers+text", "x": _r(pos[:, 0]), "y": _r(pos[:, 1]), "z": _r(pos[:, 2]),
+         "text": ids, "textposition": "top center", "textfont": {"size": 10, "color": "#000000"},
+         "marker": {"size": 4, "color": "#000000", "symbol": "diamond"}, "name": f"cameras ({len(cameras)})",
+         "hovertext": hover, "hovertemplate": "%{hovertext}<br>(%{x}, %{y}, %{z}) m<extra></extra>"},
+    ]
+
+
+def view3d_figure(view: SceneView, positions: np.ndarray, coverage: np.ndarray, gamma: np.ndarray,
+                  region_ids: np.ndarray, region_names, cameras: list[dict],
+                  max_points: int = MAX_POINTS) -> tuple[dict, int]:
+    """Plotly spec of the 3D view and the number of target markers drawn."""
+    targets, shown = _target_traces(np.asarray(positions, float), np.asarray(coverage, np.int64),
+                                    np.asarray(gamma, np.int64), np.asarray(region_ids, np.int64), region_names,
+                                    max_points)
+    data = [_room_lines(view), *_obstacle_traces(view), *targets, *_camera_traces(cameras, frustum_depth(view))]
+    axis = {"showbackground": False, "gridcolor": "#dddddd", "zerolinecolor": "#bbbbbb"}
+    layout = {"height": 720, "margin": {"l": 0, "r": 0, "t": 30, "b": 0}, "uirevision": "keep",
+              "legend": {"itemsizing": "constant", "x": 0.0, "y": 1.0, "bgcolor": "rgba(255,255,255,0.8)"},
+              "scene": {"aspectmode": "data", "xaxis": {**axis, "title": {"text": "x (m)"}},
+                        "yaxis": {**axis, "title": {"text": "y (m)"}}, "zaxis": {**axis, "title": {"text": "z (m)"}},
+                        "camera": {"eye": {"x": -1.3, "y": -1.75, "z": 1.35}}}}
+    return {"data": data, "layout": layout}, shown
+
+
+# ----------------------------------------------------------------------------- 2D figures
+def _discrete_colourscale() -> list:
+    out = []
+    for k, (_, colour) in enumerate(COVERAGE_CLASSES):
+        out += [[k / 4, colour], [(k + 1) / 4, colour]]
+    return out
+
+
+def slice_figure(sl: CoverageSlice, view: SceneView, cameras: list[dict]) -> dict:
+    """Plotly spec of one coverage slice (heatmap of classes, obstacles, cameras)."""
+    cls = np.where(np.isnan(sl.coverage), np.nan, np.minimum(sl.coverage, 3))
+    data = [{"type": "heatmap", "x": _r(sl.x), "y": _r(sl.y), "z": _nan_to_none(cls),
+             "customdata": _nan_to_none(sl.coverage), "zmin": -0.5, "zmax": 3.5, "colorscale": _discrete_colourscale(),
+             "showscale": False, "hoverongaps": False, "name": f"z = {sl.height:.2f} m",
+             "hovertemplate": "(%{x}, %{y}) m: seen by %{customdata} cameras<extra></extra>"}]
+    if cameras:
+        pos = np.array([c["position"] for c in cameras], float)
+        data.append({"type": "scatter", "mode": "markers+text", "x": _r(pos[:, 0]), "y": _r(pos[:, 1]),
+                     "text": [str(c.get("candidate_id")) for c in cameras], "textposition": "top center",
+                     "textfont": {"size": 9}, "marker": {"color": "#000000", "size": 5}, "name": "cameras",
+                     "hovertemplate": "camera %{text}<extra></extra>", "showlegend": False})
+    fp = np.asarray(view.footprint, float)
+    path = "M " + " L ".join(f"{x:.3f},{y:.3f}" for x, y in fp) + " Z"
+    shapes = [{"type": "path", "path": path, "line": {"color": "#000000", "width": 1.5}}]
+    for _, x0, y0, x1, y1 in sl.boxes:
+        shapes.append({"type": "rect", "x0": x0, "y0": y0, "x1": x1, "y1": y1, "fillcolor": "#9e9e9e",
+                       "opacity": 0.8, "line": {"color": "#424242", "width": 1}, "layer": "below"})
+    w, h = np.ptp(fp[:, 0]), np.ptp(fp[:, 1])
+    layout = {"title": {"text": f"coverage at z = {sl.height:.2f} m", "font": {"size": 14}, "x": 0.01,
+                        "xanchor": "left"},
+              "height": int(np.clip(80 + 520 * h / max(w, 1e-9), 260, 760)), "margin": {"l": 50, "r": 10, "t": 40, "b": 40},
+              "xaxis": {"title": {"text": "x (m)"}, "constrain": "domain"},
+              "yaxis": {"title": {"text": "y (m)"}, "scaleanchor": "x", "scaleratio": 1, "constrain": "domain"},
+              "shapes": shapes, "plot_bgcolor": "#ffffff"}
+    return {"data": data, "layout": layout}
+
+
+def histogram_figure(histograms: dict[str, dict[str, int]], gammas: dict[str, int]) -> dict:
+    """Plotly spec of the coverage histogram, stacked by region, Γ per region dashed."""
+    kmax = max([int(k) for h in histograms.values() for k in h] + [0])
+    ks = list(range(kmax + 1))
+    data, shapes = [], []
+    for n, (name, hist) in enumerate(histograms.items()):
+        colour = REGION_COLOURS[n % len(REGION_COLOURS)]
+        data.append({"type": "bar", "x": ks, "y": [int(hist.get(str(k), 0)) for k in ks], "name": str(name),
+                     "marker": {"color": colour},
+                     "hovertemplate": f"{html.escape(str(name))}: %{{y}} targets seen by %{{x}} cameras<extra></extra>"})
+        if name in gammas:
+            shapes.append({"type": "line", "xref": "x", "yref": "paper", "x0": gammas[name] - 0.5,
+                           "x1": gammas[name] - 0.5, "y0": 0, "y1": 1, "line": {"color": colour, "dash": "dash"}})
+    layout = {"barmode": "stack", "height": 380, "margin": {"l": 60, "r": 10, "t": 40, "b": 50}, "shapes": shapes,
+              "title": {"text": "targets per achieved coverage (dashed: required \u0393)", "font": {"size": 14},
+                        "x": 0.01, "xanchor": "left"},
+              "xaxis": {"title": {"text": "cameras seeing the target"}, "dtick": 1},
+              "yaxis": {"title": {"text": "targets"}}}
+    return {"data": data, "layout": layout}
+
+
+# ----------------------------------------------------------------------------- camera views
+VIEW_WIDTH = 240  # pixels of each rendered camera view in the report
+VIEW_BUDGET_S = 1.0  # rendering stops after this many seconds (the rest: `camplace render`)
+
+
+def camera_views(scene, vis, selected: np.ndarray, width: int = VIEW_WIDTH,
+                 budget_s: float = VIEW_BUDGET_S) -> tuple[list[dict], int]:
+    """What each selected camera sees (camplace.outputs.render: rays through its lens model into
+    the occupancy grid), with the targets it covers as dots coloured by their coverage
+    class. Returns ([{id, caption, uri}], number not rendered within ``budget_s``)."""
+    import base64
+    import io
+
+    from PIL import Image
+
+    from camplace.outputs.render import covered_pixels, label_grid, render_view
+    from camplace.visibility.pixel import free_distance
+
+    t0 = time.perf_counter()
+    sel = np.asarray(selected, np.int64)
+    cov = np.bincount(vis.V[sel].indices, minlength=vis.V.shape[1]) if len(sel) else np.zeros(vis.V.shape[1], int)
+    cls = coverage_class(cov)
+    colours = np.array([[int(c[1:3], 16), int(c[3:5], 16), int(c[5:7], 16)] for _, c in COVERAGE_CLASSES], np.uint8)
+    labels = label_grid(scene)  # once per report: both grids are the same for every view
+    dist = free_distance(scene.occupancy)
+    c = vis.candidates
+    out = []
+    for n, i in enumerate(sel):
+        if out and time.perf_counter() - t0 > budget_s:
+            return out, len(sel) - n
+        cam = c.cameras[int(c.camera_ids[i])]
+        rv = render_view(scene, cam, c.positions[i], c.rotations[i], width, labels, dist)
+        grey = np.clip(rv.rgb, 0, 1) @ np.array([0.299, 0.587, 0.114])  # grey scene: the coloured dots stand out
+        img = np.repeat((40 + 200 * grey)[:, :, None], 3, axis=2).astype(np.uint8)
+        seen = vis.V.indices[vis.V.indptr[i]:vis.V.indptr[i + 1]]
+        uv, ok = covered_pixels(cam, c.positions[i], c.rotations[i], vis.targets.positions[seen], rv.scale)
+        h, w = img.shape[:2]
+        px = np.rint(uv[ok]).astype(np.int64)
+        for dx in (0, 1):
+            for dy in (0, 1):
+                x, y = px[:, 0] + dx, px[:, 1] + dy
+                m = (x >= 0) & (x < w) & (y >= 0) & (y < h)
+                img[y[m], x[m]] = colours[cls[seen[ok]][m]]
+        buf = io.BytesIO()
+        Image.fromarray(img).save(buf, format="JPEG", quality=85)
+        yaw, pitch, roll = c.angles_deg[i]
+        out.append({"id": int(i), "uri": "data:image/jpeg;base64," + base64.b64encode(buf.getvalue()).decode(),
+                    "caption": f"camera {int(i)} ({cam.name}): yaw {yaw:.0f}\u00b0, pitch {pitch:.0f}\u00b0, "
+                               f"roll {roll:.0f}\u00b0; sees {len(seen)} targets"})
+    return out, 0
+
+
+def _views_section(views: list[dict] | None, skipped: int) -> str:
+    if views is None:
+        return ""
+    cards = "".join(f"<figure><img src='{v['uri']}' alt='view of camera {v['id']}'>"
+                    f"<figcaption>{html.escape(v['caption'])}</figcaption></figure>" for v in views)
+    more = (f"<p class=note>{skipped} more views not rendered within the report's time budget; "
+            f"<code>camplace render</code> draws any camera.</p>" if skipped else "")
+    return (f"<section><h2>Camera views</h2><p class=note>What each selected camera sees (rays through its "
+            f"lens model into the occupancy grid, in grey, darker beyond range); dots: the targets it covers, "
+            f"coloured by how many selected cameras see them.</p><div class='views'>{cards}</div>{more}</section>")
+
+
+# ----------------------------------------------------------------------------- page
+_CSS = """
+body{font-family:system-ui,-apple-system,Segoe UI,Roboto,sans-serif;margin:0;color:#212121;background:#fafafa}
+header{background:#263238;color:#fff;padding:14px 24px}header h1{margin:0;font-size:22px}
+header p{margin:4px 0 0;color:#cfd8dc;font-size:13px}main{padding:12px 24px;max-width:1800px}
+section{background:#fff;border:1px solid #e0e0e0;border-radius:6px;margin:14px 0;padding:10px 16px}
+h2{font-size:17px;margin:6px 0 10px}table{border-collapse:collapse;font-size:13px}
+td,th{border-bottom:1px solid #eeeeee;padding:4px 10px;text-align:left}th{background:#f5f5f5}
+td.num{text-align:right;font-variant-numeric:tabular-nums}.grid{display:flex;flex-wrap:wrap;gap:12px}
+.grid>div{flex:1 1 520px;min-width:420px}.legend span{display:inline-block;margin-right:14px;font-size:13px}
+.legend i{display:inline-block;width:12px;height:12px;margin-right:5px;vertical-align:-1px;border-radius:2px}
+.note{color:#616161;font-size:12px}.views{display:flex;flex-wrap:wrap;gap:10px}
+.views figure{margin:0;width:244px;font-size:11px;color:#424242}.views img{width:240px;border:1px solid #ccc}.top{display:flex;flex-wrap:wrap;gap:14px;align-items:flex-start}
+.top>section{margin:14px 0 0}.summary{flex:0 0 360px}.view{flex:1 1 700px;min-width:600px}.mounts{max-height:420px;overflow:auto}a{color:#1565c0}
+"""
+
+
+def _fmt(v, nd: int = 6) -> str:
+    if v is None:
+        return "\u2013"
+    if isinstance(v, float):
+        return f"{v:.{nd}g}"
+    return str(v)
+
+
+def _rows(pairs) -> str:
+    return "".join(f"<tr><th>{html.escape(str(k))}</th><td>{html.escape(str(v))}</td></tr>" for k, v in pairs)
+
+
+def _summary_pairs(placement: dict, metrics: dict, n_targets: int, n_candidates: int | None) -> list:
+    gap = placement.get("gap")
+    timings = metrics.get("timings_s") or {}
+    return [
+        ("scene", placement.get("scene")), ("solver", placement.get("solver")), ("status", placement.get("status")),
+        ("cameras placed (budget)", f"{len(placement.get('cameras', []))} ({placement.get('budget')})"),
+        ("cost \u03a3 w (\u0393 \u2212 c)\u207a\u00b2", _fmt(metrics.get("cost"))),
+        ("coverage gap (paper eq. 8)", _fmt(metrics.get("coverage_gap"), 4)),
+        ("lower bound", _fmt(placement.get("bound"))),
+        ("proven gap", "\u2013" if gap is None else f"{100 * gap:.2f} %"),
+        ("non-triangulatable (< 2 cameras)", f"{metrics.get('non_triangulatable_pct', 0.0):.2f} %"),
+        ("targets", n_targets), ("candidate poses", "\u2013" if n_candidates is None else n_candidates),
+        ("timings (s)", ", ".join(f"{k} {float(v):.2f}" for k, v in timings.items()) or "\u2013"),
+    ]
+
+
+def _region_table(metrics: dict, region_kinds: dict, gammas: dict) -> str:
+    head = ("<tr><th>region</th><th>kind</th><th>targets</th><th>\u0393</th><th>cost</th><th>coverage gap</th>"
+            "<th>non-triangulatable</th><th>not seen</th></tr>")
+    body = ""
+    for name, r in (metrics.get("regions") or {}).items():
+        hist = r.get("coverage_histogram", {})
+        body += (f"<tr><td>{html.escape(str(name))}</td><td>{html.escape(str(region_kinds.get(name, '')))}</td>"
+                 f"<td class=num>{r.get('targets', '')}</td><td class=num>{gammas.get(name, '')}</td>"
+                 f"<td class=num>{_fmt(r.get('cost'))}</td><td class=num>{r.get('coverage_gap', 0.0):.4f}</td>"
+                 f"<td class=num>{r.get('non_triangulatable_pct', 0.0):.2f} %</td>"
+                 f"<td class=num>{hist.get('0', 0)}</td></tr>")
+    return f"<table>{head}{body}</table>"
+
+
+def _mount_table(cameras: list[dict]) -> str:
+    src = any("source_id" in c for c in cameras)  # an evaluated file: its own camera ids too
+    head = ("<tr><th>id</th>" + ("<th>id in file</th>" if src else "") + "<th>x (m)</th><th>y (m)</th><th>z (m)</th>"
+            "<th>yaw (\u00b0)</th><th>pitch (\u00b0)</th><th>roll (\u00b0)</th><th>lens</th></tr>")
+    body = "".join(
+        f"<tr><td>{c.get('candidate_id')}</td>"
+        + (f"<td>{html.escape(str(c.get('source_id', '')))}</td>" if src else "")
+        + "".join(f"<td class=num>{v:.3f}</td>" for v in c["position"])
+        + "".join(f"<td class=num>{c[k]:.2f}</td>" for k in ("yaw_deg", "pitch_deg", "roll_deg"))
+        + f"<td>{html.escape(str(c.get('camera', '')))}</td></tr>" for c in cameras)
+    return f"<div class=mounts><table>{head}{body}</table></div>"
+
+
+def _json(obj) -> str:
+    return json.dumps(obj, separators=(",", ":"), allow_nan=False).replace("</", "<\\/")
+
+
+def render_report(view: SceneView, placement: dict, metrics: dict, positions: np.ndarray, is_surface: np.ndarray,
+                  coverage: np.ndarray, gamma: np.ndarray, region_ids: np.ndarray, region_names,
+                  region_kinds=(), n_candidates: int | None = None, files: list[str] = (),
+                  slices: list[CoverageSlice] | None = None, max_points: int = MAX_POINTS,
+                  views: list[dict] | None = None, views_skipped: int = 0) -> str:
+    """The report page as one HTML string (plotly.js embedded).
+
+    positions: (N_p, 3) m; is_surface, coverage, gamma, region_ids: (N_p,);
+    placement / metrics: the placement.json / metrics.json dicts; files: names of
+    sibling output files to link."""
+    positions = np.asarray(positions, float)
+    coverage = np.asarray(coverage, np.int64)
+    cameras = placement.get("cameras", [])
+    if slices is None:
+        slices = coverage_slices(view, positions, is_surface, coverage)
+    region_names = [str(r) for r in region_names]
+    gammas = {name: int(np.max(gamma[region_ids == r])) for r, name in enumerate(region_names)
+              if np.any(region_ids == r)}
+    kinds = dict(zip(region_names, region_kinds))
+    fig3d, shown = view3d_figure(view, positions, coverage, gamma, region_ids, region_names, cameras, max_points)
+    figs = {"view3d": fig3d}
+    for k, sl in enumerate(slices):
+        figs[f"slice{k}"] = slice_figure(sl, view, cameras)
+    hists = {name: r.get("coverage_histogram", {}) for name, r in (metrics.get("regions") or {}).items()}
+    if not hists:
+        hists = {"all targets": metrics.get("coverage_histogram", {})}
+    figs["histogram"] = histogram_figure(hists, gammas)
+
+    legend = "".join(f"<span><i style='background:{c}'></i>{html.escape(lab)}</span>" for lab, c in COVERAGE_CLASSES)
+    sub = (f"showing {shown} of {len(positions)} targets" if shown < len(positions)
+           else f"all {len(positions)} targets shown")
+    slice_divs = "".join(f"<div id='slice{k}' class='plot'></div>" for k in range(len(slices)))
+    slice_divs = slice_divs or "<p class=note>no volume targets</p>"
+    links = " \u00b7 ".join(f"<a href='{html.escape(f)}'>{html.escape(f)}</a>" for f in files) or "\u2013"
+    title = html.escape(str(placement.get("scene", view.name)))
+    page = f"""<!DOCTYPE html>
+<html lang="en"><head><meta charset="utf-8"><meta name="viewport" content="width=device-width, initial-scale=1">
+<title>camplace report: {title}</title><style>{_CSS}</style></head>
+<body data-plots-total="{len(figs)}">
+<header><h1>camplace report: {title}</h1>
+<p>{html.escape(str(placement.get('solver')))} placement of {len(cameras)} cameras \u00b7 written {time.strftime('%Y-%m-%d %H:%M:%S')} \u00b7 self-contained, works offline</p></header>
+<main>
+<div class="top"><section class="summary"><h2>Summary</h2><table>{_rows(_summary_pairs(placement, metrics, len(positions), n_candidates))}</table></section>
+<section class="view"><h2>3D view</h2><p class="legend">{legend}</p>
+<p class="note">Target voxels coloured by how many selected cameras see them ({sub}); camera frusta drawn {frustum_depth(view):.2f} m deep with candidate ids. Drag to rotate, scroll to zoom, click legend entries to hide a class.</p>
+<div id="view3d" class="plot"></div></section></div>
+<section><h2>Coverage slices per target height</h2><p class="legend">{legend}</p>
+<p class="note">Volume targets at each height; grey boxes: obstacles crossing that height; black dots: cameras (ids).</p>
+<div class="grid">{slice_divs}</div></section>
+<section><h2>Coverage histogram and regions</h2><div class="grid"><div id="histogram" class="plot"></div>
+<div>{_region_table(metrics, kinds, gammas)}</div></div></section>
+{_views_section(views, views_skipped)}
+<section><h2>Mount list</h2>{_mount_table(cameras)}</section>
+<section><h2>Files</h2><p>{links}</p></section>
+</main>
+<script type="text/javascript">{plotly_js()}</script>
+<script type="text/javascript">
+(function(){{
+  var figs = {_json(figs)};
+  var config = {{"displaylogo": false, "responsive": true}};
+  var jobs = Object.keys(figs).map(function(id) {{
+    return Plotly.newPlot(id, figs[id].data, figs[id].layout, config);
+  }});
+  Promise.all(jobs).then(function() {{
+    document.body.setAttribute("data-plots-ready", String(jobs.length));
+  }}).catch(function(err) {{
+    document.body.setAttribute("data-plots-error", String(err));
+    console.error("camplace report: plot failed: " + err);
+  }});
+}})();
+</script>
+</body></html>
+"""
+    return page
+
+
+def write_report(out_dir: str | Path, targets, coverage: np.ndarray, placement: dict, metrics: dict,
+                 view: SceneView | None = None, n_candidates: int | None = None,
+                 html_report: bool = True, figures: bool = True, exports: bool = True,
+                 scene=None, vis=None, selected: np.ndarray | None = None) -> dict[str, Path]:
+    """Write exports (opencv/, colmap/), PNG figures and report.html into out_dir.
+
+    targets: camplace.targets.build.Targets (N_p); coverage: (N_p,) achieved coverage of the
+    placement; placement / metrics: the placement.json / metrics.json dicts. With
+    ``scene`` (camplace.scene.build.Scene), ``vis`` (camplace.visibility.voxel.Visibility) and
+    ``selected`` (rows of vis.V) the page also shows each camera's rendered view.
+    Returns file name (relative to out_dir) -> path."""
+    from camplace.outputs.exports import write_exports
+    from camplace.outputs.figures import write_figures
+
+    out = Path(out_dir)
+    cameras = placement.get("cameras", [])
+    if view is None:
+        view = SceneView.from_targets(str(placement.get("scene", "scene")), targets.positions, cameras)
+    is_surface = targets.is_surface
+    slices = coverage_slices(view, targets.positions, is_surface, coverage)
+    paths: dict[str, Path] = {}
+    if exports:
+        paths.update(write_exports(out, cameras))
+    if figures:
+        gammas = {name: int(targets.gamma[targets.region_ids == r].max())
+                  for r, name in enumerate(targets.region_names) if np.any(targets.region_ids == r)}
+        hists = {n: r["coverage_histogram"] for n, r in (metrics.get("regions") or {}).items()}
+        paths.update(write_figures(out, view, targets.positions, is_surface, coverage, cameras,
+                                   hists or {"all targets": metrics.get("coverage_histogram", {})}, gammas, slices))
+    if html_report:
+        files = ["placement.csv", "placement.json", "metrics.json", "visibility.npz",
+                 *sorted(p for p in paths if p.endswith(".png")), *(["opencv/", "colmap/"] if exports else [])]
+        views, skipped = (None, 0)
+        if scene is not None and vis is not None and selected is not None:
+            views, skipped = camera_views(scene, vis, selected)
+        text = render_report(view, placement, metrics, targets.positions, is_surface, coverage, targets.gamma,
+                             targets.region_ids, targets.region_names, targets.region_kinds, n_candidates, files,
+                             slices, views=views, views_skipped=skipped)
+        paths["report.html"] = atomic_write_text(out / "report.html", text)
+    return paths

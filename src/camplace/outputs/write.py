@@ -1,0 +1,164 @@
+"""Stage 8 - outputs: placement.json, metrics.json, visibility.npz, placement.csv.
+
+Keys follow the output contract (docs/output-contract.md). Every file is written
+atomically (temporary file + rename).
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import time
+from pathlib import Path
+
+import numpy as np
+
+from camplace.cameras.candidates import Candidates
+from camplace.core.errors import Interrupted
+from camplace.core.files import AtomicBatch, atomic_savez, atomic_write_json, atomic_write_text
+from camplace.metrics.coverage import Metrics
+from camplace.solvers.base import Placement
+from camplace.visibility.voxel import Visibility
+
+
+def _round(x: float, nd: int = 9) -> float:
+    return float(round(float(x), nd))
+
+
+def camera_entries(candidates: Candidates, selected: np.ndarray) -> list[dict]:
+    """One placement.json camera object per selected candidate (in id order)."""
+    out = []
+    for i in np.sort(np.asarray(selected, np.int64)):
+        cam = candidates.cameras[int(candidates.camera_ids[i])]
+        yaw, pitch, roll = (float(a) for a in candidates.angles_deg[i])
+        out.append({
+            "candidate_id": int(i),
+            "location_id": int(candidates.location_ids[i]),
+            "position": [float(v) for v in candidates.positions[i]],  # exact: evaluate re-raycasts it
+            "yaw_deg": _round(yaw), "pitch_deg": _round(pitch), "roll_deg": _round(roll),
+            "rotation": [[float(v) for v in row] for row in candidates.rotations[i]],
+            "camera": cam.name,
+            "intrinsics": cam.intrinsics(),
+        })
+    return out
+
+
+def placement_dict(scene_name: str, placement: Placement, budget: int, candidates: Candidates) -> dict:
+    out = {
+        "scene": scene_name,
+        "solver": placement.solver,
+        "budget": int(budget),
+        "status": placement.status,
+        "objective": float(placement.objective),
+        "bound": None if placement.bound is None else float(placement.bound),
+        "gap": placement.gap,
+        **{k: str(placement.info[k]) for k in ("incumbent_method", "bound_method") if k in placement.info},
+        **{k: placement.info[k] for k in ("refine", "adaptive", "robust") if k in placement.info},  # issue 10
+        "n_cameras": int(len(placement.selected)),
+        "cameras": camera_entries(candidates, placement.selected),
+    }
+    src = placement.info.get("source_ids")
+    if src is not None:  # an evaluated placement (camplace.workflows.evaluate): the ids its file gave the cameras
+        for c in out["cameras"]:
+            c["source_id"] = str(src[c["candidate_id"]])
+    return out
+
+
+def placement_csv(cameras: list[dict]) -> str:
+    """The mount list: header id,x,y,z,yaw,pitch,roll,lens (metres, degrees)."""
+    buf = io.StringIO()
+    w = csv.writer(buf, lineterminator="\n")
+    w.writerow(["id", "x", "y", "z", "yaw", "pitch", "roll", "lens"])
+    for c in cameras:
+        w.writerow([c["candidate_id"], *c["position"], c["yaw_deg"], c["pitch_deg"], c["roll_deg"], c["camera"]])
+    return buf.getvalue()
+
+
+def visibility_arrays(vis: Visibility) -> dict[str, np.ndarray]:
+    """The arrays of visibility.npz (no pickles)."""
+    V, t, c = vis.V, vis.targets, vis.candidates
+    return {
+        "data": V.data.astype(np.uint8), "indices": V.indices.astype(np.int32),
+        "indptr": V.indptr.astype(np.int64), "shape": np.array(V.shape, dtype=np.int64),
+        "gamma": t.gamma.astype(np.int64), "weights": t.weights.astype(np.float64),
+        "target_positions": t.positions.astype(np.float64), "target_normals": t.normals.astype(np.float64),
+        "target_region_ids": t.region_ids.astype(np.int32), "region_names": np.array(t.region_names, dtype=str),
+        "candidate_positions": c.positions.astype(np.float64), "rotations": c.rotations.astype(np.float64),
+        "candidate_angles_deg": c.angles_deg.astype(np.float64), "camera_ids": c.camera_ids.astype(np.int32),
+        "camera_names": np.array([cam.name for cam in c.cameras], dtype=str),
+        "location_ids": c.location_ids.astype(np.int64),
+    }
+
+
+def write_outputs(out_dir: str | Path, scene_name: str, vis: Visibility, placement: Placement, budget: int,
+                  metrics: Metrics, timings: dict[str, float], scene=None, report: bool = True,
+                  repeatable: bool = False) -> dict[str, Path]:
+    """Write the contract files into out_dir and, with ``report``, the report set
+    (report.html, PNG figures, opencv/ and colmap/ exports; camplace.outputs.report_html);
+    ``scene`` (camplace.scene.build.Scene) adds the room and obstacles to the pictures;
+    ``repeatable`` writes every timing as 0.0 (byte-identical metrics.json for
+    identical runs). Returns name -> path.
+
+    The contract files (visibility.npz, placement.json, placement.csv, metrics.json) land
+    first, together (camplace.core.files.AtomicBatch: all new or all old); the report comes
+    after them, so a report that fails or is interrupted cannot cost the new placement.
+    Then a report.html left from an earlier run (it would show another placement) is
+    removed, and a KeyboardInterrupt comes out as camplace.core.errors.Interrupted saying so;
+    metrics.json is rewritten at the end with the report's time in ``timings_s.report``."""
+    t0 = time.perf_counter()
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    pdict = placement_dict(scene_name, placement, budget, vis.candidates)
+    timings = dict(timings)
+    report_timings = {k: round(float(v), 4) for k, v in timings.items()}  # shown in report.html (no "report")
+    with AtomicBatch() as batch:  # the contract files replace the old ones together, once all are written
+        paths = {
+            "visibility.npz": batch.stage_savez(out / "visibility.npz", **visibility_arrays(vis)),
+            "placement.json": batch.stage_json(out / "placement.json", pdict),
+            "placement.csv": batch.stage_text(out / "placement.csv", placement_csv(pdict["cameras"])),
+        }
+        timings["report"] = time.perf_counter() - t0
+        paths["metrics.json"] = batch.stage_json(out / "metrics.json", _metrics_dict(metrics, timings, repeatable))
+    if not report:
+        return paths
+    try:
+        paths.update(_write_report_set(out, vis, placement, pdict, metrics, report_timings, scene))
+    except BaseException as err:
+        if "report.html" not in paths:  # an earlier run's page would contradict the new contract files
+            _unlink_quietly(out / "report.html")
+        if isinstance(err, KeyboardInterrupt):
+            raise Interrupted(f"stopped during the report: the contract files (placement.json, metrics.json, "
+                              f"visibility.npz, placement.csv) are written to {out}; the report set is "
+                              f"incomplete") from err
+        raise
+    if not repeatable:  # repeatable: every timing is 0.0, metrics.json is already final
+        timings["report"] = time.perf_counter() - t0
+        atomic_write_json(out / "metrics.json", _metrics_dict(metrics, timings, repeatable))
+    return paths
+
+
+def _metrics_dict(metrics: Metrics, timings: dict[str, float], repeatable: bool) -> dict:
+    m = metrics.to_dict()
+    # repeatable: timings written as 0.0 so that metrics.json is byte-identical between runs
+    m["timings_s"] = {k: 0.0 if repeatable else round(float(v), 4) for k, v in timings.items()}
+    return m
+
+
+def _write_report_set(out: Path, vis: Visibility, placement: Placement, pdict: dict, metrics: Metrics,
+                      timings: dict[str, float], scene) -> dict[str, Path]:
+    """report.html, PNG figures and exports (camplace.outputs.report_html.write_report)."""
+    from camplace.outputs.figures import SceneView
+    from camplace.outputs.report_html import write_report
+
+    sel = np.asarray(placement.selected, np.int64)
+    cov = np.bincount(vis.V[sel].indices, minlength=vis.V.shape[1]).astype(np.int64)
+    m = dict(metrics.to_dict(), timings_s=timings)
+    return write_report(out, vis.targets, cov, pdict, m, SceneView.from_scene(scene) if scene else None,
+                        n_candidates=int(vis.V.shape[0]), scene=scene, vis=vis, selected=sel)
+
+
+def _unlink_quietly(path: Path) -> None:
+    try:
+        path.unlink()
+    except OSError:
+        pass

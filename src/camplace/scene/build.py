@@ -1,0 +1,163 @@
+"""Stage 1 - the scene: room, obstacles and the occupancy grid used for occlusion.
+
+World frame: metres, right-handed, z up. The occupancy grid is a dense boolean array
+at ``occupancy_resolution``; walls (everything outside the footprint), the floor
+(z < 0) and the ceiling (z > height) are occupied, so every ray stays in the room.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+import numpy as np
+import shapely
+from shapely.geometry import Polygon
+
+from camplace.spec.schema import SceneSpec, memory_limit_bytes
+from camplace.core.errors import InputError
+
+if TYPE_CHECKING:
+    from camplace.scene.freespace import FreeSpace
+
+MAX_GRID_BYTES = 4 * 1024**3  # refuse dense grids larger than this (bool = 1 byte/cell)
+
+
+@dataclass(frozen=True)
+class OccupancyGrid:
+    """Dense occupancy. occupied: (nx, ny, nz) bool; cell (i,j,k) spans
+    origin + [i, i+1) * resolution (metres) on each axis."""
+
+    occupied: np.ndarray
+    origin: np.ndarray  # (3,) float64, metres
+    resolution: float  # metres
+
+    @property
+    def shape(self) -> tuple[int, int, int]:
+        return tuple(self.occupied.shape)  # type: ignore[return-value]
+
+    def cell_of(self, points: np.ndarray) -> np.ndarray:
+        """points: (N, 3) metres -> (N, 3) int64 cell indices (may be out of range)."""
+        return np.floor((np.asarray(points, float) - self.origin) / self.resolution).astype(np.int64)
+
+    def is_occupied(self, points: np.ndarray) -> np.ndarray:
+        """points: (N, 3) metres -> (N,) bool; points outside the grid count as occupied."""
+        c = self.cell_of(points)
+        inside = np.all((c >= 0) & (c < np.array(self.shape)), axis=1)
+        out = np.ones(len(c), dtype=bool)
+        ci = c[inside]
+        out[inside] = self.occupied[ci[:, 0], ci[:, 1], ci[:, 2]]
+        return out
+
+    def cell_centres(self, axis: int) -> np.ndarray:
+        n = self.shape[axis]
+        return self.origin[axis] + (np.arange(n) + 0.5) * self.resolution
+
+
+@dataclass(frozen=True)
+class Scene:
+    """A room with obstacles. footprint: (K, 2) float64 polygon (m); height (m);
+    boxes: obstacle name -> (min (3,), max (3,)) metres."""
+
+    name: str
+    spec: SceneSpec
+    footprint: np.ndarray
+    height: float
+    boxes: dict[str, tuple[np.ndarray, np.ndarray]]
+    occupancy: OccupancyGrid
+    base_dir: Path | None = None
+    info: dict = field(default_factory=dict)
+    free_space: "FreeSpace | None" = None  # walkable free space from scans / OctoMaps (issue 5)
+    points: np.ndarray | None = None  # (N, 3) cleaned scan points (scene frame), for surface targets
+    viewpoints: np.ndarray | None = None  # (K, 3) scanner positions (scene frame)
+
+    @property
+    def polygon(self) -> Polygon:
+        return Polygon(self.footprint)
+
+    @property
+    def floor_area(self) -> float:
+        return float(self.polygon.area)
+
+
+def estimate_grid_bytes(spec: SceneSpec) -> int:
+    fp = np.asarray(spec.room.footprint, float)
+    ext = np.r_[fp.max(0) - fp.min(0), spec.room.height]
+    n = np.ceil(ext / spec.occupancy_resolution) + 2
+    return int(np.prod(n))
+
+
+def _validate_footprint(spec: SceneSpec, source: str) -> Polygon:
+    poly = Polygon(spec.room.footprint)
+    if not poly.is_valid:
+        reason = shapely.is_valid_reason(poly)
+        raise InputError(f"{source}: room.footprint: not a simple polygon ({reason})")
+    if poly.area <= 1e-9:
+        raise InputError(f"{source}: room.footprint: polygon has zero area")
+    return poly
+
+
+def build_scene(spec: SceneSpec, base_dir: Path | None = None, source: str = "<scene>",
+                progress=None) -> Scene:
+    """Build the occupancy grid of a validated scene spec (file obstacles read through
+    camplace.scene.loaders; free space derived when a scan or OctoMap is present)."""
+    poly = _validate_footprint(spec, source)
+    need = estimate_grid_bytes(spec)
+    # last guard for direct callers: the pipeline already checked every size against the
+    # user's limit (camplace.spec.schema.check_resources, --max-memory-gb) before this point
+    limit = max(MAX_GRID_BYTES, memory_limit_bytes())
+    if need > limit:
+        raise InputError(
+            f"{source}: occupancy_resolution: {spec.occupancy_resolution} m would need a "
+            f"{need / 1024**3:.1f} GiB occupancy grid (limit {limit / 1024**3:.1f} GiB); use a coarser resolution"
+        )
+    res = float(spec.occupancy_resolution)
+    fp = np.asarray(spec.room.footprint, float)
+    lo = np.r_[fp.min(0), 0.0] - res
+    hi = np.r_[fp.max(0), spec.room.height] + res
+    shape = tuple(int(v) for v in np.ceil((hi - lo) / res - 1e-9))
+    grid = OccupancyGrid(np.zeros(shape, dtype=bool), lo, res)
+    xs, ys, zs = (grid.cell_centres(a) for a in range(3))
+    gx, gy = np.meshgrid(xs, ys, indexing="ij")
+    inside = shapely.contains_xy(poly, gx, gy)
+    occ = grid.occupied
+    occ[~inside, :] = True  # walls: outside the footprint
+    occ[:, :, (zs < 0) | (zs > spec.room.height)] = True  # floor and ceiling slabs
+
+    boxes: dict[str, tuple[np.ndarray, np.ndarray]] = {}
+    loaded = []
+    for i, ob in enumerate(spec.obstacles):
+        if ob.box is None:
+            from camplace.scene.loaders.obstacles import add_obstacle
+
+            loaded.append(add_obstacle(occ, grid.origin, res, ob, i, base_dir, source, progress))
+            continue
+        bmin, bmax = np.asarray(ob.box.min, float), np.asarray(ob.box.max, float)
+        boxes[ob.name] = (bmin, bmax)
+        if ob.occludes:
+            rasterize_box(grid, bmin, bmax)
+    info = {"grid_shape": shape, "grid_cells": int(np.prod(shape)), "occupied_cells": int(occ.sum()),
+            "grid_bytes": int(np.prod(shape))}
+    free_space = points = viewpoints = None
+    if loaded:
+        from camplace.scene.freespace import scene_free_space
+
+        info["obstacle_files"] = {ob.name: lo.report for ob, lo in zip([o for o in spec.obstacles if o.box is None],
+                                                                       loaded)}
+        free_space, points, viewpoints = scene_free_space(grid, spec, loaded, progress)
+        info["free_space"] = free_space.info if free_space is not None else None
+    return Scene(spec.name, spec, fp, float(spec.room.height), boxes, grid, base_dir, info,
+                 free_space, points, viewpoints)
+
+
+def rasterize_box(grid: OccupancyGrid, bmin: np.ndarray, bmax: np.ndarray) -> None:
+    """Mark (in place) every cell whose centre lies inside [bmin, bmax] as occupied."""
+    sl = []
+    for a in range(3):
+        c = grid.cell_centres(a)
+        idx = np.nonzero((c >= bmin[a]) & (c <= bmax[a]))[0]
+        if len(idx) == 0:
+            return
+        sl.append(slice(idx[0], idx[-1] + 1))
+    grid.occupied[sl[0], sl[1], sl[2]] = True

@@ -1,0 +1,139 @@
+"""Stage 2 - targets: the N_p points that must be seen, with their required coverage.
+
+``volume`` regions are free-space voxel centres of the walkable area at given heights;
+``surface`` regions are voxel-sized patches on named obstacles' faces, with outward
+normals and an incidence-angle limit.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import shapely
+
+from camplace.spec.schema import TargetRegion
+from camplace.core.errors import InputError
+from camplace.scene.build import Scene
+
+FACE_AXES = {"+x": (0, 1.0), "-x": (0, -1.0), "+y": (1, 1.0), "-y": (1, -1.0), "+z": (2, 1.0), "-z": (2, -1.0)}
+DEFAULT_FACES = ("+x", "-x", "+y", "-y")
+
+
+@dataclass(frozen=True)
+class Targets:
+    """positions: (N, 3) float64 m; normals: (N, 3) float64 unit outward normal, zeros
+    for volume targets; gamma: (N,) int64 required coverage Γ; weights: (N,) float64;
+    region_ids: (N,) int32 index into region_names; max_incidence_deg: (R,) per region."""
+
+    positions: np.ndarray
+    normals: np.ndarray
+    gamma: np.ndarray
+    weights: np.ndarray
+    region_ids: np.ndarray
+    region_names: tuple[str, ...]
+    region_kinds: tuple[str, ...]
+    max_incidence_deg: np.ndarray
+    min_px_per_m: np.ndarray | None = None  # (R,) px/m per region, 0 = no limit (issue 4)
+
+    def __len__(self) -> int:
+        return len(self.positions)
+
+    @property
+    def is_surface(self) -> np.ndarray:
+        """(N,) bool: True for surface targets."""
+        return np.any(self.normals != 0, axis=1)
+
+
+def volume_targets(scene: Scene, region: TargetRegion) -> np.ndarray:
+    """Free-space voxel centres inside the footprint at each height: (M, 3) metres."""
+    v = float(scene.spec.voxel_size)
+    lo, hi = scene.footprint.min(0), scene.footprint.max(0)
+    nx, ny = (int(np.floor((hi[a] - lo[a]) / v + 1e-9)) for a in range(2))
+    xs = lo[0] + (np.arange(nx) + 0.5) * v
+    ys = lo[1] + (np.arange(ny) + 0.5) * v
+    gx, gy = np.meshgrid(xs, ys, indexing="ij")
+    inside = shapely.contains_xy(scene.polygon, gx, gy)
+    xy = np.c_[gx[inside], gy[inside]]
+    layers = [np.c_[xy, np.full(len(xy), float(h))] for h in region.heights or []]
+    pts = np.concatenate(layers) if layers else np.zeros((0, 3))
+    pts = pts[~scene.occupancy.is_occupied(pts)]
+    if getattr(scene, "free_space", None) is not None:  # scans / OctoMaps: observed walkable space only
+        pts = pts[scene.free_space.contains(pts)]
+    return pts
+
+
+def surface_targets(scene: Scene, region: TargetRegion) -> tuple[np.ndarray, np.ndarray]:
+    """Patches of size <= voxel_size on the named boxes' faces.
+
+    Returns (positions (M, 3), outward normals (M, 3)). Patches whose outside is
+    occupied (a face against a wall or another obstacle) are dropped.
+    """
+    v = float(scene.spec.voxel_size)
+    pos, nrm = [], []
+    for name in region.of or []:
+        if name not in scene.boxes:
+            raise InputError(f"targets '{region.name}': obstacle '{name}' has no box to put surface targets on")
+        bmin, bmax = scene.boxes[name]
+        for face in region.faces or DEFAULT_FACES:
+            axis, sign = FACE_AXES[face]
+            u, w = [a for a in range(3) if a != axis]
+            # clip the face to the room (a box may poke through the ceiling or floor)
+            lo = bmin.copy()
+            hi = bmax.copy()
+            lo[2], hi[2] = max(lo[2], 0.0), min(hi[2], scene.height)
+            if hi[u] <= lo[u] or hi[w] <= lo[w]:
+                continue
+            nu, nw = (max(1, int(np.ceil((hi[a] - lo[a]) / v - 1e-9))) for a in (u, w))
+            cu = lo[u] + (np.arange(nu) + 0.5) * (hi[u] - lo[u]) / nu
+            cw = lo[w] + (np.arange(nw) + 0.5) * (hi[w] - lo[w]) / nw
+            gu, gw = np.meshgrid(cu, cw, indexing="ij")
+            p = np.zeros((gu.size, 3))
+            p[:, u], p[:, w] = gu.ravel(), gw.ravel()
+            p[:, axis] = bmax[axis] if sign > 0 else bmin[axis]
+            n = np.zeros_like(p)
+            n[:, axis] = sign
+            pos.append(p)
+            nrm.append(n)
+    if not pos:
+        return np.zeros((0, 3)), np.zeros((0, 3))
+    p, n = np.concatenate(pos), np.concatenate(nrm)
+    labels = {o.name for o in scene.spec.obstacles if not o.occludes}
+    if labels & set(region.of or []):  # labelled boxes on a scan: step out of the scanned shell
+        from camplace.scene.freespace import snap_outward
+
+        p, keep = snap_outward(scene.occupancy, p, n)
+        return p[keep], n[keep]
+    outside = p + n * 0.75 * scene.occupancy.resolution
+    keep = ~scene.occupancy.is_occupied(outside)
+    return p[keep], n[keep]
+
+
+def build_targets(scene: Scene) -> Targets:
+    """All target regions of the scene, in the order of ``scene.spec.targets``."""
+    pos, nrm, gam, wts, rid = [], [], [], [], []
+    for r, region in enumerate(scene.spec.targets):
+        if region.kind == "volume":
+            p = volume_targets(scene, region)
+            n = np.zeros_like(p)
+        elif region.box is not None:
+            from camplace.scene.freespace import scan_surface_targets
+
+            p, n = scan_surface_targets(scene, region.box.min, region.box.max)
+        else:
+            p, n = surface_targets(scene, region)
+        pos.append(p)
+        nrm.append(n)
+        gam.append(np.full(len(p), region.coverage, dtype=np.int64))
+        wts.append(np.full(len(p), region.weight, dtype=np.float64))
+        rid.append(np.full(len(p), r, dtype=np.int32))
+    regions = scene.spec.targets
+    t = Targets(
+        np.concatenate(pos), np.concatenate(nrm), np.concatenate(gam), np.concatenate(wts), np.concatenate(rid),
+        tuple(r.name for r in regions), tuple(r.kind for r in regions),
+        np.array([r.max_incidence_deg for r in regions], dtype=np.float64),
+        np.array([r.min_px_per_m_value for r in regions], dtype=np.float64),
+    )
+    if len(t) == 0:
+        raise InputError(f"scene '{scene.name}': targets: no target point lies in free space inside the room")
+    return t

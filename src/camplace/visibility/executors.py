@@ -1,0 +1,214 @@
+"""Executors for chunked maps: in-process, a local process pool, or a Dask cluster.
+
+The visibility stage is a map over chunks of candidates: ``fn(shared, task)`` for
+every task, where ``shared`` (occupancy grid, targets, candidates: tens of MB) is the
+same for all tasks and is shipped to each worker once, and ``task`` is small (a row
+range). Every executor has the same interface, ``map_unordered(fn, shared, tasks)``,
+which yields ``(task_index, result)`` as results arrive, so the caller can stream them
+to disk or assemble them without holding everything twice. Results do not depend on the
+executor: each task is computed by the same function on the same inputs.
+
+- ``InProcessExecutor``: tasks run here one after another (the kernel itself is
+  multi-threaded).
+- ``ProcessPoolChunkExecutor``: ``workers`` local processes (``spawn`` start method:
+  numba's OpenMP layer is not fork-safe); each gets ``shared`` once at start-up.
+- ``DaskExecutor``: a ``dask.distributed`` cluster given by its scheduler address
+  (``tcp://host:port``) or an existing ``Client``; ``shared`` is scattered (broadcast)
+  once and tasks are submitted as futures.
+
+``make_executor(workers, scheduler)`` picks one; ``CAMPLACE_SCHEDULER`` in the
+environment stands for ``scheduler`` when it is not given.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import os
+import threading
+import uuid
+from concurrent.futures import ProcessPoolExecutor, as_completed
+from typing import Any, Callable, Iterator, Sequence
+
+from camplace.core.errors import InputError
+
+SCHEDULER_ENV = "CAMPLACE_SCHEDULER"
+TaskFn = Callable[[Any, Any], Any]
+
+# Calls into the numba kernels are serialized inside one process: the kernel already
+# uses every core it is given, and concurrent parallel launches from several threads
+# (a threaded Dask worker) would oversubscribe the cores or trip numba's threading layer.
+_CALL_LOCK = threading.Lock()
+_WORKER_SHARED: Any = None  # the shared payload inside a process-pool worker
+
+
+def _set_threads(n_threads: int | None) -> None:
+    if n_threads:
+        import numba
+
+        numba.set_num_threads(max(1, min(int(n_threads), numba.config.NUMBA_NUM_THREADS)))
+
+
+def run_task(fn: TaskFn, shared: Any, task: Any, n_threads: int | None = None) -> Any:
+    """Run one task under the per-process kernel lock, with ``n_threads`` numba threads."""
+    with _CALL_LOCK:
+        _set_threads(n_threads)
+        return fn(shared, task)
+
+
+class InProcessExecutor:
+    """Run the tasks here, in order (the kernel is parallel inside each task)."""
+
+    name = "in-process"
+    workers = 1
+
+    def map_unordered(self, fn: TaskFn, shared: Any, tasks: Sequence[Any]) -> Iterator[tuple[int, Any]]:
+        for k, task in enumerate(tasks):
+            yield k, run_task(fn, shared, task)
+
+    def close(self) -> None:
+        pass
+
+    def __enter__(self) -> "InProcessExecutor":
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+
+def _pool_init(shared: Any, n_threads: int | None) -> None:
+    global _WORKER_SHARED
+    _WORKER_SHARED = shared
+    _set_threads(n_threads)
+
+
+@contextlib.contextmanager
+def _sigint_ignored():
+    """Block SIGINT while worker processes are spawned: they inherit the blocked mask
+    (across exec), so a Ctrl-C - sent by the terminal to the whole process group -
+    reaches only the parent, which stops cleanly between chunks (camplace.workflows.run),
+    instead of killing workers mid-start and hanging the pool. The parent gets a SIGINT
+    sent meanwhile as soon as the mask is restored."""
+    import signal
+
+    if not hasattr(signal, "pthread_sigmask"):  # pragma: no cover - non-POSIX
+        yield
+        return
+    old = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
+    try:
+        yield
+    finally:
+        signal.pthread_sigmask(signal.SIG_SETMASK, old)
+
+
+def _pool_call(fn: TaskFn, task: Any) -> Any:
+    return run_task(fn, _WORKER_SHARED, task)
+
+
+class ProcessPoolChunkExecutor:
+    """``workers`` local processes (spawned); ``shared`` is sent to each once."""
+
+    name = "process-pool"
+
+    def __init__(self, workers: int, threads_per_worker: int | None = None) -> None:
+        if workers < 1:
+            raise InputError(f"--workers: expected a positive integer, got {workers}")
+        self.workers = int(workers)
+        cores = os.cpu_count() or 1
+        self.threads_per_worker = threads_per_worker or max(1, cores // self.workers)
+
+    def map_unordered(self, fn: TaskFn, shared: Any, tasks: Sequence[Any]) -> Iterator[tuple[int, Any]]:
+        import multiprocessing as mp
+
+        if not tasks:
+            return
+        ctx = mp.get_context("spawn")
+        n = min(self.workers, len(tasks))
+        with ProcessPoolExecutor(n, mp_context=ctx, initializer=_pool_init,
+                                 initargs=(shared, self.threads_per_worker)) as pool:
+            with _sigint_ignored():  # the workers are spawned here and keep SIGINT ignored (see below)
+                futures = {pool.submit(_pool_call, fn, t): k for k, t in enumerate(tasks)}
+            try:
+                for fut in as_completed(futures):
+                    yield futures[fut], fut.result()
+            except BaseException:
+                for fut in futures:
+                    fut.cancel()
+                raise
+
+    def close(self) -> None:
+        pass
+
+    def __enter__(self) -> "ProcessPoolChunkExecutor":
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+
+class DaskExecutor:
+    """Tasks on a dask.distributed cluster: ``DaskExecutor("tcp://host:port")`` or
+    ``DaskExecutor(client=Client(...))``. ``threads_per_task``: numba threads per task
+    (default: all the worker machine's cores)."""
+
+    name = "dask"
+
+    def __init__(self, address: str | None = None, client: Any = None, threads_per_task: int | None = None,
+                 timeout_s: float = 10.0) -> None:
+        from dask.distributed import Client
+
+        self._own = client is None
+        if client is None:
+            if not address or "://" not in address:
+                raise InputError(f"--scheduler: expected a Dask scheduler address like tcp://host:8786, got '{address}'")
+            try:
+                client = Client(address, timeout=f"{timeout_s}s", set_as_default=False)
+            except (OSError, TimeoutError) as err:
+                raise InputError(f"--scheduler: cannot connect to the Dask scheduler at {address} ({err})") from None
+        self.client = client
+        self.threads_per_task = threads_per_task
+        self.workers = max(1, len(client.scheduler_info().get("workers", {})))
+
+    def map_unordered(self, fn: TaskFn, shared: Any, tasks: Sequence[Any]) -> Iterator[tuple[int, Any]]:
+        from dask.distributed import as_completed as dask_as_completed
+
+        if not tasks:
+            return
+        shared_f = self.client.scatter(shared, broadcast=True, hash=False)
+        run = uuid.uuid4().hex[:12]
+        futures = [self.client.submit(run_task, fn, shared_f, t, self.threads_per_task, pure=False,
+                                      key=f"camplace-chunk-{run}-{k}") for k, t in enumerate(tasks)]
+        index = {f.key: k for k, f in enumerate(futures)}
+        try:
+            for fut in dask_as_completed(futures, loop=self.client.loop):
+                k = index[fut.key]
+                yield k, fut.result()
+                fut.release()
+        finally:
+            self.client.cancel(futures)
+            self.client.cancel([shared_f])
+
+    def close(self) -> None:
+        if self._own:
+            self.client.close()
+
+    def __enter__(self) -> "DaskExecutor":
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+
+Executor = InProcessExecutor | ProcessPoolChunkExecutor | DaskExecutor
+
+
+def make_executor(workers: int = 1, scheduler: str | None = None) -> Executor:
+    """Dask when a scheduler address is given (or ``CAMPLACE_SCHEDULER`` is set), a local
+    process pool when ``workers`` > 1, in-process otherwise."""
+    scheduler = scheduler or os.environ.get(SCHEDULER_ENV) or None
+    if scheduler:
+        return DaskExecutor(scheduler)
+    if workers is None or workers <= 1:
+        if workers is not None and workers < 1:
+            raise InputError(f"--workers: expected a positive integer, got {workers}")
+        return InProcessExecutor()
+    return ProcessPoolChunkExecutor(workers)

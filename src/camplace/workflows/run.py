@@ -1,0 +1,354 @@
+"""The whole pipeline as one call; the CLI and the Python API both use it.
+
+scene -> targets -> candidates -> visibility -> problem -> solve -> metrics.
+Progress goes through a callback ``progress(stage, done, total)``; nothing prints.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Callable
+
+import numpy as np
+
+from camplace.spec.builtin import resolve_scene
+from camplace.cameras.models import CameraModel, camera_from_spec
+from camplace.cameras.candidates import build_candidates
+from camplace.problem.feasibility import check_feasibility
+from camplace.spec.schema import SceneSpec, check_resources
+from camplace.core.errors import InputError, Interrupted
+from camplace.metrics.coverage import Metrics, compute_metrics
+from camplace.problem.model import PlacementProblem
+from camplace.scene.build import Scene, build_scene
+from camplace.solvers import Placement, solve
+from camplace.targets.build import Targets, build_targets
+from camplace.visibility.executors import make_executor
+from camplace.visibility.voxel import Visibility, compute_visibility, drop_blind_candidates
+
+Progress = Callable[[str, int, int], None]
+
+
+@dataclass
+class RunResult:
+    scene: Scene
+    visibility: Visibility
+    problem: PlacementProblem
+    placement: Placement
+    metrics: Metrics
+    timings_s: dict[str, float] = field(default_factory=dict)
+    log: list[str] = field(default_factory=list)
+
+
+def _stage(progress: Progress | None, name: str) -> None:
+    if progress:
+        progress(name, 0, 1)
+
+
+def prepare(scene: str | Path | SceneSpec, progress: Progress | None = None,
+            timings: dict | None = None, log: list | None = None, *, should_stop: Callable[[], bool] | None = None,
+            max_memory_bytes: int | None = None, require_feasible: bool = False, workers: int = 1,
+            scheduler: str | None = None, cache_dir: str | Path | None = None, visibility_mode: str = "voxel",
+            stride: int | None = None, probe: float | None = None) -> tuple[Scene, Visibility]:
+    """Scene, targets, candidates and visibility (blind candidates dropped).
+
+    ``visibility_mode``: ``voxel`` (default, centre test per target) or ``pixel`` (the
+    paper's per-pixel raycasting, camplace.visibility.pixel, one ray per ``stride`` x
+    ``stride`` pixels, ``probe`` = part of the voxel a ray must cross).
+
+    Visibility chunks run on a Dask cluster when ``scheduler`` (``tcp://host:port``, or
+    env CAMPLACE_SCHEDULER) is given, on ``workers`` local processes when > 1, else
+    in-process (camplace.visibility.executors); with ``cache_dir`` V is stored / reused in
+    blocks under a content-hash key (camplace.visibility.cache). Same V bit for bit either way;
+    both visibility modes.
+
+    Refuses (InputError) a scene whose grids would exceed ``max_memory_bytes`` (default:
+    camplace.spec.schema.memory_limit_bytes()) before allocating them. Targets that cannot
+    reach their coverage are a warning in ``log``, an InputError if ``require_feasible``.
+    ``should_stop()`` polled between visibility chunks raises camplace.core.errors.Interrupted."""
+    timings = {} if timings is None else timings
+    log = [] if log is None else log
+    if should_stop is not None:
+        progress = _stoppable(progress, should_stop)
+    sc, targets, cameras, source = scene_inputs(scene, progress, timings, max_memory_bytes)
+    t = time.perf_counter()
+    _stage(progress, "candidates")
+    cands = build_candidates(sc, cameras)
+    timings["candidates"] = time.perf_counter() - t
+    t = time.perf_counter()
+    if visibility_mode == "pixel":
+        from camplace.visibility.pixel import DEFAULT_PROBE, compute_pixel_visibility
+
+        with make_executor(workers, scheduler) as executor:
+            vis = compute_pixel_visibility(sc.occupancy, targets, cands, sc.spec.voxel_size, stride=stride,
+                                           probe=DEFAULT_PROBE if probe is None else probe, progress=progress,
+                                           executor=executor, cache_dir=cache_dir)
+    elif visibility_mode == "voxel":
+        with make_executor(workers, scheduler) as executor:
+            vis = compute_visibility(sc.occupancy, targets, cands, progress=progress, executor=executor,
+                                     cache_dir=cache_dir)
+    else:
+        raise InputError(f"visibility mode: expected 'voxel' or 'pixel', got {visibility_mode!r}")
+    vis = drop_blind_candidates(vis)
+    timings["visibility"] = time.perf_counter() - t
+    if sc.info.get("obstacle_files"):  # scans, meshes, OctoMaps: what was read and each clean-up step
+        from camplace.scene.loaders.obstacles import describe
+
+        log.extend(describe(name, rep) for name, rep in sc.info["obstacle_files"].items())
+        if sc.info.get("free_space"):
+            from camplace.scene.freespace import describe_free_space
+
+            log.append(describe_free_space(sc.info["free_space"]))
+    log.append(f"candidates: {cands.info['generated']} generated, {cands.info['dropped_inside_obstacle']} inside "
+               f"obstacles, {vis.info['dropped_blind']} seeing no target, {len(vis.candidates)} kept")
+    log.append(f"targets: {len(targets)} ({', '.join(f'{n}: {int((targets.region_ids == r).sum())}' for r, n in enumerate(targets.region_names))})")
+    log.append(f"visibility: V {vis.V.shape[0]} x {vis.V.shape[1]}, nnz {vis.V.nnz}")
+    if vis.info.get("executor") != "in-process" or "cache" in vis.info:
+        log.append(f"visibility: {vis.info['chunks']} chunks on {vis.info.get('executor')}, "
+                   f"{vis.info.get('cached_chunks', 0)} from cache {vis.info.get('cache', '(off)')}")
+    if vis.V.shape[0] == 0:
+        raise InputError(f"{source}: mounts: no candidate pose sees any target ({cands.info['generated']} "
+                         f"generated, {len(cands)} in free space); check mounts, cameras (max_range, fov_deg) "
+                         f"and targets")
+    tg = vis.targets
+    feas = check_feasibility(vis.V, tg.gamma, vis.candidates.location_ids, tg.region_ids, tg.region_names)
+    if not feas.ok:
+        msg = feas.describe(tg.positions, tg.region_ids, tg.region_names)
+        if require_feasible:
+            raise InputError(f"{source}: targets: {msg} (--require-feasible)")
+        log.append(f"warning: {msg}")
+    return sc, vis
+
+
+def scene_inputs(scene: str | Path | SceneSpec, progress: Progress | None = None, timings: dict | None = None,
+                 max_memory_bytes: int | None = None) -> tuple[Scene, Targets, dict[str, CameraModel], str]:
+    """The stages before candidates: the scene (occupancy), its targets, its camera
+    models by name and the scene's source label (for messages); shared by ``prepare``
+    and camplace.workflows.evaluate."""
+    timings = {} if timings is None else timings
+    spec, base_dir, source = resolve_scene(scene)
+    check_resources(spec, source, max_memory_bytes)
+    t = time.perf_counter()
+    _stage(progress, "scene")
+    sc = build_scene(spec, base_dir, source, progress=progress)
+    timings["scene"] = time.perf_counter() - t
+    t = time.perf_counter()
+    _stage(progress, "targets")
+    targets = build_targets(sc)
+    timings["targets"] = time.perf_counter() - t
+    cameras: dict[str, CameraModel] = {c.name: camera_from_spec(c, base_dir) for c in spec.cameras}
+    return sc, targets, cameras, source
+
+
+def _stoppable(progress: Progress | None, should_stop: Callable[[], bool]) -> Progress:
+    """A progress callback that raises Interrupted between visibility chunks once should_stop() is true."""
+    def cb(stage: str, done: int, total: int) -> None:
+        if progress:
+            progress(stage, done, total)
+        if stage == "visibility" and should_stop():
+            raise Interrupted(f"stopped during visibility ({done}/{total} chunks done); nothing written")
+    return cb
+
+
+STOP_GRACE_S = 2.0  # seconds a solver gets to honour should_stop() before the pipeline stops waiting
+
+
+def solve_stoppable(problem: PlacementProblem, solver: str, *, log: list | None = None,
+                    grace_s: float = STOP_GRACE_S, **options) -> Placement:
+    """``solve(problem, solver, **options)`` that always comes back soon after
+    ``options['should_stop']()`` turns true.
+
+    The solver runs in a worker thread (HiGHS and numba release the GIL); this thread
+    polls should_stop(). A solver that does not return within ``grace_s`` after the stop
+    request (e.g. HiGHS inside a root LP, which polls no callback) is left behind and
+    the greedy placement is returned instead, with status 'interrupted' and
+    the best lower bound the solver reported through on_incumbent (or None)."""
+    import threading
+    from dataclasses import replace
+
+    should_stop = options.get("should_stop")
+    if should_stop is None:
+        return solve(problem, solver, **options)
+    bound: dict[str, float | None] = {"bound": None}
+    user_cb = options.get("on_incumbent")
+
+    def on_incumbent(objective: float, b: float | None) -> None:
+        if b is not None and np.isfinite(b):
+            bound["bound"] = b if bound["bound"] is None else max(bound["bound"], b)
+        if user_cb is not None:
+            user_cb(objective, b)
+
+    options["on_incumbent"] = on_incumbent
+    out: dict = {}
+
+    def work() -> None:
+        try:
+            out["placement"] = solve(problem, solver, **options)
+        except BaseException as err:  # noqa: BLE001 - handed to the calling thread
+            out["error"] = err
+
+    th = threading.Thread(target=work, name=f"camplace-solve-{solver}", daemon=True)
+    th.start()
+    asked = None
+    while th.is_alive():
+        th.join(0.05)
+        if asked is None and should_stop():
+            asked = time.perf_counter()
+        if asked is not None and time.perf_counter() - asked > grace_s:
+            break
+    if "error" in out:
+        raise out["error"]
+    if "placement" in out:
+        return out["placement"]
+    fallback_opts = {k: v for k, v in options.items() if k not in ("should_stop", "progress", "on_incumbent")}
+    fallback_opts["time_limit_s"] = 5.0
+    g = solve(problem, "greedy", **{k: v for k, v in fallback_opts.items() if k != "local_search"})
+    b = bound["bound"]
+    if b is not None and b > g.objective:  # cannot happen for a valid bound; never report one above the cost
+        b = None
+    if log is not None:
+        log.append(f"warning: solver '{solver}' did not stop within {grace_s:g} s of the interrupt (inside a phase "
+                   f"that polls nothing); wrote the greedy placement instead")
+    info = dict(g.info, interrupted_solver=solver, fallback="greedy")
+    return replace(g, status="interrupted", bound=b, solver=solver, info=info)
+
+
+def check_solver_name(name: str, key: str) -> None:
+    """InputError naming ``key`` (e.g. '--solver' or 'scene.yaml: placement.solver') for an unknown solver."""
+    from camplace.spec.schema import _did_you_mean
+    from camplace.solvers import SOLVERS
+
+    if name not in SOLVERS:
+        raise InputError(f"{key}: unknown solver '{name}'{_did_you_mean(name, list(SOLVERS))}; expected one of "
+                         f"{', '.join(sorted(SOLVERS))}")
+
+
+def problem_from_visibility(vis: Visibility, budget: int, money_budget: float | None = None) -> PlacementProblem:
+    t = vis.targets
+    return PlacementProblem(vis.V, t.gamma, t.weights, int(budget), vis.candidates.location_ids,
+                            np.array([vis.candidates.cameras[c].cost for c in vis.candidates.camera_ids]),
+                            money_budget)
+
+
+def improve_placement(sc: Scene, vis: Visibility, problem: PlacementProblem, placement: Placement, *,
+                      refine: bool = False, refine_time_s: float = 60.0, adaptive: int = 0, robust: int = 0,
+                      time_limit_s: float | None = None, should_stop: Callable[[], bool] | None = None,
+                      progress: Progress | None = None,
+                      log: list | None = None) -> tuple[Visibility, PlacementProblem, Placement]:
+    """Beyond the grid (issue 10), after the discrete solve: ``robust`` = 1 minimises the
+    worst case over single camera failures (camplace.solvers.robust: swap/tabu heuristic, then the
+    scenario MIP, exact on small V, as a large-neighbourhood search on large V); ``adaptive`` rounds of
+    finer candidates (camplace.improve.adaptive), then ``refine`` moves each camera off the grid
+    (camplace.improve.refine). Adaptive and refine append rows to V, so the returned visibility /
+    problem replace the grid ones (the placement stays a selection of V rows). time_limit_s
+    caps the robust search (default 60 s) and the adaptive rounds (default 120 s)."""
+    log = [] if log is None else log
+    if robust not in (0, 1):
+        raise InputError(f"--robust: expected 0 or 1 (single camera failures), got {robust}")
+    if robust and (refine or adaptive):
+        raise InputError("--robust 1 cannot be combined with --refine / --adaptive (they optimise the nominal cost)")
+    if adaptive < 0:
+        raise InputError(f"--adaptive: expected a non-negative number of rounds, got {adaptive}")
+    if robust:
+        from camplace.solvers.robust import robust_placement
+
+        rr = robust_placement(problem, placement, time_limit_s=time_limit_s or 60.0, should_stop=should_stop)
+        placement = rr.placement
+        log.append(f"robust: nominal {rr.nominal['cost']:.6g} -> {rr.robust['cost']:.6g}, worst single failure "
+                   f"{rr.nominal['worst_case_cost']:.6g} -> {rr.robust['worst_case_cost']:.6g}"
+                   + ("" if rr.bound is None else f" (lower bound {rr.bound:.6g}, {rr.info['bound_method']})")
+                   + f" by {rr.info['method']}; coverage gap {rr.nominal['coverage_gap']:.4f} -> "
+                   f"{rr.robust['coverage_gap']:.4f}, worst-case gap {rr.nominal['worst_case_gap']:.4f} -> "
+                   f"{rr.robust['worst_case_gap']:.4f}")
+    if adaptive:
+        from camplace.improve.adaptive import adaptive_rounds
+
+        ar = adaptive_rounds(sc, vis, problem, placement, rounds=adaptive, time_limit_s=time_limit_s or 120.0,
+                             progress=progress)
+        vis, problem, placement = ar.visibility, ar.problem, ar.placement
+        for h in ar.rounds:
+            log.append(f"adaptive round {h['round']}: {h['candidates']} candidates, cost {h['cost']:.6g}")
+    if refine:
+        from camplace.improve.refine import refine_placement
+
+        rf = refine_placement(sc, vis, problem, placement, time_limit_s=refine_time_s, progress=progress)
+        vis, problem, placement = rf.visibility, rf.problem, rf.placement
+        log.append(f"refine: cost {rf.grid_cost:.6g} -> {rf.refined_cost:.6g} ({rf.info['moved']} cameras moved, "
+                   f"{rf.info['trials']} trial poses, {rf.info['seconds']:.1f} s)")
+    return vis, problem, placement
+
+
+def run(scene: str | Path | SceneSpec, budget: int | None = None, solver: str | None = None,
+        progress: Progress | None = None, *, time_limit_s: float | None = None,
+        should_stop: Callable[[], bool] | None = None, max_memory_bytes: int | None = None,
+        require_feasible: bool = False, workers: int = 1, scheduler: str | None = None,
+        cache_dir: str | Path | None = None, visibility_mode: str = "voxel", stride: int | None = None,
+        probe: float | None = None, money_budget: float | None = None, refine: bool = False,
+        refine_time_s: float = 60.0, adaptive: int = 0, robust: int = 0,
+        triangulation_deg: tuple[float, float] = (20.0, 160.0), well_triangulated: bool = False,
+        **solver_options) -> RunResult:
+    """Run every stage on a scene (built-in name, YAML path or spec).
+
+    budget / solver / time_limit_s default to the scene's ``placement`` keys. The solver
+    name and budget are checked before any heavy stage. ``should_stop()`` is polled
+    between visibility chunks (Interrupted) and by the solver, which then returns its
+    best placement with status 'interrupted'. See ``prepare`` for the other options."""
+    timings: dict[str, float] = {}
+    log: list[str] = []
+    spec, _, source = resolve_scene(scene)
+    if solver is None:
+        check_solver_name(spec.placement.solver, f"{source}: placement.solver")
+    else:
+        check_solver_name(solver, "solver")
+    if budget is not None and (isinstance(budget, bool) or int(budget) != budget or budget < 0):
+        raise InputError(f"budget: expected a non-negative integer, got {budget!r}")
+    if time_limit_s is not None and not (time_limit_s > 0 and np.isfinite(time_limit_s)):
+        raise InputError(f"time limit: expected a positive number of seconds, got {time_limit_s!r}")
+    sc, vis = prepare(scene, progress, timings, log, should_stop=should_stop, max_memory_bytes=max_memory_bytes,
+                      require_feasible=require_feasible, workers=workers, scheduler=scheduler, cache_dir=cache_dir,
+                      visibility_mode=visibility_mode, stride=stride, probe=probe)
+    budget = sc.spec.placement.budget if budget is None else budget
+    solver = sc.spec.placement.solver if solver is None else solver
+    solver_options.setdefault("time_limit_s", sc.spec.placement.time_limit_s if time_limit_s is None else time_limit_s)
+    if should_stop is not None:
+        solver_options.setdefault("should_stop", should_stop)
+    if progress is not None:
+        solver_options.setdefault("progress", progress)  # solver stages (greedy, tabu, mip, ...) as bars
+    money = sc.spec.placement.money_budget if money_budget is None else money_budget
+    if money is not None and not (money >= 0 and np.isfinite(money)):
+        raise InputError(f"money budget: expected a non-negative number, got {money!r}")
+    problem = problem_from_visibility(vis, budget, money)
+    t = time.perf_counter()
+    _stage(progress, "solve")
+    if well_triangulated:  # the greedy with the triangulation requirement (needs geometry: not a registry solver)
+        from camplace.metrics.triangulation import solve_greedy_triangulated
+
+        placement = solve_greedy_triangulated(problem, vis.candidates.positions, vis.targets.positions,
+                                              *triangulation_deg)
+        log.append(f"greedy-triangulated: triangulation-aware cost {placement.info['triangulated_cost']:.6g}")
+    else:
+        placement = solve_stoppable(problem, solver, log=log, **solver_options)
+    timings["solve"] = time.perf_counter() - t
+    if refine or adaptive or robust:
+        t = time.perf_counter()
+        vis, problem, placement = improve_placement(
+            sc, vis, problem, placement, refine=refine, refine_time_s=refine_time_s, adaptive=adaptive,
+            robust=robust, should_stop=should_stop, progress=progress, log=log)
+        timings["beyond_grid"] = time.perf_counter() - t
+    t = time.perf_counter()
+    metrics = placement_metrics(vis, problem, placement.selected, triangulation_deg)
+    timings["metrics"] = time.perf_counter() - t
+    return RunResult(sc, vis, problem, placement, metrics, timings, log)
+
+
+def placement_metrics(vis: Visibility, problem: PlacementProblem, selected: np.ndarray,
+                      triangulation_deg: tuple[float, float] = (20.0, 160.0)) -> Metrics:
+    """Every metric of a selection (rows of vis.V), per region too; shared by ``run`` and
+    camplace.workflows.evaluate so both score a placement the same way."""
+    from camplace.metrics.triangulation import well_triangulated_of_selection
+
+    well = well_triangulated_of_selection(vis.V, vis.candidates.positions, vis.targets.positions,
+                                          selected, *triangulation_deg)
+    return compute_metrics(problem, selected, vis.targets.region_ids, vis.targets.region_names,
+                           well_triangulated=well)

@@ -1,0 +1,106 @@
+"""Atomic writes: never a half-written output (camplace.core.files)."""
+
+from __future__ import annotations
+
+import gc
+import re
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from camplace.core.files import AtomicBatch, atomic_savez, atomic_write_bytes, atomic_write_json, atomic_write_text
+
+SRC = Path(__file__).resolve().parents[2] / "src" / "camplace"
+
+
+def _listing(d: Path) -> set[str]:
+    return {p.name for p in d.iterdir()}
+
+
+def test_atomic_write_replaces_whole_file_and_leaves_no_temporary(tmp_path):
+    f = tmp_path / "sub" / "a.json"
+    atomic_write_json(f, {"a": 1})
+    atomic_write_text(f, "new\n")
+    assert f.read_text() == "new\n"
+    atomic_savez(tmp_path / "z.npz", x=np.arange(3))
+    assert np.load(tmp_path / "z.npz")["x"].tolist() == [0, 1, 2]
+    assert _listing(f.parent) == {"a.json"}
+
+
+def test_failing_write_keeps_the_old_file(tmp_path, monkeypatch):
+    f = tmp_path / "a.txt"
+    atomic_write_text(f, "old")
+
+    def broken_replace(src, dst):
+        raise OSError(28, "No space left on device")
+
+    monkeypatch.setattr("camplace.core.files.os.replace", broken_replace)
+    with pytest.raises(OSError):
+        atomic_write_bytes(f, b"new")
+    assert f.read_text() == "old"
+    assert _listing(tmp_path) == {"a.txt"}
+
+
+def test_batch_commits_all_or_nothing(tmp_path):
+    for name in ("a", "b"):
+        (tmp_path / name).write_text("old")
+    with pytest.raises(RuntimeError):
+        with AtomicBatch() as b:
+            b.stage_text(tmp_path / "a", "new")
+            b.stage_json(tmp_path / "c", [1])
+            raise RuntimeError("the report failed half-way")
+    assert (tmp_path / "a").read_text() == "old" and _listing(tmp_path) == {"a", "b"}
+    with AtomicBatch() as b:
+        b.stage_text(tmp_path / "a", "new")
+        b.stage_savez(tmp_path / "c.npz", x=np.ones(2))
+        assert (tmp_path / "a").read_text() == "old"  # nothing visible before the commit
+    assert (tmp_path / "a").read_text() == "new" and _listing(tmp_path) == {"a", "b", "c.npz"}
+
+
+def test_uncommitted_batch_cleans_up_when_collected(tmp_path):
+    b = AtomicBatch()
+    b.stage_text(tmp_path / "x", "data")
+    assert len(_listing(tmp_path)) == 1 and not (tmp_path / "x").exists()
+    del b
+    gc.collect()
+    assert _listing(tmp_path) == set()
+
+
+def test_report_failure_keeps_previous_contract_files(tmp_path, demo_run, monkeypatch):
+    """write_outputs that fails part-way (here: the report) leaves the old set untouched."""
+    from camplace.outputs.write import write_outputs
+
+    r = demo_run
+    out = tmp_path / "out"
+    write_outputs(out, r.scene.name, r.visibility, r.placement, r.problem.budget, r.metrics, r.timings_s,
+                  report=False)
+    before = {p.name: p.read_bytes() for p in out.iterdir()}
+
+    def broken(*a, **k):
+        raise OSError(28, "No space left on device")
+
+    monkeypatch.setattr("camplace.outputs.report_html.write_report", broken)
+    monkeypatch.setattr("camplace.core.files.np.savez_compressed", broken)
+    with pytest.raises(OSError):
+        write_outputs(out, r.scene.name, r.visibility, r.placement, r.problem.budget, r.metrics, r.timings_s)
+    gc.collect()
+    assert {p.name: p.read_bytes() for p in out.iterdir()} == before
+
+
+# a raw write anywhere in the library bypasses the atomic writers; writes into an in-memory
+# buffer (buf) or to os.devnull are fine
+RAW_WRITE = re.compile(
+    r"open\([^)]*['\"][wax]b?\+?['\"]|\.write_text\(|\.write_bytes\(|np\.save(z|z_compressed)?\((?!buf)|"
+    r"savefig\((?!buf)|\.to_csv\(|json\.dump\(|write_html\(|shutil\.(copy|move)|tofile\(|\.write\((?!buf)")
+
+
+def test_library_writes_files_only_through_camplace_files():
+    offenders = []
+    for f in sorted(SRC.rglob("*.py")):
+        if f.name == "files.py":
+            continue
+        for n, line in enumerate(f.read_text().splitlines(), 1):
+            if RAW_WRITE.search(line) and "os.devnull" not in line and not line.lstrip().startswith("#"):
+                offenders.append(f"{f.relative_to(SRC)}:{n}: {line.strip()}")
+    assert not offenders, "write through camplace.core.files (atomic):\n" + "\n".join(offenders)

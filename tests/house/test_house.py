@@ -1,0 +1,124 @@
+"""The rules of the house (docs/design.md), checked on the source tree itself.
+
+- imports point down the pipeline's layers (LAYERS), never up, and never in a circle,
+  not even inside a function (every ``import`` in the AST counts);
+- no module over 500 lines;
+- no library string names a CLI flag (only ``camplace.cli`` words errors for the
+  command line).
+"""
+
+from __future__ import annotations
+
+import ast
+import re
+from pathlib import Path
+
+SRC = Path(__file__).resolve().parents[2] / "src"
+LAYERS = ["core", "spec", "scene", "targets", "cameras", "visibility", "problem", "metrics", "solvers", "improve",
+          "outputs", "workflows", "cli"]
+MAX_LINES = 500
+
+
+def _modname(p: Path) -> str:
+    parts = list(p.relative_to(SRC).with_suffix("").parts)
+    if parts[-1] == "__init__":
+        parts = parts[:-1]
+    return ".".join(parts)
+
+
+def _modules() -> dict[str, Path]:
+    return {_modname(p): p for p in sorted((SRC / "camplace").rglob("*.py"))}
+
+
+def import_graph() -> dict[str, set[str]]:
+    """module -> camplace modules it imports (``from pkg import sub`` counts as pkg.sub)."""
+    mods = _modules()
+    edges: dict[str, set[str]] = {}
+    for m, p in mods.items():
+        out: set[str] = set()
+        for node in ast.walk(ast.parse(p.read_text())):
+            if isinstance(node, ast.Import):
+                out.update(a.name for a in node.names if a.name.startswith("camplace"))
+            elif isinstance(node, ast.ImportFrom) and node.level == 0 and (node.module or "").startswith("camplace"):
+                for a in node.names:
+                    sub = f"{node.module}.{a.name}"
+                    out.add(sub if sub in mods else node.module)
+        edges[m] = {o for o in out if o in mods and o != m}
+    return edges
+
+
+def _layer(m: str) -> int:
+    parts = m.split(".")
+    return LAYERS.index(parts[1]) if len(parts) > 1 and parts[1] in LAYERS else -1
+
+
+def test_every_module_sits_in_a_layer():
+    loose = [m for m in _modules() if m != "camplace" and _layer(m) < 0]
+    assert not loose, f"modules outside the pipeline's packages: {loose}"
+
+
+def test_imports_point_down():
+    up = sorted(f"{m} -> {o}" for m, os in import_graph().items() for o in os
+                if _layer(m) >= 0 and _layer(o) > _layer(m))
+    assert not up, "imports that point up the pipeline:\n" + "\n".join(up)
+
+
+def test_no_import_cycles():
+    edges = import_graph()
+    index: dict[str, int] = {}
+    low: dict[str, int] = {}
+    stack: list[str] = []
+    on: set[str] = set()
+    cycles: list[list[str]] = []
+    counter = [0]
+
+    def visit(v: str) -> None:  # Tarjan's strongly connected components
+        index[v] = low[v] = counter[0]
+        counter[0] += 1
+        stack.append(v)
+        on.add(v)
+        for w in sorted(edges.get(v, ())):
+            if w not in index:
+                visit(w)
+                low[v] = min(low[v], low[w])
+            elif w in on:
+                low[v] = min(low[v], index[w])
+        if low[v] == index[v]:
+            comp = []
+            while True:
+                w = stack.pop()
+                on.discard(w)
+                comp.append(w)
+                if w == v:
+                    break
+            if len(comp) > 1:
+                cycles.append(sorted(comp))
+
+    for v in sorted(edges):
+        if v not in index:
+            visit(v)
+    assert not cycles, f"import cycles: {cycles}"
+
+
+def test_no_module_over_500_lines():
+    long = {m: n for m, p in _modules().items() if (n := len(p.read_text().splitlines())) > MAX_LINES}
+    assert not long, f"modules over {MAX_LINES} lines: {long}"
+
+
+FLAG = re.compile(r"(?<![\w-])--[a-z][a-z0-9]*(?:-[a-z0-9]+)*")
+
+
+def test_library_strings_name_no_cli_flag():
+    hits = []
+    for m, p in _modules().items():
+        if m.startswith("camplace.cli"):
+            continue
+        tree = ast.parse(p.read_text())
+        docstrings = {id(n.body[0].value) for n in ast.walk(tree)
+                      if isinstance(n, (ast.Module, ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef))
+                      and n.body and isinstance(n.body[0], ast.Expr) and isinstance(n.body[0].value, ast.Constant)}
+        for node in ast.walk(tree):
+            if isinstance(node, ast.Constant) and isinstance(node.value, str) and id(node) not in docstrings:
+                for flag in FLAG.findall(node.value):
+                    hits.append(f"{m}:{node.lineno}: {flag}")
+    assert not hits, "library strings that name CLI flags (word them in camplace.cli):\n" + "\n".join(hits)
