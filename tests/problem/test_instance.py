@@ -9,7 +9,7 @@ import pytest
 
 from camplace.core.errors import InputError
 from camplace.problem.instance import instance_name, load_problem_npz, save_problem_npz, solve_instance, write_instance_outputs
-from tests.test_bounds import random_problem
+from tests.solvers.test_bounds import random_problem
 
 
 def test_round_trip_minimal_arrays(tmp_path):

@@ -7,7 +7,7 @@ from hypothesis import HealthCheck, given, settings
 
 from camplace.solvers import SOLVERS, solve
 from camplace.solvers.certify import solve_certify
-from tests.test_bounds import brute_force, problems, random_problem
+from tests.solvers.test_bounds import brute_force, problems, random_problem
 
 
 @settings(max_examples=8, deadline=None, suppress_health_check=[HealthCheck.too_slow])

@@ -10,7 +10,7 @@ from camplace.problem.model import PlacementProblem
 from camplace.solvers import SOLVERS, solve
 from camplace.solvers.greedy import solve_greedy
 from camplace.solvers.tabu import TabuSearch, solve_tabu
-from tests.test_bounds import brute_force, problems, random_problem
+from tests.solvers.test_bounds import brute_force, problems, random_problem
 
 FAST = settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 
