@@ -9,7 +9,7 @@ import sys
 import numpy as np
 import pytest
 
-from camplace.spec.schema import parse_scene
+from camplace.spec.loading import parse_scene
 
 REPO = Path(__file__).resolve().parents[1]
 SHARED = REPO.parent / "shared"

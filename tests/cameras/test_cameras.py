@@ -13,7 +13,7 @@ from hypothesis import strategies as st
 
 from camplace.cameras.models import CameraModel, camera_from_spec, load_calibration, project_nb
 from camplace.cameras.candidates import Candidates, location_ids_of, rotation_from_ypr
-from camplace.spec.schema import parse_scene
+from camplace.spec.loading import parse_scene
 from camplace.core.errors import InputError
 from camplace.scene.build import build_scene
 from camplace.targets.build import build_targets

@@ -1,5 +1,5 @@
-"""Free space from scans: floor/ceiling, carving, clearance, connectivity, scene glue,
-surface targets on scans, wall mounts, a scene from just a scan."""
+"""Free space from scans: carving, clearance, connectivity, scene glue, surface targets
+on scans, wall mounts."""
 
 from __future__ import annotations
 
@@ -7,47 +7,13 @@ import numpy as np
 import pytest
 import yaml
 
-from camplace.spec.schema import parse_scene
 from camplace.core.errors import InputError
-from camplace.scene.freespace import (auto_footprint, carve_observed, check_grid_memory, compute_free_space,
-                                detect_floor_ceiling, pca_normals, scene_from_cloud)
-from camplace.scene.loaders.pointcloud import write_ply
+from camplace.spec.loading import parse_scene
 from camplace.scene.build import build_scene
+from camplace.scene.freespace import carve_observed, compute_free_space
+from camplace.scene.loaders.pointcloud import write_ply
 from camplace.targets.build import build_targets
 from tests.conftest import box_room
-
-
-def _box_room_cloud(rng, w=6.0, d=5.0, h=3.0, n=40_000):
-    """Points on the floor, ceiling and four walls of a w x d x h room."""
-    k = n // 6
-    pts = [np.c_[rng.uniform(0, w, k), rng.uniform(0, d, k), np.zeros(k)],
-           np.c_[rng.uniform(0, w, k), rng.uniform(0, d, k), np.full(k, h)],
-           np.c_[np.zeros(k), rng.uniform(0, d, k), rng.uniform(0, h, k)],
-           np.c_[np.full(k, w), rng.uniform(0, d, k), rng.uniform(0, h, k)],
-           np.c_[rng.uniform(0, w, k), np.zeros(k), rng.uniform(0, h, k)],
-           np.c_[rng.uniform(0, w, k), np.full(k, d), rng.uniform(0, h, k)]]
-    return np.concatenate(pts) + rng.normal(0, 0.005, (6 * k, 3))
-
-
-def test_floor_and_ceiling_detected():
-    rng = np.random.default_rng(0)
-    lv = detect_floor_ceiling(_box_room_cloud(rng) + [0, 0, -1.2])
-    assert abs(lv["floor_z"] + 1.2) < 0.03 and abs(lv["ceiling_z"] - 1.8) < 0.03
-
-
-def test_no_ceiling_when_open_top():
-    rng = np.random.default_rng(1)
-    p = _box_room_cloud(rng)
-    lv = detect_floor_ceiling(p[p[:, 2] < 2.9])
-    assert abs(lv["floor_z"]) < 0.03 and lv["ceiling_z"] is None
-
-
-def test_auto_footprint_of_a_room():
-    rng = np.random.default_rng(2)
-    fp = auto_footprint(_box_room_cloud(rng), 0.0, 3.0)
-    from shapely.geometry import Polygon
-
-    assert abs(Polygon(fp).area - 30.0) < 1.0
 
 
 def test_carving_does_not_see_inside_a_closed_box():
@@ -75,19 +41,6 @@ def test_free_space_clearance_and_connectivity():
     assert not fs.free[9, 12, 5]  # within 0.1 m of the block
     assert fs.free[8, 12, 5]
     assert fs.info["components_kept"] == 1
-
-
-def test_memory_check_names_the_numbers():
-    with pytest.raises(InputError, match=r"2000x2000x2000 grid needs 52.2 GiB .*limit 4.0 GiB"):
-        check_grid_memory((2000, 2000, 2000), 7, "test", limit=4 * 1024**3)
-    assert check_grid_memory((10, 10, 10), 7, "test") == 7000
-
-
-def test_pca_normals_of_a_plane():
-    rng = np.random.default_rng(3)
-    p = np.c_[rng.uniform(0, 1, 2000), rng.uniform(0, 1, 2000), 0.3 + rng.normal(0, 0.001, 2000)]
-    n = pca_normals(p, p[:10])
-    assert np.allclose(np.abs(n[:, 2]), 1.0, atol=1e-3)
 
 
 @pytest.fixture(scope="module")
@@ -200,40 +153,9 @@ def test_wall_mount_needs_height():
         box_room(mounts=[{"kind": "wall", "camera": "cam"}])
 
 
-def test_scene_from_cloud_tilted_scan(tmp_path):
-    from camplace.scene.loaders.cleanup import apply_matrix, rigid_matrix
-
-    rng = np.random.default_rng(5)
-    p = apply_matrix(_box_room_cloud(rng), rigid_matrix(1.0, (3.0, -2.0, 0.0), (0.0, 0.0, -1.4)))
-    write_ply(tmp_path / "s.ply", p)
-    data, rep = scene_from_cloud(str(tmp_path / "s.ply"), heights=(0.5, 1.0, 1.5, 2.9))
-    assert abs(data["room"]["height"] - 3.0) < 0.05
-    assert abs(rep["floor_area_m2"] - 30.0) < 1.5
-    assert data["targets"][0]["heights"] == [0.5, 1.0, 1.5]  # 2.9 m is too close to the ceiling
-    assert "transform" in data["obstacles"][0] and "level_floor" not in data["obstacles"][0]["transform"]
-    sc = build_scene(parse_scene(data))
-    z = sc.points[:, 2]
-    assert abs(np.median(z[z < 0.5])) < 0.02  # floor at z = 0 after the stored transform
-
-
-def test_auto_footprint_keeps_an_l_shape():
-    from shapely.geometry import Polygon
-
-    from camplace.spec.builtin import resolve_scene
-    from camplace.workflows.scan import scan_scene
-
-    spec, _, _ = resolve_scene("store-a")  # L-shaped, wall shelves up to 2.2 m
-    sc = build_scene(spec)
-    cloud = scan_scene(sc, step_deg=0.6, noise=0.005)
-    fp = Polygon(auto_footprint(cloud.points, 0.0, 3.0))
-    iou = fp.intersection(sc.polygon).area / fp.union(sc.polygon).area
-    assert iou > 0.95
-    assert not fp.contains(Polygon([(14.0, 8.0), (15.5, 8.0), (15.5, 11.5), (14.0, 11.5)]).centroid)  # the notch
-
-
 def test_a_viewpoint_outside_the_room_is_ignored_and_reported(tmp_path):
     from camplace.spec.builtin import resolve_scene
-    from camplace.scene.freespace import describe_free_space
+    from camplace.scene.from_scan import describe_free_space
     from camplace.scene.loaders.pointcloud import write_pcd
     from camplace.workflows.scan import roundtrip_spec, scan_scene
 

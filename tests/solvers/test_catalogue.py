@@ -82,7 +82,7 @@ def test_repair_fits_any_selection():
 
 def test_scene_money_budget_key():
     from camplace.spec.builtin import resolve_scene
-    from camplace.spec.schema import parse_scene
+    from camplace.spec.loading import parse_scene
     import yaml
     from camplace.spec.builtin import builtin_yaml
 

@@ -1,5 +1,6 @@
-"""The scene schema (camplace.spec.schema): one-line errors with key paths, 'did you mean',
-resource estimates before allocation, referenced files, YAML loading."""
+"""The scene schema (camplace.spec.schema, .wording, .loading, .resources): one-line errors
+with key paths, 'did you mean', resource estimates before allocation, referenced files,
+YAML loading."""
 
 from __future__ import annotations
 
@@ -9,8 +10,9 @@ import math
 import pytest
 import yaml
 
-from camplace.spec.schema import (AngleRange, angle_values, check_referenced_files, check_resources, estimate_resources,
-                             load_scene_file, load_yaml_text, memory_limit_bytes, parse_scene)
+from camplace.spec.loading import check_referenced_files, load_scene_file, load_yaml_text, parse_scene
+from camplace.spec.resources import check_resources, estimate_resources
+from camplace.spec.schema import AngleRange, angle_values
 from camplace.core.errors import InputError
 from conftest import BASE
 
@@ -119,7 +121,8 @@ def test_refused_before_allocating_with_the_numbers(monkeypatch):
         check_resources(spec, "s.yaml", limit_bytes=2 * 1024**3)
     msg = str(e.value)
     assert msg.startswith("s.yaml: occupancy_resolution: 0.001 m would need 2.71e+10 occupancy cells (25.5 GiB")
-    assert "limit 2.0 GiB" in msg and "--max-memory-gb" in msg
+    assert "limit 2.0 GiB" in msg and "max_memory_bytes" in msg and "--" not in msg
+    assert e.value.option == "max_memory_bytes"
     assert not calls
     # the same scene is fine with a coarser grid
     check_resources(parse_scene(with_("occupancy_resolution", 0.05)), "s.yaml", limit_bytes=2 * 1024**3)
@@ -132,16 +135,6 @@ def test_total_over_the_limit_lists_the_biggest_parts():
     limit = int((biggest + est.total_bytes) / 2)  # every part fits, the sum does not
     with pytest.raises(InputError, match=r"the scene would need about .* \(occupancy_resolution: "):
         check_resources(spec, "s.yaml", limit_bytes=limit)
-
-
-def test_memory_limit_from_environment(monkeypatch):
-    monkeypatch.setenv("CAMPLACE_MAX_MEMORY_GB", "1.5")
-    assert memory_limit_bytes() == int(1.5 * 1024**3)
-    monkeypatch.setenv("CAMPLACE_MAX_MEMORY_GB", "-2")
-    with pytest.raises(InputError, match="positive"):
-        memory_limit_bytes()
-    monkeypatch.delenv("CAMPLACE_MAX_MEMORY_GB")
-    assert memory_limit_bytes() > 0
 
 
 def test_builtin_scenes_are_valid_and_fit_in_memory():

@@ -55,7 +55,7 @@ def test_default_viewpoints_on_free_floor():
 def test_scan_requires_box_scene(tmp_path):
     from camplace.core.errors import InputError
     from camplace.scene.loaders.pointcloud import write_ply
-    from camplace.spec.schema import parse_scene
+    from camplace.spec.loading import parse_scene
 
     write_ply(tmp_path / "p.ply", np.random.default_rng(0).uniform(0, 3, (100, 3)))
     data = box_room().model_dump(mode="json", exclude_defaults=True)

@@ -9,7 +9,8 @@ import yaml
 from shapely.geometry import Polygon
 
 from camplace.spec.builtin import BUILTIN_SCENES, WAREHOUSE, builtin_yaml, resolve_scene, warehouse_spec
-from camplace.spec.schema import angle_values, parse_scene
+from camplace.spec.loading import parse_scene
+from camplace.spec.schema import angle_values
 from camplace.core.errors import InputError
 
 

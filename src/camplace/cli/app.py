@@ -538,8 +538,8 @@ def _floats(text: str, option: str, n: int | None = None) -> list[float]:
 
 def _scene_from_cloud(scene, cloud, save_scene, up, no_level_floor, crop, downsample, heights, coverage,
                       wall_mounts, budget, viewpoint=None):
-    from camplace.spec.schema import parse_scene
-    from camplace.scene.freespace import scene_from_cloud
+    from camplace.spec.loading import parse_scene
+    from camplace.scene.from_scan import scene_from_cloud
 
     if scene is not None:
         raise CamplaceInputErrorProxy("run: give either a scene or --cloud, not both")

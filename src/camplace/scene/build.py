@@ -15,8 +15,9 @@ import numpy as np
 import shapely
 from shapely.geometry import Polygon
 
-from camplace.spec.schema import SceneSpec, memory_limit_bytes
 from camplace.core.errors import InputError
+from camplace.core.memory import check_memory, memory_limit_bytes
+from camplace.spec.schema import SceneSpec
 
 if TYPE_CHECKING:
     from camplace.scene.freespace import FreeSpace
@@ -82,6 +83,7 @@ class Scene:
 
 
 def estimate_grid_bytes(spec: SceneSpec) -> int:
+    """Cells (= bytes, bool) of the occupancy grid of ``spec``, border layers included."""
     fp = np.asarray(spec.room.footprint, float)
     ext = np.r_[fp.max(0) - fp.min(0), spec.room.height]
     n = np.ceil(ext / spec.occupancy_resolution) + 2
@@ -105,13 +107,9 @@ def build_scene(spec: SceneSpec, base_dir: Path | None = None, source: str = "<s
     poly = _validate_footprint(spec, source)
     need = estimate_grid_bytes(spec)
     # last guard for direct callers: the pipeline already checked every size against the
-    # user's limit (camplace.spec.schema.check_resources, --max-memory-gb) before this point
-    limit = max(MAX_GRID_BYTES, memory_limit_bytes())
-    if need > limit:
-        raise InputError(
-            f"{source}: occupancy_resolution: {spec.occupancy_resolution} m would need a "
-            f"{need / 1024**3:.1f} GiB occupancy grid (limit {limit / 1024**3:.1f} GiB); use a coarser resolution"
-        )
+    # user's limit (camplace.spec.resources.check_resources) before this point
+    check_memory(need, f"{source}: occupancy_resolution: {spec.occupancy_resolution} m", "use a coarser resolution",
+                 items=f"{need:.3g} occupancy cells", limit=max(MAX_GRID_BYTES, memory_limit_bytes()))
     res = float(spec.occupancy_resolution)
     fp = np.asarray(spec.room.footprint, float)
     lo = np.r_[fp.min(0), 0.0] - res

@@ -12,8 +12,10 @@ from pathlib import Path
 
 import yaml
 
-from camplace.spec.schema import SceneSpec, load_scene_file, parse_scene
 from camplace.core.errors import InputError
+from camplace.spec.loading import load_scene_file, parse_scene
+from camplace.spec.schema import SceneSpec
+from camplace.spec.wording import did_you_mean
 
 BUILTIN_SCENES = ("demo", "standard-store", "store-a", "warehouse", "catalogue-store")
 PROCEDURAL_SCENES = ("warehouse",)  # generated in code; ``warehouse:AREA`` picks the size
@@ -130,7 +132,5 @@ def resolve_scene(scene: str | Path | SceneSpec) -> tuple[SceneSpec, Path | None
     p = Path(text)
     if p.suffix.lower() in (".yaml", ".yml") or p.exists():
         return load_scene_file(p), p.resolve().parent, str(p)
-    from camplace.spec.schema import _did_you_mean
-
-    raise InputError(f"scene '{text}': not a built-in scene{_did_you_mean(text, list(BUILTIN_SCENES))} "
+    raise InputError(f"scene '{text}': not a built-in scene{did_you_mean(text, list(BUILTIN_SCENES))} "
                      f"({', '.join(BUILTIN_SCENES)}) nor an existing .yaml file")

@@ -1,23 +1,19 @@
-"""The scene file (YAML) schema: the user's contract, validated with pydantic.
+"""The scene file (YAML) schema: the user's contract, as pydantic models.
 
 Every error names the file, the key path (e.g. ``mounts[0].yaw_deg.step``) and what
-was expected. See docs/scene-file.md for the reference.
+was expected (worded by camplace.spec.wording; files read by camplace.spec.loading).
+See docs/scene-file.md for the reference.
 """
 
 from __future__ import annotations
 
-import difflib
 import math
-from dataclasses import dataclass
-from pathlib import Path
 from typing import Annotated, Any, Literal, Union
 
-import yaml
-from pydantic import (BaseModel, BeforeValidator, ConfigDict, Discriminator, Field, Tag, ValidationError,
-                      field_validator, model_validator)
+from pydantic import BaseModel, BeforeValidator, ConfigDict, Discriminator, Field, Tag, model_validator
 from pydantic_core import PydanticCustomError
 
-from camplace.core.errors import InputError
+from camplace.spec.wording import did_you_mean, name_list
 
 MAX_ANGLES_PER_AXIS = 3600  # an angle list/range longer than this is a typo (e.g. step 0.001)
 
@@ -83,7 +79,6 @@ def _angles_kind(v: Any) -> str:
 AngleList = Annotated[list[Finite], Field(min_length=1, max_length=MAX_ANGLES_PER_AXIS)]
 Angles = Annotated[Union[Annotated[AngleRange, Tag("range")], Annotated[AngleList, Tag("list")],
                          Annotated[Finite, Tag("value")]], Discriminator(_angles_kind)]
-_UNION_TAGS = ("range", "list", "value")
 
 
 def angle_values(a: Angles) -> list[float]:
@@ -349,8 +344,8 @@ class SceneSpec(_Strict):
             for k, name in enumerate(t.of or []):
                 if name not in obstacle_names:
                     raise scene_error(f"targets[{i}].of[{k}]", f"unknown obstacle '{name}'"
-                                      f"{_did_you_mean(name, obstacle_names)}; expected one of "
-                                      f"{_names(obstacle_names)}")
+                                      f"{did_you_mean(name, obstacle_names)}; expected one of "
+                                      f"{name_list(obstacle_names)}")
             for k, h in enumerate(t.heights or []):
                 if not 0 < h < H:
                     raise scene_error(f"targets[{i}].heights[{k}]",
@@ -364,7 +359,7 @@ class SceneSpec(_Strict):
         for i, m in enumerate(self.mounts):
             if m.camera not in camera_names:
                 raise scene_error(f"mounts[{i}].camera", f"unknown camera '{m.camera}'"
-                                  f"{_did_you_mean(m.camera, camera_names)}; expected one of {_names(camera_names)}")
+                                  f"{did_you_mean(m.camera, camera_names)}; expected one of {name_list(camera_names)}")
             if m.kind == "wall" and not 0 < (m.height or 0) < H:
                 raise scene_error(f"mounts[{i}].height", f"{m.height} m is outside the room; expected (0, {H}) m")
             off = getattr(m, "offset_below_ceiling", None)
@@ -378,356 +373,3 @@ class SceneSpec(_Strict):
                 if math.dist(seg[0], seg[1]) <= 1e-9:
                     raise scene_error(f"mounts[{i}].walls[{k}]", "zero-length wall segment (both ends equal)")
         return self
-
-
-def _names(names: list[str]) -> str:
-    return ", ".join(f"'{n}'" for n in names[:8]) + (", ..." if len(names) > 8 else "") if names else "(none defined)"
-
-
-def _did_you_mean(word: str, choices: list[str]) -> str:
-    close = difflib.get_close_matches(word, choices, n=1)
-    return f" (did you mean '{close[0]}'?)" if close else ""
-
-
-def _loc_to_path(loc: tuple[Any, ...]) -> str:
-    """pydantic's error location -> ``mounts[0].yaw_deg.step`` (union tags dropped)."""
-    out = ""
-    for part in loc:
-        if isinstance(part, int):
-            out += f"[{part}]"
-        elif part in _UNION_TAGS or _is_branch_name(str(part)):
-            continue  # union branch names are noise for the user
-        else:
-            out += ("." if out else "") + str(part)
-    return out
-
-
-def _is_branch_name(part: str) -> bool:
-    """pydantic names the branch of an untagged union by its type ('float', 'list[...]', 'Box', ...)."""
-    return part in ("float", "int", "str", "bool", "constrained-float", "constrained-int", "constrained-str") or (
-        part.endswith("]") and "[" in part) or part.startswith("function-") or (
-        part[:1].isupper() and part in _model_names())
-
-
-def _model_names() -> set[str]:
-    if not _MODEL_NAMES:
-        seen: set[type[BaseModel]] = set()
-        todo: list[type[BaseModel]] = [SceneSpec]
-        while todo:
-            m = todo.pop()
-            if m not in seen:
-                seen.add(m)
-                for f in m.model_fields.values():
-                    todo += _models_in(f.annotation)
-        _MODEL_NAMES.update(m.__name__ for m in seen)
-    return _MODEL_NAMES
-
-
-_MODEL_NAMES: set[str] = set()
-
-
-def _models_in(tp: Any) -> list[type[BaseModel]]:
-    """Every pydantic model a type annotation may hold (through Annotated, Union, list, tuple, dict)."""
-    import typing
-
-    if isinstance(tp, type) and issubclass(tp, BaseModel):
-        return [tp]
-    if typing.get_origin(tp) is typing.Annotated:
-        return _models_in(typing.get_args(tp)[0])
-    out: list[type[BaseModel]] = []
-    for a in typing.get_args(tp) or ():
-        for m in _models_in(a):
-            if m not in out:
-                out.append(m)
-    return out
-
-
-def _fields_of(model: type[BaseModel], loc: tuple[Any, ...]) -> list[str]:
-    """Field names valid at the parent of ``loc`` (for 'did you mean')."""
-    cur = [model]
-    for part in loc[:-1]:
-        if isinstance(part, int) or part in _UNION_TAGS:
-            continue
-        nxt: list[type[BaseModel]] = []
-        for m in cur:
-            f = m.model_fields.get(str(part))
-            if f is not None:
-                nxt += [x for x in _models_in(f.annotation) if x not in nxt]
-        if not nxt:
-            if any(m.__name__ == part for m in cur):  # union branch named by its model
-                continue
-            return []
-        cur = nxt
-    names: list[str] = []
-    for m in cur:
-        names += [k for k in m.model_fields if k not in names]
-    return names
-
-
-_ERROR_ORDER = {"extra_forbidden": 0}  # a mistyped key also shows up as a missing one: name the typo
-
-
-def format_error_entry(e: dict, model: type[BaseModel] | None = None, missing: tuple[str, ...] = ()) -> tuple[str, str]:
-    """One pydantic error -> (key path, message); ``missing``: required keys missing beside it."""
-    import re
-
-    loc = tuple(e["loc"])
-    path = _loc_to_path(loc)
-    msg = e["msg"]
-    t = e["type"]
-    ctx = e.get("ctx") or {}
-    if t == "scene":
-        sub = ctx.get("path", "")
-        path = (path + ("." if path and not sub.startswith("[") else "") + sub) if sub else path
-        return path, ctx.get("message", msg)
-    if t == "extra_forbidden":
-        key = str(loc[-1])
-        hint = _did_you_mean(key, list(missing)) or (_did_you_mean(key, _fields_of(model, loc)) if model else "")
-        return path, f"unknown key '{key}'{hint}"
-    if t == "missing":
-        return path, "required key is missing"
-    if msg.startswith("Value error, "):
-        msg = msg[len("Value error, "):]
-    msg = re.sub(r"^Input should be ", "expected ", msg)
-    msg = re.sub(r"^Input should have ", "expected ", msg)
-    inp = e.get("input")
-    if isinstance(inp, float) and not math.isfinite(inp):
-        msg = "expected a finite number"
-    if t == "literal_error" and isinstance(inp, str):
-        msg += _did_you_mean(inp, re.findall(r"'([^']*)'", str(ctx.get("expected", ""))))
-    if "input" in e and not isinstance(inp, (dict, list, tuple, BaseModel)):
-        r = repr(inp)
-        msg += f" (got {r if len(r) <= 60 else r[:57] + '...'})"
-    return path, msg
-
-
-def format_validation_error(err: ValidationError, source: str, model: type[BaseModel] | None = None) -> str:
-    """One line: ``source: key.path: what is wrong`` (the first error; count of the rest)."""
-    errors = sorted(err.errors(), key=lambda e: _ERROR_ORDER.get(e["type"], 1))
-    first = errors[0]
-    missing = tuple(str(e["loc"][-1]) for e in errors
-                    if e["type"] == "missing" and tuple(e["loc"][:-1]) == tuple(first["loc"][:-1]))
-    path, msg = format_error_entry(first, model, missing)
-    more = len(errors) - 1
-    tail = f" (and {more} more error{'s' if more > 1 else ''})" if more else ""
-    return f"{source}: {path or '<top>'}: {msg}{tail}".replace("\n", " ")
-
-
-# --- checks that need more than one key: referenced files, memory -------------------------------
-
-FILE_KEYS = ("mesh", "point_cloud", "octomap", "calibration", "file", "path")  # scene keys that name a file
-
-
-def _walk_files(obj: Any, path: str):
-    """Yield (key path, file name) for every FILE_KEYS string anywhere in a spec."""
-    if isinstance(obj, BaseModel):
-        for k in type(obj).model_fields:
-            v = getattr(obj, k, None)
-            sub = f"{path}.{k}" if path else k
-            if k in FILE_KEYS and isinstance(v, (str, Path)):
-                yield sub, str(v)
-            else:
-                yield from _walk_files(v, sub)
-    elif isinstance(obj, (list, tuple)):
-        for i, v in enumerate(obj):
-            yield from _walk_files(v, f"{path}[{i}]")
-
-
-def check_referenced_files(spec: BaseModel, base_dir: Path | None, source: str) -> None:
-    """Every file the scene names (meshes, point clouds, ...) must exist, relative to the scene file."""
-    for path, name in _walk_files(spec, ""):
-        f = Path(name).expanduser()
-        if not f.is_absolute() and base_dir is not None:
-            f = base_dir / f
-        if not f.is_file():
-            where = f" (looked in {f.parent})" if not Path(name).is_absolute() else ""
-            raise InputError(f"{source}: {path}: file '{name}' not found{where}")
-
-
-GIB = 1024**3
-
-
-def memory_limit_bytes() -> int:
-    """The memory a run may plan to use: ``CAMPLACE_MAX_MEMORY_GB`` if set, else 80 % of physical RAM."""
-    import os
-
-    env = os.environ.get("CAMPLACE_MAX_MEMORY_GB")
-    if env:
-        try:
-            v = float(env)
-        except ValueError:
-            raise InputError(f"CAMPLACE_MAX_MEMORY_GB: expected a number of GiB, got '{env}'") from None
-        if not (v > 0 and math.isfinite(v)):
-            raise InputError(f"CAMPLACE_MAX_MEMORY_GB: expected a positive number of GiB, got '{env}'")
-        return int(v * GIB)
-    try:
-        return int(0.8 * os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES"))
-    except (ValueError, OSError, AttributeError):  # pragma: no cover - non-POSIX
-        return 8 * GIB
-
-
-# bytes per item, measured roughly on the stage code (arrays + temporaries)
-BYTES_PER_OCC_CELL = 1.0  # bool grid
-BYTES_PER_OCC_COLUMN = 40.0  # 2D meshgrid + inside test over x, y
-BYTES_PER_TARGET = 160.0  # positions, normals, gamma, weights, region ids, masks, visibility inputs
-BYTES_PER_TARGET_GRID_CELL = 40.0  # xy meshgrid of the volume grid
-BYTES_PER_CANDIDATE = 500.0  # positions, angles, rotations (+ temporaries), ids, visibility counts
-
-
-@dataclass(frozen=True)
-class ResourceEstimate:
-    """Sizes a scene will allocate, computed from the spec alone (nothing allocated).
-    Each ``items`` entry: (key path to blame, what, count, bytes)."""
-
-    items: tuple[tuple[str, str, float, float], ...]
-
-    @property
-    def total_bytes(self) -> float:
-        return float(sum(it[3] for it in self.items))
-
-    def count(self, what: str) -> float:
-        return float(sum(it[2] for it in self.items if it[1] == what))
-
-
-def _n_angles(a: Any) -> int:
-    if isinstance(a, AngleRange):
-        return a.count()
-    if isinstance(a, (list, tuple)):
-        return len(a)
-    return 1
-
-
-def estimate_resources(spec: "SceneSpec") -> ResourceEstimate:
-    """Upper estimates of the occupancy grid, target and candidate sizes of a scene."""
-    fp = [tuple(map(float, p)) for p in spec.room.footprint]
-    w = max(p[0] for p in fp) - min(p[0] for p in fp)
-    d = max(p[1] for p in fp) - min(p[1] for p in fp)
-    H = float(spec.room.height)
-    items: list[tuple[str, str, float, float]] = []
-    r = float(spec.occupancy_resolution)
-    nx, ny, nz = (math.ceil(e / r) + 2 for e in (w, d, H))
-    cells = float(nx) * ny * nz
-    items.append(("occupancy_resolution", "occupancy cells", cells,
-                  cells * BYTES_PER_OCC_CELL + float(nx) * ny * BYTES_PER_OCC_COLUMN))
-    v = float(spec.voxel_size)
-    grid_xy = float(math.floor(w / v) + 1) * float(math.floor(d / v) + 1)
-    boxes = {o.name: o.box for o in spec.obstacles if getattr(o, "box", None) is not None}
-    for i, t in enumerate(spec.targets):
-        if t.kind == "volume":
-            n = grid_xy * len(t.heights or [])
-            items.append((f"targets[{i}]", "targets", n, n * BYTES_PER_TARGET + grid_xy * BYTES_PER_TARGET_GRID_CELL))
-        else:
-            n = 0.0
-            for name in t.of or []:
-                b = boxes.get(name)
-                if b is None:
-                    continue
-                ext = [hi - lo for lo, hi in zip(b.min, b.max)]
-                for a in range(3):
-                    u, q = [k for k in range(3) if k != a]
-                    n += 2 * (math.ceil(ext[u] / v) + 1) * (math.ceil(ext[q] / v) + 1)
-            items.append((f"targets[{i}]", "targets", n, n * BYTES_PER_TARGET))
-    for i, m in enumerate(spec.mounts):
-        spacing = getattr(m, "spacing", None)
-        if not spacing:
-            continue
-        if getattr(m, "kind", "") == "ceiling_grid":
-            pts = float(math.floor(w / spacing) + 1) * float(math.floor(d / spacing) + 1)
-        else:  # wall or other mounts: along the walls (given segments or the footprint's edges)
-            segs = getattr(m, "walls", None) or [(fp[k], fp[(k + 1) % len(fp)]) for k in range(len(fp))]
-            pts = sum(math.dist(a, b) / spacing + 1 for a, b in segs)
-        n = pts * _n_angles(getattr(m, "yaw_deg", 1)) * _n_angles(getattr(m, "pitch_deg", 1)) * \
-            _n_angles(getattr(m, "roll_deg", 1))
-        items.append((f"mounts[{i}]", "candidates", n, n * BYTES_PER_CANDIDATE))
-    return ResourceEstimate(tuple(items))
-
-
-def _gib(b: float) -> str:
-    return f"{b / GIB:.1f} GiB" if b >= 0.1 * GIB else f"{b / 1024**2:.0f} MiB"
-
-
-def check_resources(spec: "SceneSpec", source: str, limit_bytes: int | None = None) -> ResourceEstimate:
-    """Refuse (InputError, with the numbers) a scene whose grids would not fit in memory,
-    before anything is allocated."""
-    limit = memory_limit_bytes() if limit_bytes is None else int(limit_bytes)
-    est = estimate_resources(spec)
-    hint = "set the limit with --max-memory-gb or CAMPLACE_MAX_MEMORY_GB"
-    fix = {"occupancy_resolution": "use a coarser occupancy_resolution",
-           "targets": "use a coarser voxel_size or fewer heights", "mounts": "use a larger spacing or fewer angles"}
-    for path, what, n, b in sorted(est.items, key=lambda it: -it[3]):
-        if b > limit:
-            key = path if path == "occupancy_resolution" else (
-                "voxel_size" if path.startswith("targets") else path + ".spacing")
-            value = {"occupancy_resolution": spec.occupancy_resolution, "voxel_size": spec.voxel_size}.get(key)
-            shown = f" {value} m" if value is not None else ""
-            raise InputError(f"{source}: {key}:{shown} would need {n:.3g} {what} ({_gib(b)} of memory, limit "
-                             f"{_gib(limit)}); {fix[path.split('[')[0]]} ({hint})")
-    if est.total_bytes > limit:
-        parts = ", ".join(f"{p}: {_gib(b)}" for p, _, _, b in sorted(est.items, key=lambda it: -it[3])[:3])
-        raise InputError(f"{source}: the scene would need about {_gib(est.total_bytes)} of memory ({parts}), "
-                         f"limit {_gib(limit)}; use coarser grids ({hint})")
-    return est
-
-
-def parse_scene(data: Any, source: str = "<scene>") -> SceneSpec:
-    """Validate a scene mapping; raise InputError with a one-line message."""
-    if not isinstance(data, dict):
-        raise InputError(f"{source}: expected a YAML mapping of scene keys, got {type(data).__name__}")
-    try:
-        return SceneSpec.model_validate(data)
-    except ValidationError as err:
-        raise InputError(format_validation_error(err, source, SceneSpec)) from None
-
-
-class _UniqueKeyLoader(yaml.SafeLoader):
-    """yaml.SafeLoader that refuses a key given twice in one mapping (PyYAML keeps the last)."""
-
-
-def _construct_unique_mapping(loader: _UniqueKeyLoader, node: yaml.MappingNode, deep: bool = False) -> dict:
-    seen: dict[Any, int] = {}
-    for key_node, _ in node.value:
-        key = loader.construct_object(key_node, deep=deep)
-        try:
-            if key in seen:
-                raise yaml.constructor.ConstructorError(
-                    None, None, f"key '{key}' appears twice in one mapping (first on line {seen[key] + 1})",
-                    key_node.start_mark)
-            seen[key] = key_node.start_mark.line
-        except TypeError:  # unhashable key: let the default constructor complain
-            pass
-    return loader.construct_mapping(node, deep=deep)
-
-
-_UniqueKeyLoader.add_constructor(yaml.resolver.BaseResolver.DEFAULT_MAPPING_TAG, _construct_unique_mapping)
-
-
-def load_yaml_text(text: str, source: str) -> Any:
-    """Parse YAML (duplicate keys refused); errors are one line with line and column."""
-    try:
-        return yaml.load(text, Loader=_UniqueKeyLoader)  # noqa: S506 - a SafeLoader subclass
-    except yaml.YAMLError as err:
-        mark = getattr(err, "problem_mark", None)
-        problem = getattr(err, "problem", None) or str(err).strip().splitlines()[0]
-        where = f" at line {mark.line + 1}, column {mark.column + 1}" if mark is not None else ""
-        raise InputError(f"{source}: not valid YAML{where}: {problem}") from None
-
-
-def load_scene_file(path: str | Path) -> SceneSpec:
-    """Read and validate a YAML scene file."""
-    p = Path(path)
-    if p.is_dir():
-        raise InputError(f"{p}: is a folder; expected a YAML scene file")
-    if not p.is_file():
-        raise InputError(f"{p}: scene file not found")
-    try:
-        text = p.read_text(encoding="utf-8")
-    except UnicodeDecodeError:
-        raise InputError(f"{p}: not a text file (not UTF-8); expected a YAML scene file") from None
-    except OSError as err:
-        raise InputError(f"{p}: cannot read the scene file ({err.strerror})") from None
-    data = load_yaml_text(text, str(p))
-    if data is None:
-        raise InputError(f"{p}: the file is empty; expected a YAML mapping of scene keys")
-    spec = parse_scene(data, str(p))
-    check_referenced_files(spec, p.resolve().parent, str(p))
-    return spec

@@ -100,7 +100,7 @@ def surface_targets(scene: Scene, region: TargetRegion) -> tuple[np.ndarray, np.
     p, n = np.concatenate(pos), np.concatenate(nrm)
     labels = {o.name for o in scene.spec.obstacles if not o.occludes}
     if labels & set(region.of or []):  # labelled boxes on a scan: step out of the scanned shell
-        from camplace.scene.freespace import snap_outward
+        from camplace.scene.from_scan import snap_outward
 
         p, keep = snap_outward(scene.occupancy, p, n)
         return p[keep], n[keep]
@@ -117,7 +117,7 @@ def build_targets(scene: Scene) -> Targets:
             p = volume_targets(scene, region)
             n = np.zeros_like(p)
         elif region.box is not None:
-            from camplace.scene.freespace import scan_surface_targets
+            from camplace.scene.from_scan import scan_surface_targets
 
             p, n = scan_surface_targets(scene, region.box.min, region.box.max)
         else:

@@ -17,7 +17,8 @@ from camplace.spec.builtin import resolve_scene
 from camplace.cameras.models import CameraModel, camera_from_spec
 from camplace.cameras.candidates import build_candidates
 from camplace.problem.feasibility import check_feasibility
-from camplace.spec.schema import SceneSpec, check_resources
+from camplace.spec.resources import check_resources
+from camplace.spec.schema import SceneSpec
 from camplace.core.errors import InputError, Interrupted
 from camplace.metrics.coverage import Metrics, compute_metrics
 from camplace.problem.model import PlacementProblem
@@ -97,7 +98,7 @@ def prepare(scene: str | Path | SceneSpec, progress: Progress | None = None,
 
         log.extend(describe(name, rep) for name, rep in sc.info["obstacle_files"].items())
         if sc.info.get("free_space"):
-            from camplace.scene.freespace import describe_free_space
+            from camplace.scene.from_scan import describe_free_space
 
             log.append(describe_free_space(sc.info["free_space"]))
     log.append(f"candidates: {cands.info['generated']} generated, {cands.info['dropped_inside_obstacle']} inside "
@@ -216,7 +217,7 @@ def solve_stoppable(problem: PlacementProblem, solver: str, *, log: list | None 
 
 def check_solver_name(name: str, key: str) -> None:
     """InputError naming ``key`` (e.g. '--solver' or 'scene.yaml: placement.solver') for an unknown solver."""
-    from camplace.spec.schema import _did_you_mean
+    from camplace.spec.wording import did_you_mean as _did_you_mean
     from camplace.solvers import SOLVERS
 
     if name not in SOLVERS:

@@ -203,7 +203,7 @@ def roundtrip_spec(spec, kind: str, path: str | Path, downsample: float | None =
     """The box scene ``spec`` with its occlusion replaced by a file: kind ``point_cloud``,
     ``mesh`` (solid) or ``octomap``. The boxes stay as labels (``occludes: false``) so
     surface targets keep their faces, as the paper labels shelves on its scan."""
-    from camplace.spec.schema import parse_scene
+    from camplace.spec.loading import parse_scene
 
     data = spec.model_dump(mode="json", exclude_defaults=True)
     obs = [dict(o, occludes=False) for o in data.get("obstacles", [])]
