@@ -96,13 +96,14 @@ def run_bench(scene: str | Path, budgets: Sequence[int], methods: Sequence[str] 
 
     if certify_s is not None:
         if not certify_s > 0:
-            raise InputError(f"--certify: expected seconds > 0, got {certify_s}")
+            raise InputError(f"certify_s: expected seconds > 0, got {certify_s}", option="certify_s")
         methods = [m for m in methods if m != "certify"] + ["certify"]
     for m in methods:
         if m not in SOLVERS and m != "greedy+ls":
-            raise InputError(f"--methods: unknown method '{m}'; expected some of {', '.join(sorted(SOLVERS))}")
+            raise InputError(f"methods: unknown method '{m}'; expected some of {', '.join(sorted(SOLVERS))}",
+                             option="methods")
     if targets not in ("volume", "all"):
-        raise InputError(f"--targets: expected 'volume' or 'all', got '{targets}'")
+        raise InputError(f"targets: expected 'volume' or 'all', got '{targets}'", option="targets")
     sc, vis = prepare(scene, progress)
     problem = problem_from_visibility(vis, max(budgets))
     t = vis.targets
@@ -223,9 +224,10 @@ def parse_budgets(text: str) -> list[int]:
     try:
         vals = [int(x) for x in text.split(",") if x.strip()]
     except ValueError:
-        raise InputError(f"--budgets: expected comma-separated integers like 20,30,40, got '{text}'") from None
+        raise InputError(f"budgets: expected comma-separated integers like 20,30,40, got '{text}'",
+                         option="budgets") from None
     if not vals or min(vals) < 0:
-        raise InputError(f"--budgets: expected non-negative integers like 20,30,40, got '{text}'")
+        raise InputError(f"budgets: expected non-negative integers like 20,30,40, got '{text}'", option="budgets")
     return vals
 
 

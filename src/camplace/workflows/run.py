@@ -117,7 +117,7 @@ def prepare(scene: str | Path | SceneSpec, progress: Progress | None = None,
     if not feas.ok:
         msg = feas.describe(tg.positions, tg.region_ids, tg.region_names)
         if require_feasible:
-            raise InputError(f"{source}: targets: {msg} (--require-feasible)")
+            raise InputError(f"{source}: targets: {msg} (require_feasible)", option="require_feasible")
         log.append(f"warning: {msg}")
     return sc, vis
 
@@ -246,11 +246,12 @@ def improve_placement(sc: Scene, vis: Visibility, problem: PlacementProblem, pla
     caps the robust search (default 60 s) and the adaptive rounds (default 120 s)."""
     log = [] if log is None else log
     if robust not in (0, 1):
-        raise InputError(f"--robust: expected 0 or 1 (single camera failures), got {robust}")
+        raise InputError(f"robust: expected 0 or 1 (single camera failures), got {robust}", option="robust")
     if robust and (refine or adaptive):
-        raise InputError("--robust 1 cannot be combined with --refine / --adaptive (they optimise the nominal cost)")
+        raise InputError("robust: robust=1 cannot be combined with refine=True or adaptive > 0 (they optimise the "
+                         "nominal cost)", option="robust")
     if adaptive < 0:
-        raise InputError(f"--adaptive: expected a non-negative number of rounds, got {adaptive}")
+        raise InputError(f"adaptive: expected a non-negative number of rounds, got {adaptive}", option="adaptive")
     if robust:
         from camplace.solvers.robust import robust_placement
 

@@ -1,0 +1,34 @@
+"""``camplace evaluate``: score a given placement on a scene with the metrics of a run."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Optional
+
+import typer
+
+from camplace.cli.common import (MAX_MEMORY_OPT, REPEATABLE_OPT, SCHEDULER_OPT, WORKERS_OPT, RichProgress,
+                                 check_options, memory_bytes, progress_bars, repeatable_requested)
+from camplace.cli.summary import write_and_summarise
+
+
+def evaluate_cmd(scene: str = typer.Argument(..., help="Scene YAML file or built-in name."),
+                 placement: Path = typer.Argument(..., help="placement.json, or a mount-list CSV with header "
+                                                  "id,x,y,z,yaw,pitch,roll,lens (by camplace, by hand or another tool)."),
+                 out: Optional[Path] = typer.Option(None, "--out", help="Output folder (default "
+                                                    "camplace-out/<scene>-evaluated)."),
+                 workers: int = WORKERS_OPT, scheduler: Optional[str] = SCHEDULER_OPT,
+                 max_memory_gb: Optional[float] = MAX_MEMORY_OPT, repeatable: bool = REPEATABLE_OPT) -> None:
+    """Score a given placement on a scene with the same metrics as a run.
+
+    The poses are raycast afresh (they need not be grid candidates) and written as a run
+    with solver 'file': placement.json, metrics.json, visibility.npz (row i = pose i),
+    placement.csv, report.html, figures and exports."""
+    from camplace.workflows.evaluate import evaluate
+
+    check_options(None, None, max_memory_gb, out)
+    repeatable = repeatable_requested(repeatable)
+    with progress_bars() as prog:
+        result = evaluate(scene, placement, progress=RichProgress(prog), workers=workers, scheduler=scheduler or None,
+                          max_memory_bytes=memory_bytes(max_memory_gb))
+    write_and_summarise(result, out or Path("camplace-out") / f"{result.scene.name}-evaluated", repeatable)

@@ -1,0 +1,168 @@
+"""``camplace run``: the whole pipeline on a scene file, a
+built-in name or a space file (scan, mesh, OctoMap), then the outputs and a summary."""
+
+from __future__ import annotations
+
+import os
+import sys
+from pathlib import Path
+from typing import Optional
+
+import typer
+from rich.markup import escape
+
+from camplace.cli.common import (CACHE_OPT, MAX_MEMORY_OPT, NO_CACHE_OPT, REPEATABLE_OPT, SCHEDULER_OPT,
+                                 TIME_LIMIT_OPT, WORKERS_OPT, RichProgress, StopFlag, certify_solver, check_options,
+                                 console, memory_bytes, progress_bars, repeatable_requested, scale_options, state)
+from camplace.cli.space import ImportOptions, describe_import, scene_data_from_file, scene_yaml, space_kind
+from camplace.cli.summary import write_and_summarise
+from camplace.core.errors import InputError
+
+
+def run_pipeline(scene, budget: Optional[int], solver: Optional[str], out: Optional[Path],
+                 time_limit: Optional[float] = None, require_feasible: bool = False,
+                 max_memory_gb: Optional[float] = None, repeatable: bool = False, **options) -> None:
+    """camplace.workflows.run.run with progress bars and Ctrl-C handling; writes the outputs
+    into ``out`` (default camplace-out/<scene>) and prints the summary."""
+    from camplace.workflows.run import run
+
+    check_options(budget, time_limit, max_memory_gb, out)
+    repeatable = repeatable_requested(repeatable)
+    stop = StopFlag()
+    with stop.installed():  # first Ctrl-C: finish with the best placement so far; second: abort
+        with progress_bars() as prog:
+            bars = RichProgress(prog, stop)
+            result = run(scene, budget=budget, solver=solver, progress=bars, on_incumbent=bars.incumbent,
+                         time_limit_s=time_limit, should_stop=stop, require_feasible=require_feasible,
+                         max_memory_bytes=memory_bytes(max_memory_gb), **options)
+        out_dir = out or Path("camplace-out") / result.scene.name
+        write_and_summarise(result, out_dir, repeatable)
+    if stop():
+        console.print(f"[yellow]interrupted: wrote the best placement found so far (status "
+                      f"'{result.placement.status}') to {escape(str(out_dir))}[/yellow]")
+        _exit_if_solver_left_running(130)
+        raise typer.Exit(130)
+
+
+def _exit_if_solver_left_running(code: int) -> None:
+    """A solver thread that ignored the interrupt (camplace.workflows.run.solve_stoppable) may
+    still run native code; interpreter shutdown under it can abort the process. The
+    outputs are written (atomically, fsynced), so leave at once with ``code``."""
+    import threading
+
+    if any(t.is_alive() and t.name.startswith("camplace-solve-") for t in threading.enumerate()):
+        sys.stdout.flush()
+        sys.stderr.flush()
+        os._exit(code)
+
+
+def scene_from_space_file(path: Path, budget: Optional[int], save_scene: Optional[Path] = None,
+                          opts: ImportOptions = ImportOptions()):
+    """A parsed scene from a space file with the import defaults (``save_scene``: also
+    write it as YAML, for the deprecated ``run --cloud FILE --save-scene``)."""
+    from camplace.core.files import atomic_write_text
+    from camplace.spec.loading import parse_scene
+
+    data, rep, _ = scene_data_from_file(path, opts, budget)
+    if not state["quiet"]:
+        console.print(f"[dim]{escape(describe_import(rep))}[/dim]")
+    if save_scene is not None:
+        atomic_write_text(save_scene, scene_yaml(data, "camplace run --cloud"))
+        console.print(f"[dim]wrote {escape(str(save_scene))}[/dim]")
+    return parse_scene(data, str(path))
+
+
+def beyond_grid_options(refine: bool, refine_time: float, adaptive: int, robust: int,
+                        money_budget: Optional[float], tri_angle: str) -> dict:
+    """run() keyword arguments of the options beyond the candidate grid (only those given)."""
+    try:
+        lo, hi = (float(v) for v in tri_angle.split(","))
+    except ValueError:
+        raise InputError(f"--tri-angle: expected MIN,MAX degrees, got '{tri_angle}'") from None
+    if robust and (refine or adaptive):
+        raise InputError("--robust 1 cannot be combined with --refine / --adaptive (they optimise the nominal cost)")
+    out: dict = {"triangulation_deg": (lo, hi)}
+    if refine:
+        out.update(refine=True, refine_time_s=refine_time)
+    if adaptive:
+        out["adaptive"] = adaptive
+    if robust:
+        out["robust"] = robust
+    if money_budget is not None:
+        out["money_budget"] = money_budget
+    return out
+
+
+def run_cmd(scene: Optional[str] = typer.Argument(None, help="Scene YAML file, built-in name (demo, standard-store, "
+                                                  "store-a, warehouse[:AREA_M2]) or a space file: a scan (PLY, PCD, "
+                                                  "XYZ/CSV, LAS/LAZ), a mesh (OBJ, PLY with faces, STL, GLB) or an "
+                                                  "OctoMap (.bt/.ot)."),
+            budget: Optional[int] = typer.Option(None, "--budget", help="Number of cameras N_s (default: the scene's)."),
+            solver: Optional[str] = typer.Option(None, "--solver", help="Solver (default: the scene's)."),
+            out: Optional[Path] = typer.Option(None, "--out", help="Output folder (default camplace-out/<scene>)."),
+            workers: int = WORKERS_OPT, scheduler: Optional[str] = SCHEDULER_OPT,
+            cache: Optional[Path] = CACHE_OPT, no_cache: bool = NO_CACHE_OPT,
+            time_limit: Optional[float] = TIME_LIMIT_OPT,
+            require_feasible: bool = typer.Option(False, "--require-feasible", help="Fail (exit 2) when some targets "
+                                                  "cannot reach their coverage (default: a warning that names them)."),
+            max_memory_gb: Optional[float] = MAX_MEMORY_OPT, repeatable: bool = REPEATABLE_OPT,
+            visibility: str = typer.Option("voxel", "--visibility",
+                                           help="Visibility mode: voxel (fast, centre test) or pixel (per-pixel rays)."),
+            stride: Optional[int] = typer.Option(None, "--stride", help="Pixel mode: one ray per STRIDE x STRIDE pixels."),
+            probe: Optional[float] = typer.Option(None, "--probe", help="Pixel mode: part of the voxel a ray must cross "
+                                                                         "(1 = any part, the paper's rule; 0 = centre)."),
+            local_search: bool = typer.Option(False, "--local-search", help="Greedy: 1-swap local search afterwards."),
+            threads: Optional[int] = typer.Option(None, "--threads", min=1, help="Solver threads (MIP solvers)."),
+            coverage_gap: Optional[float] = typer.Option(None, "--coverage-gap", min=0.0,
+                                                         help="min-cameras: allowed coverage gap ε (paper eq. 8; "
+                                                              "default 0 = every Γ met)."),
+            refine: bool = typer.Option(False, "--refine", help="Move each camera off the grid (continuous pose search)."),
+            refine_time: float = typer.Option(60.0, "--refine-time", help="Seconds for --refine."),
+            adaptive: int = typer.Option(0, "--adaptive", help="Rounds of finer candidates around the placement."),
+            robust: int = typer.Option(0, "--robust", help="1: best worst case over any single camera failure."),
+            money_budget: Optional[float] = typer.Option(None, "--money-budget",
+                                                         help="Total camera price limit (default: the scene's)."),
+            tri_angle: str = typer.Option("20,160", "--tri-angle",
+                                          help="MIN,MAX degrees at which two rays triangulate well."),
+            well_triangulated: bool = typer.Option(False, "--well-triangulated",
+                                                   help="Greedy that counts a camera toward Γ only where it pairs "
+                                                        "with another at a --tri-angle angle."),
+            certify: Optional[float] = typer.Option(None, "--certify", help="Spend SECONDS on both sides: tabu search "
+                                                    "for the placement, Lagrangian/LP/exact bounds for a proven gap "
+                                                    "(solver 'certify')."),
+            cloud: Optional[Path] = typer.Option(None, "--cloud", hidden=True,
+                                                 help="Deprecated: give the scan as SCENE (camplace run SCAN)."),
+            save_scene: Optional[Path] = typer.Option(None, "--save-scene", hidden=True,
+                                                      help="Deprecated: use camplace scene import SCAN --out FILE.")
+            ) -> None:
+    """Run the whole pipeline on a scene and write placement.json, metrics.json, visibility.npz.
+
+    Ctrl-C during the solve writes the best placement found so far (status 'interrupted',
+    exit code 130); a second Ctrl-C aborts without writing.
+
+    A space file (scan, mesh or OctoMap) is turned into a scene with the defaults of
+    camplace scene import: floor levelled to z = 0, ceiling and footprint detected,
+    walkable volume targets, a 1 m ceiling grid, the default camera
+    (docs/scan-to-mount-list.md). To adjust those, write the scene with
+    camplace scene import FILE --out scene.yaml, edit it and run that."""
+    if cloud is not None:
+        if scene is not None:
+            raise InputError("run: give either a scene or --cloud, not both")
+        console.print("[yellow]warning: --cloud is deprecated; give the scan as the scene (camplace run SCAN) and "
+                      "write the scene with camplace scene import[/yellow]")
+        scene = scene_from_space_file(cloud, budget, save_scene)
+    elif scene is None:
+        raise InputError("run: give a scene (YAML file, built-in name or space file)")
+    elif save_scene is not None:
+        raise InputError("--save-scene: use camplace scene import FILE --out SCENE.yaml")
+    elif space_kind(scene) is not None:
+        scene = scene_from_space_file(Path(scene), budget)
+    solver, time_limit = certify_solver(certify, solver, time_limit)
+    run_pipeline(scene, budget, solver, out, time_limit, require_feasible, max_memory_gb, repeatable,
+                 **scale_options(workers, scheduler, cache, no_cache), visibility_mode=visibility, stride=stride,
+                 probe=probe, **({"local_search": True} if local_search else {}),
+                 **({"threads": threads} if threads else {}),
+                 **({"coverage_gap": coverage_gap} if coverage_gap is not None else {}),
+                 **beyond_grid_options(refine, refine_time, adaptive, robust, money_budget, tri_angle),
+                 **({"well_triangulated": True} if well_triangulated else {}))
+

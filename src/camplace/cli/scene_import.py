@@ -1,0 +1,59 @@
+"""``camplace scene import FILE --out scene.yaml``: the editable scene of a space file
+(scan, mesh or OctoMap), with the options of building it."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Optional
+
+import typer
+from rich.markup import escape
+
+from camplace.cli.common import console, state
+from camplace.cli.space import ImportOptions, describe_import, scene_data_from_file, scene_yaml
+from camplace.core.errors import InputError
+
+scene_app = typer.Typer(add_completion=False, no_args_is_help=True, help="Scenes from space files.")
+
+
+@scene_app.command("import")
+def import_cmd(file: Path = typer.Argument(..., help="A scan (PLY, PCD, XYZ/CSV, LAS/LAZ), a mesh (OBJ, PLY with faces, "
+                                           "STL, GLB) or an OctoMap (.bt/.ot)."),
+               out: Path = typer.Option(..., "--out", help="Scene YAML to write (atomically)."),
+               up: str = typer.Option("+z", "--up", help="The file's up axis (+z; phone scans are often +y)."),
+               no_level_floor: bool = typer.Option(False, "--no-level-floor",
+                                                   help="Keep the file's frame (no RANSAC floor levelling)."),
+               crop: Optional[str] = typer.Option(None, "--crop", help="Keep points in the box "
+                                                  "'xmin,ymin,zmin,xmax,ymax,zmax' (m, levelled frame)."),
+               downsample: float = typer.Option(0.02, "--downsample", help="Voxel downsampling edge (m, 0 = off)."),
+               heights: str = typer.Option("0.5,1.0,1.5", "--heights",
+                                           help="Walkable target heights (m, comma-separated)."),
+               coverage: int = typer.Option(2, "--coverage", min=0, help="Cameras required per walkable target."),
+               wall_mounts: Optional[float] = typer.Option(None, "--wall-mounts",
+                                                           help="Also mount on the walls at this height (m)."),
+               viewpoint: Optional[list[str]] = typer.Option(None, "--viewpoint", help="A scanner position 'x,y,z' "
+                                                             "(file frame) for free-space carving; repeat for "
+                                                             "several (PLY/PCD scans may record their own)."),
+               budget: Optional[int] = typer.Option(None, "--budget", min=0,
+                                                    help="placement.budget of the scene (default 20).")) -> None:
+    """Write the scene built from a space file as YAML to edit, then camplace run it.
+
+    The floor is levelled to z = 0, ceiling and footprint detected, walkable volume
+    targets placed at --heights, a 1 m ceiling grid (and wall mounts with --wall-mounts)
+    and the default camera added (docs/scan-to-mount-list.md)."""
+    from camplace.core.files import atomic_write_text
+
+    if out.exists() and out.is_dir():
+        raise InputError(f"--out: '{out}' is a folder; expected a scene file (.yaml)")
+    if out.suffix.lower() not in (".yaml", ".yml"):
+        raise InputError(f"--out: expected a .yaml scene file, got '{out}'")
+    opts = ImportOptions(up=up, level_floor=not no_level_floor, crop=crop, downsample=downsample, heights=heights,
+                         coverage=coverage, wall_mounts=wall_mounts, viewpoint=list(viewpoint or []))
+    data, rep, _ = scene_data_from_file(file, opts, budget)
+    if not state["quiet"]:
+        console.print(f"[dim]{escape(describe_import(rep))}[/dim]")
+    atomic_write_text(out, scene_yaml(data, f"camplace scene import {file.name}"))
+    if state["quiet"]:
+        typer.echo(str(out))
+    else:
+        console.print(f"wrote {escape(str(out))}: edit it, then camplace run {escape(str(out))}")

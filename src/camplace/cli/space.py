@@ -1,0 +1,180 @@
+"""Space files (a scan, a mesh or an OctoMap) -> an editable scene mapping, with the
+defaults of a scene built from a scan (camplace.scene.from_scan.scene_from_cloud).
+
+scene_from_cloud reads point clouds only. A mesh or an OctoMap is turned into points
+first (mesh: area-weighted samples of its surface; OctoMap: a lattice over its occupied
+leaves), written to a temporary PLY, and given to scene_from_cloud; the scene's obstacle
+then points at the original file (``mesh:`` / ``octomap:``) with the transform found."""
+
+from __future__ import annotations
+
+import tempfile
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from camplace.cli.common import floats
+from camplace.core.errors import InputError
+from camplace.scene.loaders import MESH_SUFFIXES, OCTOMAP_SUFFIXES, POINT_CLOUD_SUFFIXES, header_lines
+
+MESH_SAMPLE_SPACING_M = 0.03  # one sample per (3 cm)² of mesh surface
+MESH_SAMPLES = (20_000, 3_000_000)  # at least / at most
+OCTOMAP_LATTICE = 8  # at most this many points per axis in one occupied leaf
+
+
+@dataclass(frozen=True)
+class ImportOptions:
+    """The options of building a scene from a space file (CLI text, parsed by kwargs())."""
+
+    up: str = "+z"
+    level_floor: bool = True
+    crop: str | None = None
+    downsample: float = 0.02
+    heights: str = "0.5,1.0,1.5"
+    coverage: int = 2
+    wall_mounts: float | None = None
+    viewpoint: list[str] = field(default_factory=list)
+
+    def kwargs(self, budget: int | None) -> dict:
+        """scene_from_cloud keyword arguments (InputError naming the flag on bad text)."""
+        if self.up not in ("+x", "-x", "+y", "-y", "+z", "-z"):
+            raise InputError(f"--up: expected one of +x -x +y -y +z -z, got '{self.up}'")
+        box = floats(self.crop, "--crop", 6) if self.crop else None
+        return dict(level_floor=self.level_floor, up=self.up, crop=(box[:3], box[3:]) if box else None,
+                    downsample=self.downsample or None, heights=floats(self.heights, "--heights"),
+                    coverage=self.coverage, budget=budget if budget is not None else 20,
+                    wall_mount_height=self.wall_mounts,
+                    viewpoints=[floats(v, "--viewpoint", 3) for v in self.viewpoint] or None)
+
+
+def _ply_has_faces(path: Path) -> bool:
+    """True when the PLY header declares a non-empty 'face' element (a mesh, not a scan)."""
+    with open(path, "rb") as f:
+        raw = f.read(65536)
+    for line, _ in header_lines(raw):
+        words = line.split()
+        if words[:2] == ["element", "face"] and len(words) > 2 and words[2].isdigit():
+            return int(words[2]) > 0
+        if line == "end_header":
+            break
+    return False
+
+
+def space_kind(path: str | Path) -> str | None:
+    """'point_cloud', 'mesh' or 'octomap' by the file's suffix (a .ply with faces is a
+    mesh); None for anything else (a scene file or a built-in name)."""
+    p = Path(path)
+    suf = p.suffix.lower()
+    if suf == ".ply":
+        return "mesh" if p.is_file() and _ply_has_faces(p) else "point_cloud"
+    if suf in POINT_CLOUD_SUFFIXES:
+        return "point_cloud"
+    if suf in MESH_SUFFIXES:
+        return "mesh"
+    if suf in OCTOMAP_SUFFIXES:
+        return "octomap"
+    return None
+
+
+def mesh_surface_points(vertices: np.ndarray, faces: np.ndarray, spacing: float = MESH_SAMPLE_SPACING_M,
+                        seed: int = 0) -> np.ndarray:
+    """(N, 3) points spread over a triangle mesh by area (about one per spacing² m²)."""
+    tri = vertices[faces]
+    area = 0.5 * np.linalg.norm(np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0]), axis=1)
+    n = int(np.clip(area.sum() / spacing**2, *MESH_SAMPLES))
+    rng = np.random.default_rng(seed)
+    f = rng.choice(len(faces), size=n, p=area / area.sum()) if area.sum() > 0 else rng.integers(0, len(faces), n)
+    u, v = rng.random(n), rng.random(n)
+    flip = u + v > 1
+    u[flip], v[flip] = 1 - u[flip], 1 - v[flip]
+    t = tri[f]
+    return t[:, 0] + u[:, None] * (t[:, 1] - t[:, 0]) + v[:, None] * (t[:, 2] - t[:, 0])
+
+
+def octomap_points(lo: np.ndarray, size: np.ndarray, resolution: float) -> np.ndarray:
+    """(N, 3) points on a lattice over occupied leaves (min corners lo (L, 3), edges size
+    (L,) m): one per resolution-cell, at most OCTOMAP_LATTICE per axis of a leaf."""
+    out = []
+    for s in np.unique(size):
+        k = int(np.clip(round(s / resolution), 1, OCTOMAP_LATTICE))
+        g = (np.arange(k) + 0.5) * (s / k)
+        offs = np.stack(np.meshgrid(g, g, g, indexing="ij"), -1).reshape(-1, 3)
+        out.append((lo[size == s][:, None, :] + offs[None]).reshape(-1, 3))
+    return np.concatenate(out) if out else np.zeros((0, 3))
+
+
+def _points_of(path: Path, kind: str) -> np.ndarray:
+    if kind == "mesh":
+        from camplace.scene.loaders.mesh import load_mesh
+
+        m = load_mesh(path)
+        return mesh_surface_points(m.vertices, m.faces)
+    from camplace.scene.loaders.octomap import load_octomap
+
+    om = load_octomap(path)
+    if len(om.occupied_lo) == 0:
+        raise InputError(f"{path}: the OctoMap has no occupied leaves")
+    return octomap_points(om.occupied_lo, om.occupied_size, om.resolution)
+
+
+def _via_points(path: Path, kind: str, kw: dict) -> tuple[dict, dict]:
+    """scene_from_cloud on the points of a mesh / OctoMap; the obstacle then names the file."""
+    from camplace.scene.from_scan import scene_from_cloud
+    from camplace.scene.loaders.pointcloud import write_ply
+
+    if kw.get("viewpoints"):
+        raise InputError("--viewpoint: scanner positions belong to scans, not to meshes or OctoMaps")
+    if kind == "octomap":
+        if kw["up"] != "+z":
+            raise InputError("--up: an OctoMap's leaves are axis-aligned; it must be +z up")
+        kw = dict(kw, level_floor=False)  # an OctoMap can be moved, not rotated
+    pts = _points_of(path, kind)
+    with tempfile.TemporaryDirectory(prefix="camplace-import-") as tmp:
+        data, rep = scene_from_cloud(str(write_ply(Path(tmp) / f"{path.stem}.ply", pts)), name=path.stem, **kw)
+    entry = {"name": "scan", kind: str(path.expanduser().resolve())}
+    old = data["obstacles"][0]
+    entry.update({k: old[k] for k in ("transform", "crop") if k in old})
+    data["obstacles"] = [entry]
+    rep = dict(rep, source=kind, sampled_points=len(pts))
+    return data, rep
+
+
+def scene_data_from_file(path: str | Path, opts: ImportOptions, budget: int | None = None
+                         ) -> tuple[dict, dict, str]:
+    """(scene mapping, report of what was detected, kind) for a space file."""
+    from camplace.scene.from_scan import scene_from_cloud
+    from camplace.spec.loading import parse_scene
+
+    p = Path(path)
+    kind = space_kind(p)
+    if kind is None:
+        raise InputError(f"{p}: not a space file; expected a scan ({', '.join(POINT_CLOUD_SUFFIXES)}), a mesh "
+                         f"({', '.join(MESH_SUFFIXES)}) or an OctoMap ({', '.join(OCTOMAP_SUFFIXES)})")
+    if not p.is_file():
+        raise InputError(f"{p}: file not found" if not p.exists() else f"{p}: is a folder, expected a file")
+    kw = opts.kwargs(budget)
+    if kind == "point_cloud":
+        data, rep = scene_from_cloud(str(p), **kw)
+        rep = dict(rep, source=kind)
+    else:
+        data, rep = _via_points(p, kind, kw)
+        parse_scene(data, str(p))  # the scene names the file itself now: check it again
+    return data, rep, kind
+
+
+def describe_import(rep: dict) -> str:
+    """One line on what was detected in the space file."""
+    what = {"point_cloud": "scan", "mesh": "mesh", "octomap": "OctoMap"}[rep.get("source", "point_cloud")]
+    pts = (f"{rep['sampled_points']:,} points sampled, {rep['points']:,} after clean-up" if "sampled_points" in rep
+           else f"{rep['points']:,} points after clean-up")
+    return (f"{what}: {pts}; floor levelled, ceiling {rep['height_m']} m above it, footprint "
+            f"{rep['floor_area_m2']} m² ({rep['footprint_vertices']} corners), {rep['viewpoints']} scanner viewpoint(s)")
+
+
+def scene_yaml(data: dict, how: str) -> str:
+    """The scene mapping as an editable YAML document, with a header comment."""
+    import yaml
+
+    return (f"# camplace scene built from a space file ({how}); edit and rerun\n"
+            + yaml.safe_dump(data, sort_keys=False, default_flow_style=None))

@@ -1,0 +1,86 @@
+"""The end of a run or an evaluation: write the outputs, show the log, and print the
+summary (a rich table, the folder with --quiet, or a JSON document with --json)."""
+
+from __future__ import annotations
+
+import json
+import time
+from pathlib import Path
+
+import typer
+from rich.console import Console
+from rich.markup import escape
+from rich.table import Table
+
+from camplace.cli.common import console, state
+
+
+def json_summary(result, out_dir: Path, paths: dict) -> dict:
+    """The --json summary: the placement's headline figures, every metrics.json figure as
+    written, and where the files are."""
+    p = result.placement
+    metrics = json.loads(Path(paths["metrics.json"]).read_text())
+    return {"scene": result.scene.name, "solver": p.solver, "status": p.status, "budget": int(result.problem.budget),
+            "n_cameras": int(len(p.selected)), "objective": float(p.objective),
+            "bound": None if p.bound is None else float(p.bound), "gap": p.gap, **metrics,
+            "out_dir": str(out_dir), "files": {k: str(v) for k, v in sorted(paths.items())}}
+
+
+def _show_log(result, paths: dict, out_dir: Path) -> None:
+    """Warnings always; the pipeline log unless --quiet; solver info and files with --verbose."""
+    for line in result.log:
+        if line.startswith("warning:"):
+            console.print(f"[yellow]{escape(line)}[/yellow]", soft_wrap=True)
+        elif not state["quiet"]:
+            console.print(f"[dim]{escape(line)}[/dim]")
+    if not state["verbose"]:
+        return
+    for k, v in result.placement.info.items():
+        if isinstance(v, (int, float, str, bool)) or v is None:
+            console.print(f"[dim]solver {escape(str(k))}: {escape(str(v))}[/dim]")
+    groups: dict[str, list[str]] = {}
+    for name in sorted(paths):
+        groups.setdefault(name.split("/")[0] + "/" if "/" in name else name, []).append(name)
+    for key, names in groups.items():
+        where = out_dir / key if key.endswith("/") else paths[key]
+        more = f" ({len(names)} files)" if key.endswith("/") else ""
+        console.print(f"[dim]wrote {escape(str(where))}{more}[/dim]")
+
+
+def _table(result, out_dir: Path, paths: dict) -> Table:
+    p, m = result.placement, result.metrics
+    t = Table(title=f"camplace - {result.scene.name}", show_header=False)
+    t.add_row("solver / status", f"{p.solver} / {p.status}")
+    t.add_row("cameras (budget)", f"{len(p.selected)} ({result.problem.budget})")
+    t.add_row("cost", f"{p.objective:.6g}")
+    t.add_row("bound", "-" if p.bound is None else f"{p.bound:.6g} (gap {100 * (p.gap or 0):.2f} %)")
+    t.add_row("coverage gap (eq. 8)", f"{m.coverage_gap:.4f}")
+    t.add_row("non-triangulatable", f"{m.non_triangulatable_pct:.2f} %")
+    if m.well_triangulated_pct is not None:
+        t.add_row("well triangulated", f"{m.well_triangulated_pct:.2f} % (rays meet at a usable angle)")
+    for name, r in m.regions.items():
+        t.add_row(f"  region {name}", f"{r['targets']} targets, gap {r['coverage_gap']:.4f}, "
+                                     f"non-tri {r['non_triangulatable_pct']:.1f} %")
+    t.add_row("timings (s)", ", ".join(f"{k} {v:.2f}" for k, v in result.timings_s.items()))
+    t.add_row("outputs", str(out_dir))
+    if "report.html" in paths:
+        t.add_row("report", str(paths["report.html"]))
+    return t
+
+
+def write_and_summarise(result, out_dir: Path, repeatable: bool = False) -> None:
+    """Write every output of ``result`` into ``out_dir`` and print the summary."""
+    from camplace.outputs.write import write_outputs
+
+    p = result.placement
+    t0 = time.perf_counter()
+    paths = write_outputs(out_dir, result.scene.name, result.visibility, p, result.problem.budget, result.metrics,
+                          result.timings_s, repeatable=repeatable, scene=result.scene)
+    result.timings_s["report"] = time.perf_counter() - t0
+    _show_log(result, paths, out_dir)
+    if state["json"]:
+        typer.echo(json.dumps(json_summary(result, out_dir, paths), indent=2))
+    elif state["quiet"]:
+        typer.echo(str(out_dir))
+    else:
+        Console().print(_table(result, out_dir, paths))
