@@ -39,7 +39,7 @@ def solve_cmd(visibility: Path = typer.Argument(..., help="A saved instance: vis
               out: Optional[Path] = typer.Option(None, "--out", help="Output folder (default "
                                                  "camplace-out/<instance>-solved).")) -> None:
     """Re-solve a saved instance with no geometry; writes placement.json and metrics.json."""
-    from camplace.problem.instance import instance_name, solve_instance, write_instance_outputs
+    from camplace.workflows.solve import instance_name, solve_instance, write_instance_outputs
 
     check_options(budget, time_limit, None, out)
     solver, time_limit = certify_solver(certify, solver, time_limit)

@@ -1,0 +1,99 @@
+"""Solve a saved instance (a visibility.npz, no geometry needed) and write its
+placement.json and metrics.json (the output contract; pose fields null where the file
+has no geometry)."""
+
+from __future__ import annotations
+
+import time
+from pathlib import Path
+
+import numpy as np
+
+from camplace.core.files import atomic_write_json
+from camplace.metrics.coverage import compute_metrics
+from camplace.problem.instance import load_problem_npz
+from camplace.problem.model import PlacementProblem
+from camplace.solvers import solve
+
+
+def instance_name(path: str | Path) -> str:
+    """A name for a saved instance: the folder of a `visibility.npz`, else the file stem."""
+    p = Path(path)
+    return (p.parent.name or "instance") if p.stem == "visibility" else p.stem
+
+
+def camera_entries_from_arrays(arrays: dict[str, np.ndarray], selected: np.ndarray, location_ids: np.ndarray) -> list[dict]:
+    """placement.json camera objects from the optional pose arrays of a visibility.npz
+    (`candidate_positions`, `rotations`, `candidate_angles_deg`, `camera_ids`,
+    `camera_names`); a field the file lacks is null."""
+    def arr(key, n_dims):
+        a = arrays.get(key)
+        return None if a is None or a.ndim != n_dims or len(a) != len(location_ids) else a
+
+    pos, rot, ang = arr("candidate_positions", 2), arr("rotations", 3), arr("candidate_angles_deg", 2)
+    cam_ids, names = arr("camera_ids", 1), arrays.get("camera_names")
+    out = []
+    for i in np.sort(np.asarray(selected, np.int64)):
+        cam = None
+        if cam_ids is not None and names is not None and 0 <= int(cam_ids[i]) < len(names):
+            cam = str(names[int(cam_ids[i])])
+        out.append({
+            "candidate_id": int(i),
+            "location_id": int(location_ids[i]),
+            "position": None if pos is None else [float(v) for v in pos[i]],
+            "yaw_deg": None if ang is None else float(ang[i][0]),
+            "pitch_deg": None if ang is None else float(ang[i][1]),
+            "roll_deg": None if ang is None else float(ang[i][2]),
+            "rotation": None if rot is None else [[float(v) for v in row] for row in rot[i]],
+            "camera": cam,
+            "intrinsics": None,
+        })
+    return out
+
+
+def solve_instance(path: str | Path, budget: int, solver: str = "greedy", **solver_options):
+    """Load a saved visibility.npz and solve it: returns (problem, placement, metrics, arrays, timings)."""
+    timings: dict[str, float] = {}
+    t = time.perf_counter()
+    problem, arrays = load_problem_npz(path, budget)
+    timings["load"] = time.perf_counter() - t
+    t = time.perf_counter()
+    placement = solve(problem, solver, **solver_options)
+    timings["solve"] = time.perf_counter() - t
+    t = time.perf_counter()
+    region_ids = arrays.get("target_region_ids")
+    names = arrays.get("region_names")
+    ok = region_ids is not None and names is not None and region_ids.shape == (problem.n_targets,)
+    metrics = compute_metrics(problem, placement.selected, region_ids if ok else None,
+                              [str(n) for n in names] if ok else ())
+    timings["metrics"] = time.perf_counter() - t
+    return problem, placement, metrics, arrays, timings
+
+
+def certificate_keys(placement) -> dict:
+    """The certification keys added to placement.json (when the solver reports them)."""
+    out = {}
+    for key in ("incumbent_method", "bound_method"):
+        if key in placement.info:
+            out[key] = str(placement.info[key])
+    return out
+
+
+def write_instance_outputs(out_dir: str | Path, name: str, problem: PlacementProblem, placement, metrics,
+                           arrays: dict[str, np.ndarray], timings: dict[str, float]) -> dict[str, Path]:
+    """placement.json and metrics.json of a solved saved instance (contract keys; pose
+    fields null where the file has no geometry)."""
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    pdict = {
+        "scene": name, "solver": placement.solver, "budget": int(problem.budget), "status": placement.status,
+        "objective": float(placement.objective),
+        "bound": None if placement.bound is None else float(placement.bound),
+        "gap": placement.gap, **certificate_keys(placement),
+        "n_cameras": int(len(placement.selected)),
+        "cameras": camera_entries_from_arrays(arrays, placement.selected, problem.location_ids),
+    }
+    m = metrics.to_dict()
+    m["timings_s"] = {k: round(float(v), 4) for k, v in timings.items()}
+    return {"placement.json": atomic_write_json(out / "placement.json", pdict),
+            "metrics.json": atomic_write_json(out / "metrics.json", m)}
