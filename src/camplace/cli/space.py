@@ -168,7 +168,9 @@ def describe_import(rep: dict) -> str:
     what = {"point_cloud": "scan", "mesh": "mesh", "octomap": "OctoMap"}[rep.get("source", "point_cloud")]
     pts = (f"{rep['sampled_points']:,} points sampled, {rep['points']:,} after clean-up" if "sampled_points" in rep
            else f"{rep['points']:,} points after clean-up")
-    return (f"{what}: {pts}; floor levelled, ceiling {rep['height_m']} m above it, footprint "
+    levelled = any(s.get("step") == "level_floor" for s in rep.get("cleanup", []))
+    return (f"{what}: {pts}; floor {'levelled' if levelled else 'moved to z = 0'}, ceiling {rep['height_m']} m above it, "
+            f"footprint "
             f"{rep['floor_area_m2']} m² ({rep['footprint_vertices']} corners), {rep['viewpoints']} scanner viewpoint(s)")
 
 
