@@ -11,9 +11,10 @@ import pytest
 
 from camplace.cameras.models import CameraModel
 from camplace.cameras.candidates import rotation_from_ypr
-from camplace.outputs.render import FLOOR, WALL, label_grid, render_camera, render_view, scaled_camera
+from camplace.outputs.render import FLOOR, WALL, label_grid, render_view, scaled_camera
 from camplace.scene.build import build_scene
 
+from camplace.workflows.render import render_camera
 from conftest import box_room
 
 PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
@@ -56,7 +57,7 @@ def test_floor_seen_when_looking_down(room):
 def test_precomputed_free_distance_gives_the_same_image(room):
     """render_view with a cached free_distance (and label grid) draws exactly the image it
     draws computing them itself, from a pose that sees walls, floor and the pillar."""
-    from camplace.visibility.pixel import free_distance
+    from camplace.visibility.raywalk import free_distance
 
     cam = CameraModel.from_fov("f", "fisheye", (640, 480), (150, 110))
     pos, rot = np.array([0.7, 0.6, 2.6]), rotation_from_ypr(30, 35, 5)[0]
@@ -73,17 +74,15 @@ def test_precomputed_free_distance_gives_the_same_image(room):
 def test_report_views_compute_the_distance_transform_once(demo_run, monkeypatch):
     """camera_views renders one view per camera but computes free_distance once."""
     import camplace.outputs.render
-    import camplace.visibility.pixel
     from camplace.outputs.report_html import camera_views
 
     calls = []
-    real = camplace.visibility.pixel.free_distance
+    real = camplace.outputs.render.free_distance
 
     def counting(occ):
         calls.append(1)
         return real(occ)
 
-    monkeypatch.setattr(camplace.visibility.pixel, "free_distance", counting)
     monkeypatch.setattr(camplace.outputs.render, "free_distance", counting)
     sel = demo_run.placement.selected
     views, skipped = camera_views(demo_run.scene, demo_run.visibility, sel, budget_s=1e9)

@@ -45,13 +45,15 @@ def test_make_executor_choice(monkeypatch):
     assert isinstance(make_executor(1), InProcessExecutor)
     ex = make_executor(3)
     assert isinstance(ex, ProcessPoolChunkExecutor) and ex.workers == 3
-    with pytest.raises(InputError, match="--workers"):
+    with pytest.raises(InputError, match="^workers: expected a positive integer") as err:
         make_executor(0)
-    with pytest.raises(InputError, match="--scheduler"):
+    assert err.value.option == "workers"
+    with pytest.raises(InputError, match="^scheduler: ") as err:
         make_executor(1, "localhost-no-scheme")
+    assert err.value.option == "scheduler"
     monkeypatch.setenv(SCHEDULER_ENV, "not-an-address")
     with pytest.raises(InputError, match="not-an-address"):
-        make_executor(4)  # the environment's scheduler wins over --workers
+        make_executor(4)  # the environment's scheduler wins over workers
 
 
 def test_cli_workers_process_pool_equals_local(tmp_path, monkeypatch):

@@ -144,7 +144,7 @@ def test_dda_walks_the_cells_a_ray_crosses():
     (0.05, 0.05, 0.05) along (2, 1, 0) / sqrt(5) through 0.1 m cells crosses x = 0.1 at
     t = 0.05 sqrt(5) / 2 = 0.056, then y = 0.1 at 0.05 sqrt(5) = 0.112, then x = 0.2 at
     0.15 sqrt(5) / 2 = 0.168; it never steps along z (parallel: both t are 1e30)."""
-    from camplace.visibility.voxel import dda_axis, dda_step
+    from camplace.visibility.raywalk import dda_axis, dda_step
 
     d = np.array([2.0, 1.0, 0.0]) / math.sqrt(5.0)
     p = np.array([0.05, 0.05, 0.05])

@@ -2,30 +2,26 @@
 
 ``render_view`` raycasts one ray per pixel of a reduced-resolution copy of the camera
 (same lens model, intrinsics scaled) through the occupancy grid with the compiled
-DDA of camplace.visibility.pixel, and colours each pixel by what it hits: floor,
-walls and ceiling in neutral greys, each obstacle in its own colour, shaded by depth
-(and dimmed beyond the camera's max range). ``view_figure_png`` draws that image with
-the targets the camera covers overlaid (projected target centres) next to a top-down
-map of its footprint (where its rays end). ``render_camera`` is the whole
-``camplace render`` command as one call. Nothing here prints; PNGs are written
-atomically.
+ray walking of camplace.visibility.raywalk, and colours each pixel by what it hits:
+floor, walls and ceiling in neutral greys, each obstacle in its own colour, shaded by
+depth (and dimmed beyond the camera's max range). ``view_figure_png`` draws that image
+with the targets the camera covers overlaid (projected target centres) next to a
+top-down map of its footprint (where its rays end). Everything here draws what it is
+given (scene, camera model, pose, targets, covered ids); rebuilding those from a scene
+name or an output folder is camplace.workflows.render. Nothing here prints.
 """
 
 from __future__ import annotations
 
 import io
 from dataclasses import dataclass
-from pathlib import Path
 
-import numba
 import numpy as np
 
 from camplace.cameras.models import CameraModel
-from camplace.core.errors import InputError
-from camplace.core.files import atomic_write_bytes
 from camplace.scene.build import Scene
 from camplace.targets.build import Targets
-from camplace.visibility.pixel import BOUNDARY, NO_HIT, _first_hit, free_distance
+from camplace.visibility.raywalk import BOUNDARY, cast_rays, free_distance
 
 FREE, WALL, FLOOR, CEILING, OTHER = 0, 1, 2, 3, 4  # labels; obstacle k (scene.boxes order) = 5 + k
 NEUTRAL = {WALL: (0.80, 0.80, 0.78), FLOOR: (0.62, 0.62, 0.60), CEILING: (0.92, 0.92, 0.90),
@@ -83,14 +79,10 @@ def obstacle_colours(n: int) -> np.ndarray:
     return np.array([cmap(k % cmap.N)[:3] for k in range(n)])
 
 
-@numba.njit(cache=True, parallel=True)
-def _cast_rays(occ, dist, origin, res, p, dirs, max_t, t_out, cell_out, axis_out):
-    for r in numba.prange(dirs.shape[0]):
-        t, ix, iy, iz, axis, step = _first_hit(occ, dist, origin[0], origin[1], origin[2], res, p[0], p[1], p[2],
-                                               dirs[r, 0], dirs[r, 1], dirs[r, 2], max_t)
-        t_out[r] = t if axis != NO_HIT else np.inf
-        cell_out[r, 0], cell_out[r, 1], cell_out[r, 2] = ix, iy, iz
-        axis_out[r] = axis
+def scene_grids(scene: Scene) -> tuple[tuple[np.ndarray, dict], np.ndarray]:
+    """What ``render_view`` reads of a scene, computed once for many views: (``label_grid(scene)``,
+    the occupancy's free distance (nx, ny, nz) uint8, camplace.visibility.raywalk.free_distance)."""
+    return label_grid(scene), free_distance(scene.occupancy)
 
 
 def scaled_camera(cam: CameraModel, width: int) -> CameraModel:
@@ -121,13 +113,9 @@ def render_view(scene: Scene, camera: CameraModel, position: np.ndarray, rotatio
     R = np.asarray(rotation, float)
     dirs = np.ascontiguousarray(rays_c @ R.T)
     n = len(dirs)
-    t = np.empty(n)
-    cell = np.empty((n, 3), np.int64)
-    axis = np.empty(n, np.int64)
     diag = float(np.linalg.norm(np.array(occ.shape) * occ.resolution)) + 1.0
     p = np.asarray(position, float)
-    _cast_rays(occ.occupied.view(np.uint8), dist, occ.origin.astype(np.float64), float(occ.resolution), p, dirs, diag,
-               t, cell, axis)
+    t, cell, axis = cast_rays(occ.occupied, dist, occ.origin, occ.resolution, p, dirs, diag)
     shape = np.array(occ.shape)
     inside = np.all((cell >= 0) & (cell < shape), axis=1) & np.isfinite(t)
     lbl = np.full(n, FREE, np.int16)
@@ -228,43 +216,3 @@ def view_figure_png(scene: Scene, view: RenderedView, camera: CameraModel, posit
     buf = io.BytesIO()
     fig.savefig(buf, format="png", dpi=110)
     return buf.getvalue()
-
-
-def render_camera(scene, camera_id: int, placement: str | Path | None = None, out: str | Path | None = None,
-                  width: int = 480, progress=None) -> tuple[Path | None, RenderedView, dict]:
-    """``camplace render``: the view of one camera as PNG.
-
-    Without ``placement``, camera_id is a candidate id (row of V over every candidate
-    of the scene); with a placement file (placement.json / .csv, see camplace.workflows.evaluate)
-    it is the index of the camera in that file. The covered targets are raycast
-    afresh (voxel mode). Returns (png path or None, the view, info)."""
-    from camplace.cameras.candidates import build_candidates
-    from camplace.workflows.evaluate import candidates_from_poses, read_placement
-    from camplace.workflows.run import scene_inputs
-    from camplace.visibility.voxel import compute_visibility
-
-    sc, targets, cameras, _ = scene_inputs(scene, progress)
-    if placement is not None:
-        cands = candidates_from_poses(read_placement(placement), cameras)
-        what = f"camera index in {placement}"
-    else:
-        cands = build_candidates(sc, cameras)
-        what = "candidate id"
-    if not 0 <= int(camera_id) < len(cands):
-        raise InputError(f"--camera: {what} {camera_id} is out of range (0..{len(cands) - 1})")
-    one = cands.subset(np.array([int(camera_id)]))
-    cam = one.cameras[int(one.camera_ids[0])]
-    vis = compute_visibility(sc.occupancy, targets, one)
-    covered = vis.V.indices[vis.V.indptr[0]:vis.V.indptr[1]]
-    pos, rot = one.positions[0], one.rotations[0]
-    view = render_view(sc, cam, pos, rot, width)
-    yaw, pitch, roll = (float(a) for a in one.angles_deg[0])
-    title = (f"{sc.name}: {what} {camera_id} ({cam.name}, {cam.model}) at ({pos[0]:.2f}, {pos[1]:.2f}, {pos[2]:.2f}) m, "
-             f"yaw {yaw:.0f}, pitch {pitch:.0f}, roll {roll:.0f} deg; covers {len(covered)} targets")
-    info = {"covered": int(len(covered)), "camera": cam.name, "position": [float(v) for v in pos],
-            "yaw_deg": yaw, "pitch_deg": pitch, "roll_deg": roll}
-    path = None
-    if out is not None:
-        png = view_figure_png(sc, view, cam, pos, rot, targets, covered, title)
-        path = atomic_write_bytes(Path(out), png)
-    return path, view, info

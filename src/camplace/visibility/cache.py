@@ -117,7 +117,8 @@ class BlockStore:
             else:
                 atomic_write_json(meta_path, meta)
         except (OSError, ValueError) as err:
-            raise InputError(f"--cache: cannot use the cache folder {self.root} ({err})") from None
+            raise InputError(f"cache_dir: cannot use the cache folder {self.root} ({err})",
+                             option="cache_dir") from None
 
     def path(self, k: int) -> Path:
         return self.dir / f"block-{k:06d}.npz"

@@ -16,12 +16,14 @@ executor: each task is computed by the same function on the same inputs.
   (``tcp://host:port``) or an existing ``Client``; ``shared`` is scattered (broadcast)
   once and tasks are submitted as futures.
 
-``make_executor(workers, scheduler)`` picks one; ``CAMPLACE_SCHEDULER`` in the
+All three derive from ``Executor`` (the protocol, and the shared context-manager
+``close``). ``make_executor(workers, scheduler)`` picks one; ``CAMPLACE_SCHEDULER`` in the
 environment stands for ``scheduler`` when it is not given.
 """
 
 from __future__ import annotations
 
+import abc
 import contextlib
 import os
 import threading
@@ -55,7 +57,36 @@ def run_task(fn: TaskFn, shared: Any, task: Any, n_threads: int | None = None) -
         return fn(shared, task)
 
 
-class InProcessExecutor:
+class Executor(abc.ABC):
+    """The executor protocol: ``map_unordered(fn, shared, tasks)`` yields ``(task index,
+    fn(shared, task))`` as results arrive; ``name`` (for Visibility.info) and ``workers``
+    (how many run at once). A context manager: ``close()`` on exit frees what the
+    executor owns (nothing, by default)."""
+
+    name: str = "executor"
+    workers: int = 1
+
+    @abc.abstractmethod
+    def map_unordered(self, fn: TaskFn, shared: Any, tasks: Sequence[Any]) -> Iterator[tuple[int, Any]]:
+        """(index into tasks, result) of every task, in completion order."""
+
+    def close(self) -> None:
+        """Free the executor's resources (idempotent)."""
+
+    def __enter__(self) -> "Executor":
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+
+def check_workers(workers: int) -> None:
+    """InputError unless ``workers`` is a positive integer."""
+    if workers < 1:
+        raise InputError(f"workers: expected a positive integer, got {workers}", option="workers")
+
+
+class InProcessExecutor(Executor):
     """Run the tasks here, in order (the kernel is parallel inside each task)."""
 
     name = "in-process"
@@ -64,15 +95,6 @@ class InProcessExecutor:
     def map_unordered(self, fn: TaskFn, shared: Any, tasks: Sequence[Any]) -> Iterator[tuple[int, Any]]:
         for k, task in enumerate(tasks):
             yield k, run_task(fn, shared, task)
-
-    def close(self) -> None:
-        pass
-
-    def __enter__(self) -> "InProcessExecutor":
-        return self
-
-    def __exit__(self, *exc: object) -> None:
-        self.close()
 
 
 def _pool_init(shared: Any, n_threads: int | None) -> None:
@@ -104,14 +126,13 @@ def _pool_call(fn: TaskFn, task: Any) -> Any:
     return run_task(fn, _WORKER_SHARED, task)
 
 
-class ProcessPoolChunkExecutor:
+class ProcessPoolChunkExecutor(Executor):
     """``workers`` local processes (spawned); ``shared`` is sent to each once."""
 
     name = "process-pool"
 
     def __init__(self, workers: int, threads_per_worker: int | None = None) -> None:
-        if workers < 1:
-            raise InputError(f"--workers: expected a positive integer, got {workers}")
+        check_workers(workers)
         self.workers = int(workers)
         cores = os.cpu_count() or 1
         self.threads_per_worker = threads_per_worker or max(1, cores // self.workers)
@@ -135,17 +156,8 @@ class ProcessPoolChunkExecutor:
                     fut.cancel()
                 raise
 
-    def close(self) -> None:
-        pass
 
-    def __enter__(self) -> "ProcessPoolChunkExecutor":
-        return self
-
-    def __exit__(self, *exc: object) -> None:
-        self.close()
-
-
-class DaskExecutor:
+class DaskExecutor(Executor):
     """Tasks on a dask.distributed cluster: ``DaskExecutor("tcp://host:port")`` or
     ``DaskExecutor(client=Client(...))``. ``threads_per_task``: numba threads per task
     (default: all the worker machine's cores)."""
@@ -159,11 +171,13 @@ class DaskExecutor:
         self._own = client is None
         if client is None:
             if not address or "://" not in address:
-                raise InputError(f"--scheduler: expected a Dask scheduler address like tcp://host:8786, got '{address}'")
+                raise InputError(f"scheduler: expected a Dask scheduler address like tcp://host:8786, got "
+                                 f"'{address}'", option="scheduler")
             try:
                 client = Client(address, timeout=f"{timeout_s}s", set_as_default=False)
             except (OSError, TimeoutError) as err:
-                raise InputError(f"--scheduler: cannot connect to the Dask scheduler at {address} ({err})") from None
+                raise InputError(f"scheduler: cannot connect to the Dask scheduler at {address} ({err})",
+                                 option="scheduler") from None
         self.client = client
         self.threads_per_task = threads_per_task
         self.workers = max(1, len(client.scheduler_info().get("workers", {})))
@@ -190,15 +204,7 @@ class DaskExecutor:
     def close(self) -> None:
         if self._own:
             self.client.close()
-
-    def __enter__(self) -> "DaskExecutor":
-        return self
-
-    def __exit__(self, *exc: object) -> None:
-        self.close()
-
-
-Executor = InProcessExecutor | ProcessPoolChunkExecutor | DaskExecutor
+            self._own = False
 
 
 def make_executor(workers: int = 1, scheduler: str | None = None) -> Executor:
@@ -208,7 +214,7 @@ def make_executor(workers: int = 1, scheduler: str | None = None) -> Executor:
     if scheduler:
         return DaskExecutor(scheduler)
     if workers is None or workers <= 1:
-        if workers is not None and workers < 1:
-            raise InputError(f"--workers: expected a positive integer, got {workers}")
+        if workers is not None:
+            check_workers(workers)
         return InProcessExecutor()
     return ProcessPoolChunkExecutor(workers)

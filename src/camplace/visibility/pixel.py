@@ -1,4 +1,4 @@
-"""Stage 4, ``pixel`` mode: the paper's per-pixel raycasting (Malhotra et al. 2022, sec. IV).
+"""The ``pixel`` visibility engine: the paper's per-pixel raycasting (Malhotra et al. 2022, sec. IV).
 
 For each candidate, one ray leaves the camera through the centre of every block of
 ``stride`` x ``stride`` pixels (unprojected through the lens model, so distortion and
@@ -15,16 +15,18 @@ fisheye lenses are handled exactly). Each ray is traced with a compiled 3D DDA
    region's incidence limit (ray direction vs face normal).
 
 Pixel-density limits (``min_px_per_m``) are tested at the target centre with the same
-function as ``voxel`` mode. The result is the same ``Visibility`` as voxel mode.
+function as the voxel engine. ``PixelEngine`` implements camplace.visibility.engine's
+interface, so it runs on the same executors and block cache and gives the same kind
+of ``Visibility``; the DDA routines are camplace.visibility.raywalk's.
 Where the two differ and why: docs/lenses.md.
 """
 
 from __future__ import annotations
 
 import math
-import time
+import sys
+from dataclasses import dataclass
 from pathlib import Path
-from typing import Callable
 
 import numba
 import numpy as np
@@ -35,75 +37,17 @@ from camplace.core.errors import InputError
 from camplace.spec.quality import target_min_px
 from camplace.scene.build import OccupancyGrid
 from camplace.targets.build import Targets
-from camplace.visibility.voxel import Visibility, chunked_rows, dda_axis, dda_step, target_cos_limits
+from camplace.visibility import engine as _engine
+from camplace.visibility.engine import Progress, Visibility
+from camplace.visibility.raywalk import dda_axis, dda_step, first_hit, free_distance
+from camplace.visibility.voxel import target_cos_limits
 
-Progress = Callable[[str, int, int], None]
 DEFAULT_STRIDE = 4
 DEFAULT_PROBE = 1.0
-NO_HIT, BOUNDARY = -2, -1
+DEFAULT_CHUNK = 64  # candidate rows per block
 
 
 # ----------------------------------------------------------------------------- kernels
-@numba.njit(cache=True, inline="always")
-def _first_hit(occ, dist, ox, oy, oz, res, px, py, pz, dx, dy, dz, rng):
-    """First occupied cell along the unit ray p + t d, t in [0, rng].
-
-    Returns (t, ix, iy, iz, axis, step): t = distance to the entry of the hit cell (rng
-    when nothing is hit: axis = NO_HIT); axis/step = the axis and direction of the DDA
-    step that entered the hit cell (axis = BOUNDARY when the ray starts in an occupied
-    cell or leaves the grid). ``dist`` (same shape as occ, see ``free_distance``) lets the
-    ray jump through empty space: from a cell whose Chebyshev distance to the nearest
-    occupied cell is d, every point within (d - 1) cells is free, so the ray advances
-    (d - 1) * res at once; pass a (1, 1, 1) array to step cell by cell. Same result."""
-    nx, ny, nz = occ.shape
-    skip = dist.shape[0] == nx and dist.shape[1] == ny and dist.shape[2] == nz
-    ix = int(math.floor((px - ox) / res))
-    iy = int(math.floor((py - oy) / res))
-    iz = int(math.floor((pz - oz) / res))
-    if ix < 0 or iy < 0 or iz < 0 or ix >= nx or iy >= ny or iz >= nz or occ[ix, iy, iz]:
-        return 0.0, ix, iy, iz, BOUNDARY, 0
-    sx, tmx, tdx = dda_axis(ix, px, dx, ox, res)
-    sy, tmy, tdy = dda_axis(iy, py, dy, oy, res)
-    sz, tmz, tdz = dda_axis(iz, pz, dz, oz, res)
-    t_in = 0.0  # ray parameter where it entered the current cell
-    while True:
-        if skip:
-            dd = dist[ix, iy, iz]
-            if dd >= 4:
-                t_in = t_in + (dd - 1) * res
-                if t_in > rng:
-                    return rng, ix, iy, iz, NO_HIT, 0
-                ix = int(math.floor((px + t_in * dx - ox) / res))
-                iy = int(math.floor((py + t_in * dy - oy) / res))
-                iz = int(math.floor((pz + t_in * dz - oz) / res))
-                # next boundaries ahead; max() guards rays running along a cell boundary,
-                # where rounding can put the recomputed cell behind the ray (an axis the
-                # ray is parallel to keeps its 1e30)
-                tmx = max(dda_axis(ix, px, dx, ox, res)[1], t_in)
-                tmy = max(dda_axis(iy, py, dy, oy, res)[1], t_in)
-                tmz = max(dda_axis(iz, pz, dz, oz, res)[1], t_in)
-        jx, jy, jz, ux, uy, uz, axis, t = dda_step(ix, iy, iz, tmx, tmy, tmz, sx, sy, sz, tdx, tdy, tdz)
-        if t > rng:
-            return rng, ix, iy, iz, NO_HIT, 0
-        ix, iy, iz, tmx, tmy, tmz = jx, jy, jz, ux, uy, uz
-        step = sx if axis == 0 else (sy if axis == 1 else sz)
-        t_in = t
-        if ix < 0 or iy < 0 or iz < 0 or ix >= nx or iy >= ny or iz >= nz:
-            return t, ix, iy, iz, BOUNDARY, 0
-        if occ[ix, iy, iz]:
-            return t, ix, iy, iz, axis, step
-
-
-def free_distance(occupancy: OccupancyGrid) -> np.ndarray:
-    """(nx, ny, nz) uint8: Chebyshev distance (cells, capped at 255) from each free cell to
-    the nearest occupied cell or the grid's outside; 0 on occupied cells."""
-    from scipy.ndimage import distance_transform_cdt
-
-    free = np.pad(~occupancy.occupied, 1, constant_values=False)
-    d = distance_transform_cdt(free, metric="chessboard")[1:-1, 1:-1, 1:-1]
-    return np.minimum(d, 255).astype(np.uint8)
-
-
 @numba.njit(cache=True, inline="always")
 def _ray_hits_cube(px, py, pz, dx, dy, dz, cx, cy, cz, h, t_end):
     """True if the segment p + t d, t in [0, t_end], meets the cube of half-size h at c."""
@@ -189,7 +133,7 @@ def _pixel_kernel(occ, dist, origin, res, cam_pos, cam_rot, cam_ids, cam_params,
             dx = R[0, 0] * cx_ + R[0, 1] * cy_ + R[0, 2] * cz_
             dy = R[1, 0] * cx_ + R[1, 1] * cy_ + R[1, 2] * cz_
             dz = R[2, 0] * cx_ + R[2, 1] * cy_ + R[2, 2] * cz_
-            t_end, hx, hy, hz, axis, step = _first_hit(occ, dist, ox, oy, oz, res, px, py, pz, dx, dy, dz, rng)
+            t_end, hx, hy, hz, axis, step = first_hit(occ, dist, ox, oy, oz, res, px, py, pz, dx, dy, dz, rng)
             # surface patch hit
             if axis >= 0 and n_keys > 0:
                 face = 2 * axis + (0 if step < 0 else 1)
@@ -326,11 +270,6 @@ def surface_cell_map(occupancy: OccupancyGrid, targets: Targets, probe: float, v
     return keys[keep].astype(np.int64), ids[keep].astype(np.int32)
 
 
-def default_stride(candidates: Candidates) -> int:
-    """The default pixel stride (DEFAULT_STRIDE, see docs/benchmarks.md for its cost)."""
-    return DEFAULT_STRIDE
-
-
 def camera_rays(candidates: Candidates, stride: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Unit camera-frame rays of every camera type, concatenated: (rays (M, 3), start
     (n_cameras + 1,) int64 offsets per camera id, foot (n_cameras,) float64: the
@@ -349,96 +288,103 @@ def camera_rays(candidates: Candidates, stride: int) -> tuple[np.ndarray, np.nda
     return np.ascontiguousarray(np.concatenate(parts), dtype=np.float64), start, np.array(foot, np.float64)
 
 
-def compute_pixel_visibility(occupancy: OccupancyGrid, targets: Targets, candidates: Candidates,
-                             voxel_size: float, stride: int | None = None, probe: float = DEFAULT_PROBE,
-                             chunk_size: int = 64, progress: Progress | None = None,
-                             skip_empty: bool = True, executor=None,
-                             cache_dir: str | Path | None = None) -> Visibility:
-    """V by per-pixel raycasting (rows in candidate order).
+def ray_counts(candidates: Candidates, stride: int) -> np.ndarray:
+    """(n_cameras,) int64: rays cast per candidate of each camera type (see camera_rays)."""
+    return np.array([max(1, c.width // stride) * max(1, c.height // stride) for c in candidates.cameras], np.int64)
+
+
+@dataclass(frozen=True)
+class PixelEngine:
+    """The paper's per-pixel raycasting (see the module docstring).
 
     voxel_size: the target voxel edge (m, the scene's ``voxel_size``); stride: cast one
-    ray per stride x stride pixel block (None = ``default_stride``); probe: the part of
-    the voxel a ray must pass through, as a fraction of its edge (1 = any part of the
-    voxel, the paper's rule; smaller = closer to the target centre; 0 = "centre": the
-    target centre must lie in a ray's pixel footprint, the counterpart of voxel mode's
+    ray per stride x stride pixel block (None = DEFAULT_STRIDE); probe: the part of the
+    voxel a ray must pass through, as a fraction of its edge (1 = any part of the voxel,
+    the paper's rule; smaller = closer to the target centre; 0 = "centre": the target
+    centre must lie in a ray's pixel footprint, the counterpart of the voxel engine's
     centre test; for surfaces, a ray that hits the patch must pass the patch centre
     within its footprint). skip_empty: jump rays through empty space (same V, faster).
+    chunk_size: candidate rows per block."""
 
-    Chunks of ``chunk_size`` candidates run on ``executor`` and are stored in / loaded
-    from the block cache under ``cache_dir`` exactly as in voxel mode
-    (camplace.visibility.voxel.chunked_rows; the cache key adds the mode, stride, probe and
-    voxel size). The result does not depend on executor or cache."""
-    if stride is None:
-        stride = default_stride(candidates)
-    if int(stride) < 1:
-        raise InputError(f"--stride: expected a positive integer, got {stride}")
-    if not 0 <= probe <= 1:
-        raise InputError(f"probe: expected a fraction in [0, 1], got {probe}")
-    t0 = time.perf_counter()
-    stride = int(stride)
-    n, n_t = len(candidates), len(targets)
-    bounds = [(s, min(s + chunk_size, n)) for s in range(0, n, chunk_size)]
-    rays, ray_start, foot = camera_rays(candidates, stride)
-    rays_per_cam = np.diff(ray_start)
-    store = None
-    if cache_dir is not None:
-        import camplace.visibility.pixel as _this
-        from camplace.visibility.cache import BlockStore
-        from camplace.visibility.voxel import visibility_cache_key
+    voxel_size: float
+    stride: int | None = None
+    probe: float = DEFAULT_PROBE
+    chunk_size: int = DEFAULT_CHUNK
+    skip_empty: bool = True
+    mode = "pixel"
 
-        mode = f"pixel:stride={stride}:probe={float(probe)!r}:voxel={float(voxel_size)!r}:skip={bool(skip_empty)}"
-        key = visibility_cache_key(occupancy, targets, candidates, mode, chunk_size, (_this,))
-        store = BlockStore(cache_dir, key, bounds, n_t)
+    def __post_init__(self) -> None:
+        stride = DEFAULT_STRIDE if self.stride is None else self.stride
+        if int(stride) < 1:
+            raise InputError(f"stride: expected a positive integer, got {stride}", option="stride")
+        if not 0 <= self.probe <= 1:
+            raise InputError(f"probe: expected a fraction in [0, 1], got {self.probe}", option="probe")
+        if not float(self.voxel_size) > 0:
+            raise InputError(f"voxel_size: expected a positive length (m), got {self.voxel_size}",
+                             option="voxel_size")
+        _engine.check_chunk_size(self.chunk_size)
+        object.__setattr__(self, "stride", int(stride))
 
-    setup: dict = {}
+    def cache_tag(self) -> str:
+        return (f"pixel:stride={self.stride}:probe={float(self.probe)!r}:voxel={float(self.voxel_size)!r}"
+                f":skip={bool(self.skip_empty)}")
 
-    def make_shared() -> tuple:
-        shared = _pixel_setup(occupancy, targets, candidates, voxel_size, probe, skip_empty, rays, ray_start, foot)
-        setup["surface_face_cells"] = int(len(shared[3][5]))  # s_keys
-        return shared
+    def code_modules(self) -> tuple:
+        return (sys.modules[__name__],)
 
-    V, cached = chunked_rows(n_t, bounds, _pixel_chunk_task, make_shared, executor, store, progress)
-    secs = time.perf_counter() - t0
-    from_cache = set(cached)
-    cast = sum(int(rays_per_cam[candidates.camera_ids[s:e]].sum())
-               for k, (s, e) in enumerate(bounds) if k not in from_cache)
-    info = {"seconds": secs, "nnz": int(V.nnz), "chunks": len(bounds), "stride": stride, "probe": probe,
-            "rays": int(rays_per_cam[candidates.camera_ids].sum()), "rays_cast": cast,
-            "rays_per_s": cast / secs if secs > 0 else 0.0, "cached_chunks": len(cached),
-            "executor": getattr(executor, "name", "in-process"), **setup}
-    if store is not None:
-        info["cache"] = str(store.dir)
-    return Visibility(V, candidates, targets, "pixel", info)
+    def setup(self, occupancy: OccupancyGrid, targets: Targets, candidates: Candidates) -> tuple:
+        """The arrays every block of ``_pixel_kernel`` reads (built once, shipped once per worker)."""
+        rays, ray_start, foot = camera_rays(candidates, self.stride)
+        probe, voxel_size = self.probe, self.voxel_size
+        centre_mode = probe == 0
+        reach = max(c.max_range for c in candidates.cameras) * float(foot.max()) if centre_mode else 0.0
+        bprobe = min(1.0, 2.0 * reach / voxel_size) if centre_mode else probe
+        bgrid, bshape, b_start, b_ids, thalf = volume_buckets(occupancy, targets, bprobe, voxel_size)
+        s_keys, s_ids = surface_cell_map(occupancy, targets, 1.0 if centre_mode else probe, voxel_size)
+        occ = occupancy.occupied.view(np.uint8)
+        dist = free_distance(occupancy) if self.skip_empty else np.zeros((1, 1, 1), np.uint8)
+        params = np.stack([c.params for c in candidates.cameras])
+        world = (occ, dist, occupancy.origin.astype(np.float64), float(occupancy.resolution))
+        poses = (np.ascontiguousarray(candidates.positions, dtype=np.float64),
+                 np.ascontiguousarray(candidates.rotations, dtype=np.float64),
+                 np.ascontiguousarray(candidates.camera_ids, dtype=np.int64))
+        tgt = (bgrid, bshape, b_start, b_ids, thalf, s_keys, s_ids,
+               np.ascontiguousarray(targets.positions, dtype=np.float64),
+               np.ascontiguousarray(targets.normals, dtype=np.float64), target_cos_limits(targets),
+               target_min_px(targets))
+        return world, poses, (params, rays, ray_start, foot), tgt, centre_mode, len(targets)
+
+    def rows(self, shared: tuple, start: int, stop: int) -> tuple[np.ndarray, np.ndarray]:
+        world, (pos, rot, cam_ids), (params, rays, ray_start, foot), tgt, centre_mode, n_t = shared
+        s, e = start, stop
+        mask = np.zeros((e - s, n_t), np.uint8)
+        _pixel_kernel(*world, pos[s:e], rot[s:e], cam_ids[s:e], params, rays, ray_start, *tgt, foot, centre_mode,
+                      mask)
+        rows, cols = np.nonzero(mask == 1)
+        indptr = np.zeros(e - s + 1, np.int64)
+        np.cumsum(np.bincount(rows, minlength=e - s), out=indptr[1:])
+        return indptr, cols.astype(np.int32)
+
+    def info(self, candidates: Candidates, bounds: list, computed: list, seconds: float, shared: tuple | None) -> dict:
+        """stride, probe, rays (all candidates), rays_cast (this call), rays_per_s and, when
+        the set-up ran, surface_face_cells."""
+        per_cam = ray_counts(candidates, self.stride)
+        cast = sum(int(per_cam[candidates.camera_ids[s:e]].sum()) for s, e in (bounds[k] for k in computed))
+        out = {"stride": self.stride, "probe": self.probe, "rays": int(per_cam[candidates.camera_ids].sum()),
+               "rays_cast": cast, "rays_per_s": cast / seconds if seconds > 0 else 0.0}
+        if shared is not None:
+            out["surface_face_cells"] = int(len(shared[3][5]))  # s_keys
+        return out
 
 
-def _pixel_setup(occupancy: OccupancyGrid, targets: Targets, candidates: Candidates, voxel_size: float,
-                 probe: float, skip_empty: bool, rays: np.ndarray, ray_start: np.ndarray, foot: np.ndarray) -> tuple:
-    """The arrays every chunk of ``_pixel_kernel`` reads (built once, shipped once per worker)."""
-    centre_mode = probe == 0
-    reach = max(c.max_range for c in candidates.cameras) * float(foot.max()) if centre_mode else 0.0
-    bprobe = min(1.0, 2.0 * reach / voxel_size) if centre_mode else probe
-    bgrid, bshape, b_start, b_ids, thalf = volume_buckets(occupancy, targets, bprobe, voxel_size)
-    s_keys, s_ids = surface_cell_map(occupancy, targets, 1.0 if centre_mode else probe, voxel_size)
-    occ = occupancy.occupied.view(np.uint8)
-    dist = free_distance(occupancy) if skip_empty else np.zeros((1, 1, 1), np.uint8)
-    params = np.stack([c.params for c in candidates.cameras])
-    world = (occ, dist, occupancy.origin.astype(np.float64), float(occupancy.resolution))
-    poses = (np.ascontiguousarray(candidates.positions, dtype=np.float64),
-             np.ascontiguousarray(candidates.rotations, dtype=np.float64),
-             np.ascontiguousarray(candidates.camera_ids, dtype=np.int64))
-    tgt = (bgrid, bshape, b_start, b_ids, thalf, s_keys, s_ids,
-           np.ascontiguousarray(targets.positions, dtype=np.float64),
-           np.ascontiguousarray(targets.normals, dtype=np.float64), target_cos_limits(targets), target_min_px(targets))
-    return world, poses, (params, rays, ray_start, foot), tgt, centre_mode, len(targets)
-
-
-def _pixel_chunk_task(shared: tuple, bounds: tuple[int, int]) -> tuple[np.ndarray, np.ndarray]:
-    """One unit of work for an executor: V rows [start, stop) as (indptr, indices)."""
-    world, (pos, rot, cam_ids), (params, rays, ray_start, foot), tgt, centre_mode, n_t = shared
-    s, e = bounds
-    mask = np.zeros((e - s, n_t), np.uint8)
-    _pixel_kernel(*world, pos[s:e], rot[s:e], cam_ids[s:e], params, rays, ray_start, *tgt, foot, centre_mode, mask)
-    rows, cols = np.nonzero(mask == 1)
-    indptr = np.zeros(e - s + 1, np.int64)
-    np.cumsum(np.bincount(rows, minlength=e - s), out=indptr[1:])
-    return indptr, cols.astype(np.int32)
+def compute_pixel_visibility(occupancy: OccupancyGrid, targets: Targets, candidates: Candidates,
+                             voxel_size: float, stride: int | None = None, probe: float = DEFAULT_PROBE,
+                             chunk_size: int = DEFAULT_CHUNK, progress: Progress | None = None,
+                             skip_empty: bool = True, executor=None,
+                             cache_dir: str | Path | None = None) -> Visibility:
+    """V by per-pixel raycasting (rows in candidate order): camplace.visibility.engine.
+    compute_visibility of ``PixelEngine(voxel_size, stride, probe, chunk_size, skip_empty)``
+    (parameters: PixelEngine). The result does not depend on executor or cache."""
+    eng = PixelEngine(voxel_size, stride, probe, chunk_size, skip_empty)
+    return _engine.compute_visibility(eng, occupancy, targets, candidates, executor=executor, cache_dir=cache_dir,
+                                      progress=progress)

@@ -1,98 +1,37 @@
-"""Stage 4 - visibility: the sparse matrix V (N_g x N_p) of which candidate sees which target.
+"""The ``voxel`` visibility engine (default, fast): the centre test per target.
 
-``voxel`` mode (default): for each candidate, the targets within range, inside the image
-(lens model) and, for surfaces, seen from their outer side within the incidence limit,
-are tested for line of sight with a 3D DDA (Amanatides & Woo) through the occupancy
-grid; a target is seen if no occupied cell lies between the camera and it. One fused
-numba kernel per chunk of candidates, parallel over candidates; chunks map over a
-local executor. V is built as CSR straight from the kernel (never dense).
+For each candidate, the targets within range, inside the image (lens model) and, for
+surfaces, seen from their outer side within the incidence limit, are tested for line of
+sight with a 3D DDA (camplace.visibility.raywalk) through the occupancy grid; a target
+is seen if no occupied cell lies between the camera and it. One fused numba kernel per
+block of candidates, parallel over candidates, returns the block's CSR pieces
+(``VoxelEngine.rows``); camplace.visibility.engine.compute_visibility maps the blocks over
+an executor and the cache.
 """
 
 from __future__ import annotations
 
 import math
-import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
-from typing import Callable
+from typing import Any
 
 import numba
 import numpy as np
 import scipy.sparse as sp
 
 from camplace.cameras.models import project_nb, px_per_m_nb
+from camplace.core.errors import InputError
 from camplace.spec.quality import target_min_px
 from camplace.cameras.candidates import Candidates
 from camplace.scene.build import OccupancyGrid
 from camplace.targets.build import Targets
+from camplace.visibility import engine as _engine
+from camplace.visibility.engine import Progress, Visibility, drop_blind_candidates  # noqa: F401 (re-exported)
+from camplace.visibility.raywalk import dda_axis, dda_step, segment_clear  # noqa: F401 (re-exported)
 
-Progress = Callable[[str, int, int], None]
 SURFACE_OFFSET = 0.75  # surface rays end this many occupancy cells outside the face
-
-
-@dataclass(frozen=True)
-class Visibility:
-    """V: (N_g, N_p) CSR uint8, 1 where candidate i sees target j; rows follow
-    ``candidates``, columns follow ``targets``."""
-
-    V: sp.csr_matrix
-    candidates: Candidates
-    targets: Targets
-    mode: str = "voxel"
-    info: dict = field(default_factory=dict)
-
-
-@numba.njit(cache=True, inline="always")
-def dda_axis(i: int, p: float, d: float, o: float, size: float) -> tuple[int, float, float]:
-    """3D DDA (Amanatides & Woo) set-up along one axis for the ray p + t d through cells of
-    ``size`` (m) from origin ``o``, the ray being in cell ``i``: (step +1/-1, t of the next
-    cell boundary, t from one boundary to the next); both t are 1e30 (never) when d == 0."""
-    step = 1 if d > 0 else -1
-    if d != 0.0:
-        return step, ((i + (1 if d > 0 else 0)) * size + o - p) / d, size / abs(d)
-    return step, 1e30, 1e30
-
-
-@numba.njit(cache=True, inline="always")
-def dda_step(ix: int, iy: int, iz: int, tmx: float, tmy: float, tmz: float, sx: int, sy: int, sz: int,
-             tdx: float, tdy: float, tdz: float):
-    """One DDA step into the next cell (set-up: ``dda_axis`` per axis): crosses the nearest
-    cell boundary. Returns (ix, iy, iz, tmx, tmy, tmz) after the step, the axis stepped
-    along (0, 1, 2) and t of the boundary crossed (the ray's entry into the new cell)."""
-    if tmx <= tmy and tmx <= tmz:
-        return ix + sx, iy, iz, tmx + tdx, tmy, tmz, 0, tmx
-    if tmy <= tmz:
-        return ix, iy + sy, iz, tmx, tmy + tdy, tmz, 1, tmy
-    return ix, iy, iz + sz, tmx, tmy, tmz + tdz, 2, tmz
-
-
-@numba.njit(cache=True, nogil=True)
-def segment_clear(occ: np.ndarray, ox: float, oy: float, oz: float, res: float,
-                  x0: float, y0: float, z0: float, x1: float, y1: float, z1: float) -> bool:
-    """True if no occupied cell meets the segment p0 -> p1 (3D DDA; out of grid = blocked)."""
-    nx, ny, nz = occ.shape
-    ix = int(math.floor((x0 - ox) / res))
-    iy = int(math.floor((y0 - oy) / res))
-    iz = int(math.floor((z0 - oz) / res))
-    ex = int(math.floor((x1 - ox) / res))
-    ey = int(math.floor((y1 - oy) / res))
-    ez = int(math.floor((z1 - oz) / res))
-    sx, tmx, tdx = dda_axis(ix, x0, x1 - x0, ox, res)
-    sy, tmy, tdy = dda_axis(iy, y0, y1 - y0, oy, res)
-    sz, tmz, tdz = dda_axis(iz, z0, z1 - z0, oz, res)
-    n_max = abs(ex - ix) + abs(ey - iy) + abs(ez - iz) + 1
-    for _ in range(n_max):
-        if ix < 0 or iy < 0 or iz < 0 or ix >= nx or iy >= ny or iz >= nz:
-            return False
-        if occ[ix, iy, iz]:
-            return False
-        if ix == ex and iy == ey and iz == ez:
-            return True
-        jx, jy, jz, ux, uy, uz, _, t = dda_step(ix, iy, iz, tmx, tmy, tmz, sx, sy, sz, tdx, tdy, tdz)
-        if t > 1.0:
-            return True
-        ix, iy, iz, tmx, tmy, tmz = jx, jy, jz, ux, uy, uz
-    return True
+DEFAULT_CHUNK = 2048  # candidate rows per block
 
 
 @numba.njit(cache=True, inline="always")
@@ -284,126 +223,53 @@ def _block_arrays(occupancy: OccupancyGrid, targets: Targets, candidates: Candid
     return indptr, indices
 
 
-def _chunk_task(shared: tuple, bounds: tuple[int, int]) -> tuple[np.ndarray, np.ndarray]:
-    """One unit of work for an executor: shared = (occupancy, targets, candidates, grid)."""
-    occupancy, targets, candidates, grid = shared
-    return _block_arrays(occupancy, targets, candidates, bounds[0], bounds[1], grid)
+@dataclass(frozen=True)
+class VoxelEngine:
+    """The centre test (see the module docstring). probe: the part of a target's voxel a
+    line of sight must reach, as a fraction of its edge: only 0 (the target's centre) is
+    implemented; voxel_size: the target voxel edge (m; enters only a probe > 0 rule);
+    chunk_size: candidate rows per block; grid_cell: range-culling cell (m; None = the
+    smallest range / 8, ``np.inf`` = no culling; V does not depend on it)."""
 
+    probe: float = 0.0
+    voxel_size: float | None = None
+    chunk_size: int = DEFAULT_CHUNK
+    grid_cell: float | None = None
+    mode = "voxel"
 
-def visibility_cache_key(occupancy: OccupancyGrid, targets: Targets, candidates: Candidates,
-                         mode: str, chunk_size: int, extra_modules: tuple = ()) -> str:
-    """Content hash of everything V depends on, code version included. ``mode`` names the
-    method and its parameters; ``extra_modules``: more modules whose code decides V."""
-    from camplace.cameras import models as _cameras_mod
-    from camplace.spec import quality as _quality_mod
-    from camplace.visibility import voxel as _vis_mod
-    from camplace.visibility.cache import code_version, content_key
+    def __post_init__(self) -> None:
+        if float(self.probe) != 0.0:
+            raise InputError(f"probe: the voxel engine implements probe 0 (the target's centre) only, got "
+                             f"{self.probe}; the pixel engine takes probe in [0, 1]", option="probe")
+        _engine.check_chunk_size(self.chunk_size)
 
-    mods = (_vis_mod, _cameras_mod, _quality_mod, *extra_modules)  # the code that decides V
-    occ = OccupancyGrid(np.packbits(occupancy.occupied, axis=None), occupancy.origin, occupancy.resolution)
-    return content_key("visibility", code_version(*mods), mode, int(chunk_size),
-                       occupancy.occupied.shape, occ, targets, candidates)
+    def cache_tag(self) -> str:
+        return f"voxel:probe={float(self.probe)!r}"
 
+    def code_modules(self) -> tuple:
+        import sys
 
-def chunked_rows(n_cols: int, bounds: list[tuple[int, int]], task: Callable, make_shared: Callable[[], object],
-                 executor=None, store=None, progress: Progress | None = None) -> tuple[sp.csr_matrix, list[int]]:
-    """A CSR 0/1 matrix (uint8) built as row blocks: block k (rows bounds[k]) is
-    ``task(shared, bounds[k])`` -> (indptr (rows + 1,) int64, indices (nnz,) int32).
+        return (sys.modules[__name__],)
 
-    The blocks not in ``store`` (a camplace.visibility.cache.BlockStore, or None) run on ``executor``
-    (camplace.visibility.executors; default in-process) and are stored as they arrive; ``shared``
-    = ``make_shared()`` is built only when a block must be computed. The matrix is then
-    assembled block by block (from the store when there is one), never densified.
-    Returns (matrix, indices of the blocks loaded from the store)."""
-    from camplace.visibility.executors import InProcessExecutor
+    def setup(self, occupancy: OccupancyGrid, targets: Targets, candidates: Candidates) -> tuple:
+        """(occupancy, targets, candidates, the targets' range-culling grid)."""
+        cell = default_grid_cell(candidates) if self.grid_cell is None else self.grid_cell
+        return occupancy, targets, candidates, target_grid(targets, cell)
 
-    n = bounds[-1][1] if bounds else 0
-    blocks: dict[int, tuple[np.ndarray, np.ndarray]] = {}
-    nnz = np.zeros(len(bounds), np.int64)
-    todo, cached = [], []
-    for k in range(len(bounds)):
-        got = store.nnz(k) if store is not None else None
-        if got is None:
-            todo.append(k)
-        else:
-            nnz[k] = got
-            cached.append(k)
-    done = len(cached)
-    if progress:
-        progress("visibility", done, len(bounds))
-    shared = None
-    if todo:
-        shared = make_shared()
-        ex = executor if executor is not None else InProcessExecutor()
-        for t, (indptr, indices) in ex.map_unordered(task, shared, [bounds[k] for k in todo]):
-            k = todo[t]
-            nnz[k] = len(indices)
-            if store is not None:
-                store.save(k, indptr, indices)
-            else:
-                blocks[k] = (indptr, indices)
-            done += 1
-            if progress:
-                progress("visibility", done, len(bounds))
-    indptr = np.zeros(n + 1, np.int64)
-    indices = np.empty(int(nnz.sum()), np.int32)
-    pos = 0
-    for k, (s, e) in enumerate(bounds):
-        blk = blocks.pop(k) if store is None else store.load(k)
-        if blk is None:  # pragma: no cover - a block vanished from the cache during the run
-            shared = make_shared() if shared is None else shared
-            blk = task(shared, (s, e))
-        bp, bi = blk
-        indptr[s + 1:e + 1] = bp[1:] + pos
-        indices[pos:pos + len(bi)] = bi
-        pos += len(bi)
-    V = sp.csr_matrix((np.ones(len(indices), np.uint8), indices, indptr), shape=(n, n_cols))
-    return V, cached
+    def rows(self, shared: tuple, start: int, stop: int) -> tuple[np.ndarray, np.ndarray]:
+        occupancy, targets, candidates, grid = shared
+        return _block_arrays(occupancy, targets, candidates, start, stop, grid)
+
+    def info(self, candidates: Candidates, bounds: list, computed: list, seconds: float, shared: Any) -> dict:
+        return {}
 
 
 def compute_visibility(occupancy: OccupancyGrid, targets: Targets, candidates: Candidates,
-                       chunk_size: int = 2048, progress: Progress | None = None, executor=None,
+                       chunk_size: int = DEFAULT_CHUNK, progress: Progress | None = None, executor=None,
                        cache_dir: str | Path | None = None, grid_cell: float | None = None) -> Visibility:
-    """V for every candidate (rows in candidate order).
-
-    Candidates are processed in chunks of ``chunk_size`` rows, the unit of work of the
-    ``executor`` (camplace.visibility.executors; default in-process; inside a chunk the kernel
-    runs parallel threads). Chunks stream back as CSR blocks and are copied into the
-    final CSR arrays, never densified. With ``cache_dir`` each block is also stored
-    under a content-hash key (camplace.visibility.cache): finished blocks are loaded instead of
-    recomputed (a second run, or a run resumed after an interruption), and V is then
-    assembled block by block from disk (peak memory ~ one V + one block; without the
-    cache, the blocks and V coexist during the assembly). ``grid_cell``: range-culling
-    cell (m; default smallest range / 8; ``np.inf`` disables culling). The result does
-    not depend on executor, cache or grid_cell."""
-    t0 = time.perf_counter()
-    n, n_p = len(candidates), len(targets)
-    bounds = [(s, min(s + chunk_size, n)) for s in range(0, n, chunk_size)]
-    store = None
-    if cache_dir is not None:
-        from camplace.visibility.cache import BlockStore
-
-        key = visibility_cache_key(occupancy, targets, candidates, "voxel", chunk_size)
-        store = BlockStore(cache_dir, key, bounds, n_p)
-
-    def make_shared() -> tuple:
-        grid = target_grid(targets, default_grid_cell(candidates) if grid_cell is None else grid_cell)
-        return occupancy, targets, candidates, grid
-
-    V, cached = chunked_rows(n_p, bounds, _chunk_task, make_shared, executor, store, progress)
-    info = {"seconds": time.perf_counter() - t0, "nnz": int(V.nnz), "chunks": len(bounds),
-            "cached_chunks": len(cached), "executor": getattr(executor, "name", "in-process")}
-    if store is not None:
-        info["cache"] = str(store.dir)
-    return Visibility(V, candidates, targets, "voxel", info)
-
-
-def drop_blind_candidates(vis: Visibility) -> Visibility:
-    """Remove candidates that see no target (rows of V with no entry). The empty rows
-    hold no entries, so V's data and indices are shared, not copied."""
-    counts = np.diff(vis.V.indptr)
-    keep = counts > 0
-    info = dict(vis.info, dropped_blind=int((~keep).sum()))
-    indptr = np.r_[0, np.cumsum(counts[keep])].astype(vis.V.indptr.dtype)
-    V = sp.csr_matrix((vis.V.data, vis.V.indices, indptr), shape=(int(keep.sum()), vis.V.shape[1]), copy=False)
-    return Visibility(V, vis.candidates.subset(keep), vis.targets, vis.mode, info)
+    """V for every candidate by the voxel engine (rows in candidate order):
+    ``camplace.visibility.engine.compute_visibility(VoxelEngine(chunk_size=chunk_size,
+    grid_cell=grid_cell), ...)``. The result does not depend on chunk_size, executor,
+    cache or grid_cell."""
+    return _engine.compute_visibility(VoxelEngine(chunk_size=chunk_size, grid_cell=grid_cell), occupancy, targets,
+                                      candidates, executor=executor, cache_dir=cache_dir, progress=progress)

@@ -22,8 +22,8 @@ from camplace.spec.schema import SceneSpec
 from camplace.metrics.coverage import compute_metrics
 from camplace.workflows.run import problem_from_visibility, scene_inputs
 from camplace.solvers import solve
-from camplace.visibility.voxel import Visibility, compute_visibility
-from camplace.visibility.pixel import compute_pixel_visibility
+from camplace.visibility.engine import Visibility, compute_visibility
+from camplace.visibility.registry import get_engine
 
 Progress = Callable[[str, int, int], None]
 CENTRE_PROBE = 0.0
@@ -78,13 +78,14 @@ def compare_visibility(scene: str | Path | SceneSpec, stride: int | None = None,
     gap comparison (default the scene's)."""
     sc, targets, cameras, _ = scene_inputs(scene, progress)
     cands = build_candidates(sc, cameras)
-    t = time.perf_counter()
-    vv = compute_visibility(sc.occupancy, targets, cands, progress=progress)
-    t_vox = time.perf_counter() - t
-    t = time.perf_counter()
-    vp = compute_pixel_visibility(sc.occupancy, targets, cands, sc.spec.voxel_size, stride=stride, probe=probe,
-                                  progress=progress)
-    t_pix = time.perf_counter() - t
+    engines = {"voxel": get_engine("voxel"),
+               "pixel": get_engine("pixel", voxel_size=sc.spec.voxel_size, stride=stride, probe=probe)}
+    vis, secs = {}, {}
+    for mode, engine in engines.items():
+        t = time.perf_counter()
+        vis[mode] = compute_visibility(engine, sc.occupancy, targets, cands, progress=progress)
+        secs[mode] = time.perf_counter() - t
+    vv, vp, t_pix = vis["voxel"], vis["pixel"], secs["pixel"]
     e = entry_agreement(vv.V, vp.V)
     regions = {}
     for r, name in enumerate(targets.region_names):
@@ -93,10 +94,10 @@ def compare_visibility(scene: str | Path | SceneSpec, stride: int | None = None,
         regions[name] = {"nnz_voxel": er["nnz_a"], "nnz_pixel": er["nnz_b"], "shared": er["shared"],
                          "jaccard": er["jaccard"], "voxel_in_pixel": er["a_in_b"], "pixel_in_voxel": er["b_in_a"]}
     budget = sc.spec.placement.budget if budget is None else int(budget)
-    gaps = gap_effect({"voxel": vv, "pixel": vp}, budget, solver)
+    gaps = gap_effect(vis, budget, solver)
     return Agreement(sc.name, int(vp.info["stride"]), float(probe), len(cands), len(targets),
                      e["nnz_a"], e["nnz_b"], e["shared"], e["jaccard"], e["a_in_b"], e["b_in_a"], regions,
-                     budget, solver, gaps, {"voxel": t_vox, "pixel": t_pix}, int(vp.info["rays"]),
+                     budget, solver, gaps, secs, int(vp.info["rays"]),
                      float(vp.info["rays"]) / t_pix if t_pix > 0 else 0.0)
 
 

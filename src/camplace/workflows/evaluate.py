@@ -244,7 +244,8 @@ def evaluate(scene: str | Path | SceneSpec, placement: str | Path | Poses, progr
     from camplace.visibility.executors import make_executor
     from camplace.workflows.run import RunResult, placement_metrics, problem_from_visibility, scene_inputs
     from camplace.solvers.base import Placement
-    from camplace.visibility.voxel import compute_visibility
+    from camplace.visibility.engine import compute_visibility
+    from camplace.visibility.voxel import VoxelEngine
 
     timings: dict[str, float] = {}
     poses = placement if isinstance(placement, Poses) else read_placement(placement)
@@ -256,7 +257,7 @@ def evaluate(scene: str | Path | SceneSpec, placement: str | Path | Poses, progr
     timings["candidates"] = time.perf_counter() - t
     t = time.perf_counter()
     with make_executor(workers, scheduler) as executor:
-        vis = compute_visibility(sc.occupancy, targets, cands, progress=progress, executor=executor)
+        vis = compute_visibility(VoxelEngine(), sc.occupancy, targets, cands, executor=executor, progress=progress)
     timings["visibility"] = time.perf_counter() - t
     problem = problem_from_visibility(vis, len(cands))
     selected = np.arange(len(cands), dtype=np.int64)

@@ -26,7 +26,8 @@ from camplace.scene.build import Scene, build_scene
 from camplace.solvers import Placement, solve
 from camplace.targets.build import Targets, build_targets
 from camplace.visibility.executors import make_executor
-from camplace.visibility.voxel import Visibility, compute_visibility, drop_blind_candidates
+from camplace.visibility.engine import Visibility, compute_visibility, drop_blind_candidates
+from camplace.visibility.registry import get_engine
 
 Progress = Callable[[str, int, int], None]
 
@@ -78,19 +79,10 @@ def prepare(scene: str | Path | SceneSpec, progress: Progress | None = None,
     cands = build_candidates(sc, cameras)
     timings["candidates"] = time.perf_counter() - t
     t = time.perf_counter()
-    if visibility_mode == "pixel":
-        from camplace.visibility.pixel import DEFAULT_PROBE, compute_pixel_visibility
-
-        with make_executor(workers, scheduler) as executor:
-            vis = compute_pixel_visibility(sc.occupancy, targets, cands, sc.spec.voxel_size, stride=stride,
-                                           probe=DEFAULT_PROBE if probe is None else probe, progress=progress,
-                                           executor=executor, cache_dir=cache_dir)
-    elif visibility_mode == "voxel":
-        with make_executor(workers, scheduler) as executor:
-            vis = compute_visibility(sc.occupancy, targets, cands, progress=progress, executor=executor,
-                                     cache_dir=cache_dir)
-    else:
-        raise InputError(f"visibility mode: expected 'voxel' or 'pixel', got {visibility_mode!r}")
+    engine = get_engine(visibility_mode, voxel_size=sc.spec.voxel_size, stride=stride, probe=probe)
+    with make_executor(workers, scheduler) as executor:
+        vis = compute_visibility(engine, sc.occupancy, targets, cands, executor=executor, cache_dir=cache_dir,
+                                 progress=progress)
     vis = drop_blind_candidates(vis)
     timings["visibility"] = time.perf_counter() - t
     if sc.info.get("obstacle_files"):  # scans, meshes, OctoMaps: what was read and each clean-up step
