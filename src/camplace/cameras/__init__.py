@@ -1,1 +1,2 @@
-"""camplace.cameras.models."""
+"""camplace.cameras: models (lens models and the compiled projection), calibration
+(OpenCV / ROS / JSON calibration files), candidates (candidate poses from the mounts)."""

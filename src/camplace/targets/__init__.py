@@ -1,1 +1,2 @@
-"""camplace.targets.build."""
+"""camplace.targets: build (the Targets of a scene: volume grids and surface points, with
+coverage Γ, weights, normals and regions)."""
