@@ -1,18 +1,14 @@
 """Robustness to a single camera failure: losses and worst case against brute force,
-exact swap scores, the robust search never worsening the worst case, `essential`."""
+exact swap scores, the robust search never worsening the worst case."""
 
 from __future__ import annotations
-
-import subprocess
-import sys
 
 import numpy as np
 import pytest
 import scipy.sparse as sp
 
 from camplace.problem.model import PlacementProblem
-from camplace.solvers.robust import (_SwapScorer, essential_cameras, essential_from_folder, removal_losses, robust_placement,
-                             robust_search, worst_case)
+from camplace.solvers.robust import _SwapScorer, essential_cameras, removal_losses, robust_placement, worst_case
 from camplace.solvers.base import Placement
 from camplace.solvers.greedy import solve_greedy
 
@@ -91,20 +87,6 @@ def test_robust_bound_is_below_brute_force_optimum():
     assert res.robust["worst_case_cost"] >= best - 1e-9
     if res.bound is not None:
         assert res.bound <= best + 1e-6
-
-
-def test_essential_on_a_run_folder(demo_out):
-    ranking, summary = essential_from_folder(demo_out)
-    assert len(ranking) >= 1 and ranking[0]["rank"] == 1
-    assert summary["worst_case_cost"] == pytest.approx(ranking[0]["cost_if_fails"])
-    out = subprocess.run([sys.executable, "-m", "camplace.cli.app", "essential", str(demo_out), "--top", "2"],
-                         capture_output=True, text=True)
-    assert out.returncode == 0, out.stderr
-    assert "essential cameras" in out.stdout
-    from camplace.core.errors import InputError
-
-    with pytest.raises(InputError, match="not found"):
-        essential_from_folder(demo_out / "nope")
 
 
 def test_robust_with_refine_is_refused():

@@ -28,7 +28,7 @@ def _table(shown: list[dict], summary: dict) -> Table:
 def essential(folder: Path = typer.Argument(..., help="Output folder of camplace run / evaluate."),
               top: Optional[int] = typer.Option(None, "--top", min=1, help="Show only the TOP most essential cameras.")) -> None:
     """Rank a placement's cameras by the cost added if each one fails (most essential first)."""
-    from camplace.solvers.robust import essential_from_folder
+    from camplace.workflows.essential import essential_from_folder
 
     ranking, summary = essential_from_folder(folder)
     shown = ranking[:top] if top else ranking

@@ -22,7 +22,8 @@ import numpy as np
 from camplace.problem.model import PlacementProblem
 from camplace.improve.refine import append_candidates, extend_problem, pose_box, _valid_positions
 from camplace.scene.build import Scene
-from camplace.solvers.base import Placement
+from camplace.solvers.base import Placement, deadline
+from camplace.solvers.local_search import NominalObjective, swap_search
 from camplace.visibility.voxel import Visibility
 
 Progress = Callable[[str, int, int], None]
@@ -30,70 +31,14 @@ Progress = Callable[[str, int, int], None]
 
 def swap_descent(problem: PlacementProblem, selected: np.ndarray, time_limit_s: float | None = 30.0,
                  max_passes: int = 1000) -> tuple[np.ndarray, dict]:
-    """Best-improvement local search from ``selected``: each pass tries, for every selected
-    camera i, removing it and adding the best candidate j (any location not used by the
-    others, money budget kept), plus plain additions while below the budget; applies the
-    single best move if it lowers the cost. One pass = k sparse mat-vecs. Returns the
-    sorted selection and info."""
-    t0 = time.perf_counter()
-    V = problem.V
-    Vf = V.astype(np.float64)
-    sel = [int(i) for i in np.asarray(selected, np.int64)]
-    cov = problem.coverage(np.array(sel, np.int64))
-    costs = problem.costs
-    locs = problem.location_ids
-    n_loc = int(locs.max()) + 1 if len(locs) else 0
-    moves = 0
-    passes = 0
-
-    def gains_of(c: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        d0 = np.maximum(problem.gamma - c, 0).astype(np.float64)
-        d1 = np.maximum(d0 - 1, 0)
-        g = problem.weights * (d0 * d0 - d1 * d1)
-        return g, np.asarray(Vf @ g).ravel()
-
-    while passes < max_passes:
-        if time_limit_s is not None and time.perf_counter() - t0 > time_limit_s:
-            break
-        passes += 1
-        used = np.zeros(n_loc, bool)
-        used[locs[sel]] = True
-        spent = float(costs[sel].sum()) if sel else 0.0
-        best = (1e-9, None, None)  # (improvement, remove, add)
-        if len(sel) < problem.budget:
-            _, gain = gains_of(cov)
-            ok = ~used[locs]
-            if problem.money_budget is not None:
-                ok &= spent + costs <= problem.money_budget + 1e-9
-            if ok.any():
-                j = int(np.argmax(np.where(ok, gain, -np.inf)))
-                if gain[j] > best[0]:
-                    best = (float(gain[j]), None, j)
-        for i in sel:
-            r = V.indices[V.indptr[i]:V.indptr[i + 1]]
-            c_o = cov.copy()
-            c_o[r] -= 1
-            g, gain = gains_of(c_o)
-            loss = float(g[r].sum())
-            ok = ~used[locs] | (locs == locs[i])
-            ok[i] = False
-            if problem.money_budget is not None:
-                ok &= spent - costs[i] + costs <= problem.money_budget + 1e-9
-            if not ok.any():
-                continue
-            j = int(np.argmax(np.where(ok, gain, -np.inf)))
-            if gain[j] - loss > best[0]:
-                best = (float(gain[j] - loss), i, j)
-        if best[2] is None:
-            break
-        _, i, j = best
-        if i is not None:
-            sel.remove(i)
-            cov[V.indices[V.indptr[i]:V.indptr[i + 1]]] -= 1
-        sel.append(j)
-        cov[V.indices[V.indptr[j]:V.indptr[j + 1]]] += 1
-        moves += 1
-    return np.array(sorted(sel), np.int64), {"moves": moves, "passes": passes, "seconds": time.perf_counter() - t0}
+    """Best-improvement local search from ``selected`` (camplace.solvers.local_search): each
+    pass tries, for every selected camera i, removing it and adding the best candidate j
+    (any location not used by the others, money budget kept), plus plain additions while
+    below the budget; applies the single best move if it lowers the cost. One pass = k
+    sparse mat-vecs. Returns the sorted selection and info (moves, passes, seconds)."""
+    sel, info = swap_search(problem, np.asarray(selected, np.int64), NominalObjective(problem),
+                            end=deadline(time_limit_s), max_passes=max_passes)
+    return np.array(sorted(sel), np.int64), {k: info[k] for k in ("moves", "passes", "seconds")}
 
 
 def finer_poses(scene: Scene, vis: Visibility, selected: np.ndarray, level: int) -> tuple[np.ndarray, np.ndarray]:

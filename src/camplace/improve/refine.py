@@ -31,6 +31,7 @@ import shapely
 
 from camplace.cameras.candidates import Candidates, rotation_from_ypr
 from camplace.spec.schema import Mount, SceneSpec, angle_values
+from camplace.problem import gains
 from camplace.problem.model import PlacementProblem
 from camplace.scene.build import OccupancyGrid, Scene
 from camplace.solvers.base import Placement
@@ -151,10 +152,9 @@ def extend_problem(problem: PlacementProblem, vis: Visibility) -> PlacementProbl
 
 
 def target_gains(problem: PlacementProblem, cov_other: np.ndarray) -> np.ndarray:
-    """(N_p,) g_j: cost drop from one more view of target j, given the others' coverage."""
-    d0 = np.maximum(problem.gamma - cov_other, 0).astype(np.float64)
-    d1 = np.maximum(d0 - 1, 0)
-    return problem.weights * (d0 * d0 - d1 * d1)
+    """(N_p,) g_j: cost drop from one more view of target j, given the others' coverage
+    (camplace.problem.gains.target_gains of the problem's Γ and weights)."""
+    return gains.target_gains(problem.gamma, problem.weights, cov_other)
 
 
 def _row_sums(rows: sp.csr_matrix, g: np.ndarray) -> np.ndarray:

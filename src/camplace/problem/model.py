@@ -12,12 +12,8 @@ import numpy as np
 import scipy.sparse as sp
 
 from camplace.core.errors import InputError
+from camplace.problem.gains import shortfall_cost  # the one home of gains and costs; re-exported here
 
-
-def shortfall_cost(gamma: np.ndarray, weights: np.ndarray, coverage: np.ndarray) -> float:
-    """Σ_j w_j max(Γ_j − c_j, 0)²; all (N_p,)."""
-    short = np.maximum(np.asarray(gamma, np.int64) - np.asarray(coverage, np.int64), 0).astype(np.float64)
-    return float(np.dot(weights, short * short))
 
 
 @dataclass(frozen=True)

@@ -16,6 +16,7 @@ import numba
 import numpy as np
 import scipy.sparse as sp
 
+from camplace.problem.gains import target_gains
 from camplace.problem.model import PlacementProblem
 
 StopFn = Callable[[], bool]
@@ -170,9 +171,7 @@ class Lagrangian:
         """λ from an incumbent's coverage: the slope of the last missing unit,
         λ_j = w_j(2 d_j − 1) where the deficit d_j > 0, else 0 (a target the incumbent
         covers needs no price). Without an incumbent d = Γ."""
-        g = self.gamma.astype(np.float64)
-        d = g if coverage is None else np.maximum(g - coverage, 0)
-        return np.where(d > 0, self.weights * (2 * d - 1), 0.0)
+        return target_gains(self.gamma, self.weights, np.zeros_like(self.gamma) if coverage is None else coverage)
 
 
 def fixing_bounds(lagr: Lagrangian, lam: np.ndarray, budget: int | None = None) -> tuple[np.ndarray, np.ndarray, float]:

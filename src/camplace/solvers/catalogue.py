@@ -19,6 +19,7 @@ import time
 
 import numpy as np
 
+from camplace.problem.gains import removal_losses
 from camplace.problem.model import PlacementProblem
 from camplace.solvers.base import OnIncumbent, Placement, ProgressFn, ShouldStop, deadline, stopped
 from camplace.solvers.greedy import lazy_greedy, marginal_gains, row_gain, swap_local_search
@@ -88,10 +89,7 @@ def repair_to_money_budget(problem: PlacementProblem, selected: np.ndarray, *, e
     V = problem.V
     cov = problem.coverage(np.array(sel, np.int64))
     while sel and float(problem.costs[sel].sum()) > problem.money_budget + 1e-9:
-        d0 = np.maximum(problem.gamma - cov, 0).astype(np.float64)
-        d1 = np.maximum(problem.gamma - cov + 1, 0).astype(np.float64)
-        h = problem.weights * (d1 * d1 - d0 * d0)
-        loss = np.asarray(V[np.array(sel)].astype(np.float64) @ h).ravel() / price[sel]
+        loss = removal_losses(problem, np.array(sel), cov) / price[sel]
         k = int(np.argmin(loss))
         i = sel.pop(k)
         cov[V.indices[V.indptr[i]:V.indptr[i + 1]]] -= 1

@@ -13,26 +13,10 @@ from typing import Callable
 
 import numpy as np
 
+from camplace.problem.gains import marginal_gains, row_gain  # noqa: F401 (re-exported)
 from camplace.problem.model import PlacementProblem
 from camplace.solvers.base import OnIncumbent, Placement, ProgressFn, ShouldStop, deadline, stopped
-
-
-def marginal_gains(problem: PlacementProblem, coverage: np.ndarray) -> np.ndarray:
-    """(N_g,) float64: cost drop of adding each candidate to a selection with this coverage.
-
-    Adding one view to target j with deficit d = Γ_j − c_j > 0 lowers its cost by
-    w_j (d² − (d−1)²) = w_j (2d − 1)."""
-    d = np.maximum(problem.gamma - coverage, 0)
-    per_target = np.where(d > 0, problem.weights * (2 * d - 1), 0.0)
-    return problem.V @ per_target
-
-
-def row_gain(problem: PlacementProblem, i: int, coverage: np.ndarray) -> float:
-    V = problem.V
-    cols = V.indices[V.indptr[i]:V.indptr[i + 1]]
-    d = problem.gamma[cols] - coverage[cols]
-    pos = d > 0
-    return float(np.dot(problem.weights[cols][pos], 2 * d[pos] - 1))
+from camplace.solvers.local_search import NominalObjective, swap_search
 
 
 def lazy_greedy(problem: PlacementProblem, all_gains: Callable[[np.ndarray], np.ndarray],
@@ -84,76 +68,15 @@ def lazy_greedy(problem: PlacementProblem, all_gains: Callable[[np.ndarray], np.
 def swap_local_search(problem: PlacementProblem, selected: list[int], *, end: float = float("inf"),
                       should_stop: ShouldStop | None = None,
                       on_incumbent: OnIncumbent | None = None) -> tuple[list[int], int, bool]:
-    """1-swap descent: exchange a selected camera for an unselected one (another pose at
-    its own location or a pose at a free location) while the cost drops; also add a
-    camera when the budget allows and it lowers the cost. One sparse mat-vec per
-    tried removal. Returns (selection, number of moves, interrupted)."""
-    V = problem.V
-    sel = list(selected)
-    _, loc = np.unique(problem.location_ids, return_inverse=True)
-    loc_used = np.zeros(int(loc.max()) + 1 if len(loc) else 0, bool)
-    loc_used[loc[sel]] = True
-    is_sel = np.zeros(problem.n_candidates, bool)
-    is_sel[sel] = True
-    costs = problem.costs
-    money = float("inf") if problem.money_budget is None else float(problem.money_budget)
-    cov = problem.coverage(np.array(sel, np.int64))
-    cost = problem.cost(np.array(sel, np.int64))
-    moves = 0
-
-    def gains_for(c: np.ndarray) -> np.ndarray:
-        d = np.maximum(problem.gamma - c, 0)
-        return V @ np.where(d > 0, problem.weights * (2 * d - 1), 0.0)
-
-    def cost_of(c: np.ndarray) -> float:
-        d = np.maximum(problem.gamma - c, 0).astype(np.float64)
-        return float(np.dot(problem.weights, d * d))
-
-    improved = True
-    while improved and cost > 0:
-        improved = False
-        if len(sel) < problem.budget:  # adds first (only when greedy stopped early or money freed)
-            g = gains_for(cov)
-            ok = ~is_sel & ~loc_used[loc] & (costs <= money - costs[sel].sum() + 1e-12)
-            g = np.where(ok, g, -np.inf)
-            i = int(np.argmax(g)) if len(g) else -1
-            if i >= 0 and g[i] > 1e-9:
-                sel.append(i)
-                is_sel[i] = True
-                loc_used[loc[i]] = True
-                cov[V.indices[V.indptr[i]:V.indptr[i + 1]]] += 1
-                cost = cost_of(cov)
-                moves += 1
-                improved = True
-                continue
-        for s in list(sel):
-            if stopped(should_stop) or time.perf_counter() > end:
-                return sel, moves, True
-            cols = V.indices[V.indptr[s]:V.indptr[s + 1]]
-            cov2 = cov.copy()
-            cov2[cols] -= 1
-            cost2 = cost_of(cov2)
-            g = gains_for(cov2)
-            spent = float(costs[sel].sum()) - costs[s]
-            ok = ~is_sel & (~loc_used[loc] | (loc == loc[s])) & (costs <= money - spent + 1e-12)
-            g = np.where(ok, g, -np.inf)
-            i = int(np.argmax(g))
-            if not np.isfinite(g[i]):
-                continue
-            new_cost = cost2 - g[i]
-            if new_cost < cost - 1e-9 * max(1.0, cost):
-                sel[sel.index(s)] = i
-                is_sel[s], is_sel[i] = False, True
-                loc_used[loc[s]] = False
-                loc_used[loc[i]] = True
-                cov = cov2
-                cov[V.indices[V.indptr[i]:V.indptr[i + 1]]] += 1
-                cost = cost_of(cov)
-                moves += 1
-                improved = True
-                if on_incumbent:
-                    on_incumbent(cost, None)
-    return sel, moves, False
+    """1-swap descent (first improvement, camplace.solvers.local_search): exchange a selected
+    camera for an unselected one (another pose at its own location or a pose at a free
+    location) while the cost drops; also add a camera when the budget allows and it lowers
+    the cost. One sparse mat-vec per tried removal. Returns (selection, number of moves,
+    interrupted)."""
+    objective = NominalObjective(problem, rel_tol=1e-9, on_incumbent=on_incumbent)
+    sel, info = swap_search(problem, selected, objective, first_improvement=True, end=end, should_stop=should_stop,
+                            money_tol=1e-12)
+    return sel, info["moves"], info["stopped"] in ("time_limit", "interrupted")
 
 
 def solve_greedy(problem: PlacementProblem, *, time_limit_s: float | None = None, threads: int | None = None,

@@ -23,6 +23,7 @@ import time
 
 import numpy as np
 
+from camplace.problem.gains import marginal_gains
 from camplace.problem.model import PlacementProblem
 from camplace.solvers.base import OnIncumbent, Placement, ProgressFn, ShouldStop, deadline, stopped
 from camplace.solvers.greedy_fast import solve_greedy_fast
@@ -34,9 +35,7 @@ def restricted_candidates(problem: PlacementProblem, selected: np.ndarray, extra
     sel = np.asarray(selected, np.int64)
     loc = np.asarray(problem.location_ids)
     at = np.isin(loc, loc[sel])
-    cov = problem.coverage(sel)
-    d = np.maximum(problem.gamma - cov, 0)
-    gains = problem.V @ np.where(d > 0, problem.weights * (2 * d - 1), 0.0)
+    gains = marginal_gains(problem, problem.coverage(sel))
     free = np.flatnonzero(~at & (gains > 0))
     top = free[np.lexsort((free, -gains[free]))][:max(0, int(extra))]
     return np.union1d(np.flatnonzero(at), top).astype(np.int64)

@@ -21,6 +21,7 @@ import numba
 import numpy as np
 import scipy.sparse as sp
 
+from camplace.problem.gains import row_loss_nb as _loss, target_gain_nb as _unit_gain, target_gains
 from camplace.problem.model import PlacementProblem
 from camplace.solvers.base import Placement
 
@@ -37,15 +38,6 @@ def _rand(st):
     x ^= (x >> 27) & 0x0000001FFFFFFFFF
     st[_RNG] = x
     return (x * 2685821657736338717) & 0x7FFFFFFFFFFFFFFF
-
-
-@numba.njit(cache=True)
-def _unit_gain(w, g, c):
-    """Cost drop for one more view of a target with Γ = g, coverage c."""
-    d = g - c
-    if d > 0:
-        return w * (2 * d - 1)
-    return 0.0
 
 
 @numba.njit(cache=True)
@@ -71,15 +63,6 @@ def _apply(i, sign, indptr, indices, cptr, cidx, gamma, weights, cov, gain):
             for q in range(cptr[j], cptr[j + 1]):
                 gain[cidx[q]] += dg
     return delta
-
-
-@numba.njit(cache=True)
-def _loss(r, indptr, indices, gamma, weights, cov):
-    s = 0.0
-    for p in range(indptr[r], indptr[r + 1]):
-        j = indices[p]
-        s += _unit_gain(weights[j], gamma[j], cov[j] - 1)
-    return s
 
 
 @numba.njit(cache=True)
@@ -303,7 +286,7 @@ class TabuSearch:
         _, self.loc = np.unique(problem.location_ids, return_inverse=True)
         self.loc = self.loc.astype(np.int64)
         n_loc = int(self.loc.max()) + 1 if n_g else 0
-        unit0 = np.where(self.gamma > 0, self.weights * (2 * self.gamma - 1), 0.0)
+        unit0 = target_gains(self.gamma, self.weights, np.zeros(n_p, np.int64))
         self.base_gain = np.asarray(V @ unit0, np.float64).ravel() if n_g else np.zeros(0)
         N = max(self.budget, 1)
         self.tenure_add = int(tenure_add if tenure_add is not None else 7)
