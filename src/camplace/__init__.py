@@ -4,7 +4,8 @@ The pipeline (see docs/design.md): scene -> targets -> candidates -> visibility 
 problem -> solvers -> metrics -> outputs. The public API is importable from here:
 ``camplace.run`` (every stage on a scene), ``camplace.workflows.evaluate`` (score a placement
 file), ``camplace.solve`` (a solver on a PlacementProblem), the types
-``PlacementProblem`` and ``Placement``, and the solver registry ``SOLVERS``. They are
+``PlacementProblem`` and ``Placement``, the solver registry ``SOLVERS`` with its contract
+(``Solver``, ``Hooks``, ``build_options``; camplace.solvers.testing checks a solver). They are
 loaded lazily, so ``import camplace`` stays cheap.
 """
 
@@ -17,6 +18,9 @@ _LAZY = {
     "evaluate": ("camplace.workflows.evaluate", "evaluate"),
     "solve": ("camplace.solvers", "solve"),
     "SOLVERS": ("camplace.solvers", "SOLVERS"),
+    "Solver": ("camplace.solvers", "Solver"),
+    "Hooks": ("camplace.solvers", "Hooks"),
+    "build_options": ("camplace.solvers", "build_options"),
     "Placement": ("camplace.solvers.base", "Placement"),
     "PlacementProblem": ("camplace.problem.model", "PlacementProblem"),
 }

@@ -13,8 +13,8 @@ from hypothesis import strategies as st
 
 from camplace.core.errors import InputError
 from camplace.problem.model import build_problem
-from camplace.metrics.triangulation import (effective_coverage, ray_angle_deg, solve_greedy_triangulated, well_triangulated,
-                                    well_triangulated_of_selection)
+from camplace.metrics.triangulation import (effective_coverage, ray_angle_deg, well_triangulated,
+                                            well_triangulated_of_selection)
 
 FACING = np.array([[-2.0, 0.0, 1.0], [2.0, 0.0, 1.0]])  # two cameras facing each other across (0, 0, 1)
 SIDE = np.array([[-1.0, 0.0, 3.0], [1.0, 0.0, 3.0]])  # side by side 2 m apart, 2 m above the point (0, 0, 1)
@@ -76,18 +76,6 @@ def test_effective_coverage_counts_cameras_with_a_partner():
     assert effective_coverage(V3, cams, P[None]).tolist() == [3]  # the top one pairs with both
 
 
-def test_triangulated_greedy_prefers_a_usable_pair():
-    # target at P, Γ = 2. Candidates: 0 and 1 face each other (180 deg), 2 is above.
-    cands = np.r_[FACING, [[0.0, 0.0, 3.0]]]
-    V = sp.csr_matrix(np.ones((3, 1), np.uint8))
-    prob = build_problem(V, np.array([2]), None, 2)
-    p = solve_greedy_triangulated(prob, cands, P[None])
-    assert 2 in p.selected.tolist()  # a facing pair would leave the effective coverage at 0
-    assert p.info["triangulated_cost"] == 0.0
-    eff = effective_coverage(V[p.selected], cands[p.selected], P[None])
-    assert eff.tolist() == [2]
-
-
 def test_metrics_report_the_share(demo_run):
     r = demo_run
     d = r.metrics.to_dict()
@@ -104,22 +92,3 @@ def test_metrics_report_the_share(demo_run):
     strict = well_triangulated_of_selection(vis.V, vis.candidates.positions, vis.targets.positions,
                                             r.placement.selected, 60.0, 120.0)
     assert strict.sum() <= well.sum()
-
-
-def test_triangulated_greedy_beats_plain_greedy_on_its_own_cost(demo_run):
-    from dataclasses import replace
-
-    from camplace.problem.model import shortfall_cost
-    from camplace.solvers import solve
-
-    r = demo_run
-    vis = r.visibility
-    prob = replace(r.problem, budget=6)
-    plain = solve(prob, "greedy").selected
-    tri = solve_greedy_triangulated(prob, vis.candidates.positions, vis.targets.positions)
-    prob.check_feasible(tri.selected)
-    eff_plain = effective_coverage(vis.V[plain], vis.candidates.positions[plain], vis.targets.positions)
-    eff_tri = effective_coverage(vis.V[tri.selected], vis.candidates.positions[tri.selected], vis.targets.positions)
-    assert tri.info["triangulated_cost"] == shortfall_cost(prob.gamma, prob.weights, eff_tri)
-    assert tri.info["triangulated_cost"] <= shortfall_cost(prob.gamma, prob.weights, eff_plain)
-    assert tri.objective == prob.cost(tri.selected)

@@ -41,13 +41,22 @@ def random_problem(rng: np.random.Generator, n_g: int, n_p: int, budget: int, de
     return build_problem(V.astype(np.uint8), rng.integers(1, max_gamma + 1, n_p), None, budget, locs)
 
 
+def with_positions(problem: PlacementProblem, seed: int = 0) -> PlacementProblem:
+    """The problem with random candidate / target positions (m), for solvers tagged needs_positions."""
+    from dataclasses import replace
+
+    rng = np.random.default_rng(seed)
+    return replace(problem, candidate_positions=rng.uniform(0, 10, (problem.n_candidates, 3)),
+                   target_positions=rng.uniform(0, 10, (problem.n_targets, 3)))
+
+
 def check_placement(name: str, problem: PlacementProblem, p, optimum: float | None = None) -> None:
     """The common contract of every solver's Placement."""
     assert p.status in STATUSES, p.status
     sel = np.asarray(p.selected)
     assert sel.dtype.kind == "i"
     assert np.all(np.diff(sel) > 0), "selected must be sorted and unique"
-    if getattr(SOLVERS[name], "ignores_budget", False):
+    if SOLVERS[name].tags.ignores_camera_budget:
         assert len(set(problem.location_ids[sel].tolist())) == len(sel)
     else:
         problem.check_feasible(sel)
@@ -57,7 +66,7 @@ def check_placement(name: str, problem: PlacementProblem, p, optimum: float | No
         assert p.bound <= p.objective + 1e-6 * max(1.0, p.objective)
         if optimum is not None:
             assert p.bound <= optimum + 1e-6 * max(1.0, optimum)
-    if optimum is not None and not getattr(SOLVERS[name], "ignores_budget", False):
+    if optimum is not None and not SOLVERS[name].tags.ignores_camera_budget:
         assert p.objective >= optimum - 1e-9
 
 
@@ -68,6 +77,7 @@ def test_common_contract(name, problem, reduce):
     """Time limit 1 s: exact solvers finish tiny instances in milliseconds; anytime
     heuristics must stop at the limit (or earlier) and still honour the contract."""
     optimum, _ = brute_force(problem)
+    problem = with_positions(problem)
     p = solve(problem, name, reduce=reduce, time_limit_s=1.0, threads=1)
     check_placement(name, problem, p, optimum)
     if name in EXACT:
@@ -76,25 +86,49 @@ def test_common_contract(name, problem, reduce):
 
 
 @pytest.mark.parametrize("name", sorted(SOLVERS))
-def test_common_accepts_options_and_stop(name):
-    """Every solver takes the common keyword options, and a stop request that is already
-    set returns a feasible placement marked 'interrupted' (or a finished one)."""
-    problem = random_problem(np.random.default_rng(3), 30, 60, 5)
+def test_common_takes_options_and_stop(name):
+    """Every solver takes the common keyword options and hooks, and a stop request that is
+    already set returns a feasible placement marked 'interrupted' (or a finished one)."""
+    problem = with_positions(random_problem(np.random.default_rng(3), 30, 60, 5))
     seen = []
     p = solve(problem, name, time_limit_s=20, threads=1, seed=1, should_stop=lambda: True,
-              progress=lambda *a: seen.append(a), on_incumbent=lambda o, b: None, unknown_but_common=1)
+              progress=lambda *a: seen.append(a), on_incumbent=lambda o, b: None)
     check_placement(name, problem, p)
-    assert p.status in {"interrupted", "optimal", "heuristic", "feasible"}
+    assert p.status in {"interrupted", "optimal", "heuristic", "feasible"}  # stricter: the conformance suite
+
+
+@pytest.mark.parametrize("name", sorted(SOLVERS))
+def test_common_refuses_an_unknown_option(name):
+    """An option the solver does not declare is an InputError naming the option (it used to
+    be accepted and silently ignored)."""
+    from camplace.core.errors import InputError
+
+    problem = random_problem(np.random.default_rng(3), 6, 10, 2)
+    with pytest.raises(InputError, match="unknown_but_common") as err:
+        solve(problem, name, time_limit_s=1, unknown_but_common=1)
+    assert err.value.option == "unknown_but_common"
+
+
+def test_refusal_names_the_solvers_that_take_the_option():
+    from camplace.core.errors import InputError
+    from camplace.solvers import build_options
+
+    with pytest.raises(InputError) as err:
+        build_options("mip", coverage_gap=0.1)
+    assert str(err.value) == ("coverage_gap: solver 'mip' takes no option 'coverage_gap'; solvers that take it: "
+                              "min-cameras")
+    assert err.value.option == "coverage_gap"
+    assert build_options("min-cameras", coverage_gap=0.1, time_limit_s=2).coverage_gap == 0.1
 
 
 @pytest.mark.parametrize("name", sorted(SOLVERS))
 def test_common_zero_budget_and_empty(name):
-    problem = random_problem(np.random.default_rng(4), 6, 10, 0)
+    problem = with_positions(random_problem(np.random.default_rng(4), 6, 10, 0))
     p = solve(problem, name)
     check_placement(name, problem, p)
-    if not getattr(SOLVERS[name], "ignores_budget", False):
+    if not SOLVERS[name].tags.ignores_camera_budget:
         assert len(p.selected) == 0 and p.objective == problem.normalizer
-    zero = build_problem(sp.csr_matrix((3, 4), dtype=np.uint8), np.zeros(4, np.int64), None, 2)
+    zero = with_positions(build_problem(sp.csr_matrix((3, 4), dtype=np.uint8), np.zeros(4, np.int64), None, 2))
     p = solve(zero, name)
     assert p.objective == 0.0
 

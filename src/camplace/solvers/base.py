@@ -34,23 +34,14 @@ class Placement:
 
 
 # ---------------------------------------------------------------------------
-# The common solver signature (every solver follows it):
-#
-#   solve_x(problem, *, time_limit_s=None, threads=None, seed=0, should_stop=None,
-#           progress=None, on_incumbent=None, **options) -> Placement
-#
-# time_limit_s: wall-clock seconds (None: no limit); threads: solver threads (None:
-# solver default); should_stop(): polled, when True the solver returns its best
-# placement with status 'interrupted'; progress(stage, done, total): progress report;
-# on_incumbent(objective, bound_or_None): called when a better placement is found.
-# Unknown options common to other solvers are accepted and ignored.
+# The callbacks every solver takes (camplace.solvers.contract has the whole contract):
+# should_stop(): polled, when True the solver returns its best placement with status
+# 'interrupted'; progress(stage, done, total): progress report; on_incumbent(objective,
+# bound_or_None): called when a better placement is found.
 
 ShouldStop = Callable[[], bool]
 ProgressFn = Callable[[str, int, int], None]
 OnIncumbent = Callable[[float, "float | None"], None]
-
-COMMON_OPTIONS = frozenset({"time_limit_s", "threads", "seed", "should_stop", "progress", "on_incumbent",
-                            "local_search", "verbose", "warm_start", "mip_rel_gap", "reduce"})
 
 
 def stopped(should_stop: ShouldStop | None) -> bool:

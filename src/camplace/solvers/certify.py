@@ -99,7 +99,9 @@ def _tabu_worker(ts: TabuSearch, board: _Board, stop: threading.Event, end: floa
 def solve_certify(problem: PlacementProblem, *, time_limit_s: float | None = None, threads: int | None = None,
                   seed: int = 0, should_stop: Callable[[], bool] | None = None, progress=None, on_incumbent=None,
                   on_state: Callable[[dict], None] | None = None, lp: bool | None = None,
-                  reduced_mip: bool = True, region: bool | None = None, **options) -> Placement:
+                  reduced_mip: bool = True, region: bool | None = None, tenure_add: int | None = None,
+                  tenure_rem: int | None = None, stall_limit: int | None = None, perturb: int | None = None,
+                  k_rcl: int = 3) -> Placement:
     """Incumbent by tabu search, bound by Lagrangian (+ LP, + fixing and exact reduced
     MIP), within `time_limit_s` (default 60 s). Placement.bound is the best proven
     bound; info has incumbent_method, bound_method, gap and both sides' history.
@@ -138,8 +140,8 @@ def solve_certify(problem: PlacementProblem, *, time_limit_s: float | None = Non
             stop_evt.set()
         return stop_evt.is_set() or time.perf_counter() >= end
 
-    keys = ("tenure_add", "tenure_rem", "stall_limit", "perturb", "k_rcl")
-    ts = TabuSearch(problem, seed=seed, **{k: options[k] for k in keys if k in options})
+    ts = TabuSearch(problem, seed=seed, tenure_add=tenure_add, tenure_rem=tenure_rem, stall_limit=stall_limit,
+                    perturb=perturb, k_rcl=k_rcl)
     board.offer_incumbent(ts.best_selected, "greedy")
     if problem.budget == 0 or problem.n_candidates == 0:
         board.offer_bound(board.objective, "exact (nothing to choose)")

@@ -25,7 +25,7 @@ def undercovered_gains(problem: PlacementProblem, coverage: np.ndarray) -> np.nd
 
 def solve_horster(problem: PlacementProblem, *, time_limit_s: float | None = None, threads: int | None = None,
                   seed: int = 0, should_stop: ShouldStop | None = None, progress: ProgressFn | None = None,
-                  on_incumbent: OnIncumbent | None = None, **_: object) -> Placement:
+                  on_incumbent: OnIncumbent | None = None) -> Placement:
     """Hörster & Lienhart greedy (see module docstring). Status 'heuristic' (or
     'interrupted' / 'time_limit' when stopped early)."""
     t0 = time.perf_counter()

@@ -98,8 +98,7 @@ def _fewest(problem: PlacementProblem, target: float, prices: np.ndarray, end: f
 def solve_min_cameras(problem: PlacementProblem, *, time_limit_s: float | None = None, threads: int | None = None,
                       seed: int = 0, should_stop: ShouldStop | None = None, progress: ProgressFn | None = None,
                       on_incumbent: OnIncumbent | None = None, coverage_gap: float | None = None,
-                      max_cost: float | None = None, minimize: str | None = None, verbose: bool = False,
-                      **_: object) -> Placement:
+                      max_cost: float | None = None, minimize: str | None = None, verbose: bool = False) -> Placement:
     """Fewest cameras (minimize='count') or least price (minimize='price', the default
     when the problem has non-uniform camera_costs) with cost <= target (module docstring)."""
     t0 = time.perf_counter()
@@ -159,4 +158,3 @@ def solve_min_cameras(problem: PlacementProblem, *, time_limit_s: float | None =
     return Placement(np.sort(sel), cost, None, status, "min-cameras", time.perf_counter() - t0, info)
 
 
-solve_min_cameras.ignores_budget = True  # type: ignore[attr-defined]

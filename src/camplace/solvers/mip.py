@@ -148,8 +148,7 @@ def solve_highs_model(problem: PlacementProblem, h: highspy.Highs, start_cols: n
 def solve_mip(problem: PlacementProblem, *, time_limit_s: float | None = None, threads: int | None = None,
               seed: int = 0, should_stop: ShouldStop | None = None, progress: ProgressFn | None = None,
               on_incumbent: OnIncumbent | None = None, warm_start: bool = True, local_search: bool = True,
-              fixing: bool = True, mip_rel_gap: float | None = None, verbose: bool = False,
-              **_: object) -> Placement:
+              fixing: bool = True, mip_rel_gap: float | None = None, verbose: bool = False) -> Placement:
     """Tight convex MIP on HiGHS, warm-started from greedy (+ 1-swap when local_search).
 
     With `fixing` (default; not with a money budget) the warm start is improved by a short

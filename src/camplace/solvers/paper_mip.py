@@ -148,8 +148,7 @@ def load_cbc():
 def solve_paper_mip(problem: PlacementProblem, *, time_limit_s: float | None = None, threads: int | None = None,
                     seed: int = 0, should_stop: ShouldStop | None = None, progress: ProgressFn | None = None,
                     on_incumbent: OnIncumbent | None = None, engine: str = "cbc", warm_start: bool = True,
-                    local_search: bool = False, mip_rel_gap: float | None = None, verbose: bool = False,
-                    **_: object) -> Placement:
+                    local_search: bool = False, mip_rel_gap: float | None = None, verbose: bool = False) -> Placement:
     """The paper's MILP (module docstring) on CBC (engine='cbc') or HiGHS ('highs').
     Warm start: greedy (local_search=False by default, as the paper's greedy). CBC
     cannot be interrupted mid-solve: should_stop is checked before it starts."""

@@ -51,8 +51,7 @@ def zhao_arrays(problem: PlacementProblem) -> MilpArrays:
 
 def solve_zhao(problem: PlacementProblem, *, time_limit_s: float | None = None, threads: int | None = None,
                seed: int = 0, should_stop: ShouldStop | None = None, progress: ProgressFn | None = None,
-               on_incumbent: OnIncumbent | None = None, mip_rel_gap: float | None = None, verbose: bool = False,
-               **_: object) -> Placement:
+               on_incumbent: OnIncumbent | None = None, mip_rel_gap: float | None = None, verbose: bool = False) -> Placement:
     """Zhao et al. fixed-budget MILP on HiGHS (module docstring)."""
     from camplace.solvers.horster import solve_horster
 

@@ -1,0 +1,202 @@
+"""The public conformance suite for solvers (like scikit-learn's check_estimator).
+
+    from camplace.solvers.testing import check_solver, parametrize_with_checks
+    check_solver(my_solver)                       # raises AssertionError on the first broken promise
+
+    @parametrize_with_checks(SOLVERS)             # one pytest case per (solver, check)
+    def test_conformance(solver, check):
+        check(solver)
+
+Checks are chosen by the solver's tags (camplace.solvers.contract.Tags); each runs on tiny
+random problems (at most 8 candidates, brute force gives the optimum) with short time limits:
+feasible selection (budget, one camera per location, money budget when tagged), objective ==
+problem.cost(selected), bound <= the brute-force optimum, exact solvers reach it, a stop
+request gives status 'interrupted', zero budget, same seed -> same result, unknown option
+refused. Solvers tagged needs_positions get random positions, needs_start a greedy start.
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+from typing import Any, Callable, Iterable, Mapping
+
+import numpy as np
+import scipy.sparse as sp
+
+from camplace.core.errors import InputError
+from camplace.problem.model import PlacementProblem, brute_force_optimum
+from camplace.solvers.base import Placement
+from camplace.solvers.contract import Hooks, Solver
+from camplace.solvers.greedy import solve_greedy
+
+STATUSES = frozenset({"optimal", "feasible", "time_limit", "interrupted", "heuristic"})
+TIME_LIMIT_S = 2.0  # per solve; tiny problems finish long before
+SEEDS = (0, 1, 2)
+Check = Callable[[Solver], None]
+
+
+def random_problem(seed: int, n_g: int = 8, n_p: int = 10, budget: int = 3, n_loc: int = 5,
+                   density: float = 0.4, priced: bool = False) -> PlacementProblem:
+    """A random problem small enough for brute force, with positions (m) in a 10 m box;
+    ``priced``: candidate prices in {1, 2, 3} and a money budget of 4."""
+    rng = np.random.default_rng(seed)
+    V = sp.csr_matrix((rng.random((n_g, n_p)) < density).astype(np.uint8))
+    prices = rng.integers(1, 4, n_g).astype(np.float64) if priced else None
+    return PlacementProblem(V, rng.integers(0, 4, n_p), rng.uniform(0.5, 2.0, n_p), budget,
+                            rng.integers(0, n_loc, n_g), prices, 4.0 if priced else None,
+                            candidate_positions=rng.uniform(0, 10, (n_g, 3)),
+                            target_positions=rng.uniform(0, 10, (n_p, 3)))
+
+
+def run_solver(solver: Solver, problem: PlacementProblem, hooks: Hooks | None = None, **options: Any) -> Placement:
+    """solver.solve with time_limit_s = TIME_LIMIT_S (unless given) and, for a solver
+    tagged needs_start, the greedy placement as ``nominal``."""
+    options.setdefault("time_limit_s", TIME_LIMIT_S)
+    if solver.tags.needs_start and "nominal" not in options:
+        options["nominal"] = solve_greedy(problem)
+    return solver.solve(problem, solver.options(**options), hooks)
+
+
+def assert_valid(solver: Solver, problem: PlacementProblem, p: Placement) -> None:
+    """The Placement contract: status, sorted unique int ids, feasibility (the camera
+    budget unless tagged ignores_camera_budget, the money budget when tagged money_budget),
+    objective == problem.cost(selected), bound <= objective."""
+    name = solver.name
+    assert p.status in STATUSES, f"{name}: status {p.status!r}"
+    sel = np.asarray(p.selected)
+    assert sel.dtype.kind == "i", f"{name}: selected must be integer ids"
+    assert np.all(np.diff(sel) > 0), f"{name}: selected must be sorted and unique"
+    assert len(sel) == 0 or (sel.min() >= 0 and sel.max() < problem.n_candidates), f"{name}: id out of range"
+    locs = problem.location_ids[sel]
+    assert len(np.unique(locs)) == len(locs), f"{name}: two cameras at one location"
+    if not solver.tags.ignores_camera_budget:
+        assert len(sel) <= problem.budget, f"{name}: {len(sel)} cameras over the budget {problem.budget}"
+    if solver.tags.money_budget and problem.money_budget is not None and len(sel):
+        assert problem.costs[sel].sum() <= problem.money_budget + 1e-9, f"{name}: over the money budget"
+    assert abs(p.objective - problem.cost(sel)) <= 1e-9 * max(1.0, abs(p.objective)), \
+        f"{name}: objective {p.objective} != cost {problem.cost(sel)}"
+    assert p.seconds >= 0, f"{name}: negative seconds"
+    if p.bound is not None:
+        assert p.bound <= p.objective + 1e-6 * max(1.0, p.objective), f"{name}: bound above the objective"
+
+
+def check_feasible_and_objective(solver: Solver) -> None:
+    """Valid placements on plain and priced tiny problems."""
+    for seed in SEEDS:
+        for priced in (False, True):
+            problem = random_problem(seed, priced=priced)
+            assert_valid(solver, problem, run_solver(solver, problem))
+
+
+def check_bound_below_optimum(solver: Solver) -> None:
+    """A reported bound never exceeds the brute-force optimum; with tag gives_bound some
+    bound is reported."""
+    for seed in SEEDS:
+        problem = random_problem(seed)
+        optimum, _ = brute_force_optimum(problem)
+        p = run_solver(solver, problem)
+        if solver.tags.gives_bound:
+            assert p.bound is not None, f"{solver.name}: tagged gives_bound but reported no bound"
+        if p.bound is not None:
+            assert p.bound <= optimum + 1e-6 * max(1.0, optimum), f"{solver.name}: bound {p.bound} > optimum {optimum}"
+        if not solver.tags.ignores_camera_budget:
+            assert p.objective >= optimum - 1e-9, f"{solver.name}: cost {p.objective} below the optimum {optimum}"
+
+
+def check_exact_reaches_optimum(solver: Solver) -> None:
+    """Tag exact: status 'optimal' and the brute-force optimum (with and without prices)."""
+    for seed in SEEDS:
+        for priced in (False, True):
+            problem = random_problem(seed, priced=priced)
+            optimum, _ = brute_force_optimum(problem)
+            p = run_solver(solver, problem, time_limit_s=None)
+            assert p.status == "optimal", f"{solver.name}: status {p.status!r} on a tiny problem"
+            assert abs(p.objective - optimum) <= 1e-6 * max(1.0, optimum), \
+                f"{solver.name}: cost {p.objective} != optimum {optimum}"
+
+
+def check_stop_request(solver: Solver) -> None:
+    """Tag anytime: a stop request already set gives a valid placement, status
+    'interrupted' (or 'optimal' when the optimum was proven before the first poll). The
+    problem needs more greedy steps (40) than a solver may take between two polls."""
+    problem = random_problem(7, n_g=120, n_p=200, budget=40, n_loc=100, density=0.05)
+    seen: list = []
+    hooks = Hooks(should_stop=lambda: True, progress=lambda *a: seen.append(a), on_incumbent=lambda o, b: None)
+    p = run_solver(solver, problem, hooks, time_limit_s=20.0)
+    assert_valid(solver, problem, p)
+    assert p.status in ("interrupted", "optimal"), f"{solver.name}: status {p.status!r} after a stop request"
+
+
+def check_zero_budget(solver: Solver) -> None:
+    """Budget 0: no camera, cost = Σ w Γ² (unless tagged ignores_camera_budget); nothing
+    to cover: cost 0."""
+    problem = random_problem(4, budget=0)
+    p = run_solver(solver, problem)
+    assert_valid(solver, problem, p)
+    if not solver.tags.ignores_camera_budget:
+        assert len(p.selected) == 0 and p.objective == problem.normalizer, f"{solver.name}: cameras at budget 0"
+    empty = replace(random_problem(5), gamma=np.zeros(10, np.int64))
+    p = run_solver(solver, empty)
+    assert_valid(solver, empty, p)
+    assert p.objective == 0.0, f"{solver.name}: cost {p.objective} with nothing to cover"
+
+
+def check_same_seed_same_result(solver: Solver) -> None:
+    """Tag deterministic_with_seed: two runs with one seed give the same selection."""
+    for seed in SEEDS[:2]:
+        problem = random_problem(10 + seed)
+        a = run_solver(solver, problem, seed=seed)
+        b = run_solver(solver, problem, seed=seed)
+        assert np.array_equal(a.selected, b.selected), f"{solver.name}: seed {seed} gave two selections"
+
+
+def check_unknown_option_refused(solver: Solver) -> None:
+    """An option the solver does not declare is an InputError naming it."""
+    from camplace.solvers.contract import split_options
+
+    try:
+        split_options(solver, {"no_such_option": 1})
+    except InputError as err:
+        assert err.option == "no_such_option" and "no_such_option" in str(err), str(err)
+    else:
+        raise AssertionError(f"{solver.name}: accepted an unknown option")
+    try:
+        solver(random_problem(0), no_such_option=1)
+    except InputError:
+        pass
+    else:
+        raise AssertionError(f"{solver.name}: solved with an unknown option")
+
+
+def checks_for(solver: Solver) -> list[Check]:
+    """The checks that apply to ``solver`` by its tags."""
+    out: list[Check] = [check_feasible_and_objective, check_bound_below_optimum, check_zero_budget,
+                        check_unknown_option_refused]
+    if solver.tags.exact:
+        out.append(check_exact_reaches_optimum)
+    if solver.tags.anytime:
+        out.append(check_stop_request)
+    if solver.tags.deterministic_with_seed:
+        out.append(check_same_seed_same_result)
+    return out
+
+
+def check_solver(solver: Solver, checks: Iterable[Check] | None = None) -> None:
+    """Run every applicable check (or ``checks``) on ``solver``; AssertionError on the first failure."""
+    for check in (checks_for(solver) if checks is None else checks):
+        check(solver)
+
+
+def parametrize_with_checks(solvers: Mapping[str, Solver] | Iterable[Solver]):
+    """pytest.mark.parametrize("solver, check") over every (solver, applicable check) pair,
+    ids 'name-check'."""
+    import pytest
+
+    items = list(solvers.values()) if isinstance(solvers, Mapping) else list(solvers)
+    cases = [(s, c) for s in items for c in checks_for(s)]
+    return pytest.mark.parametrize("solver, check", cases,
+                                   ids=[f"{s.name}-{c.__name__.removeprefix('check_')}" for s, c in cases])
+
+
+__all__ = ["STATUSES", "assert_valid", "check_solver", "checks_for", "parametrize_with_checks", "random_problem",
+           "run_solver"]
