@@ -209,6 +209,8 @@ def test_deprecated_cloud_alias_and_save_scene(scan_ply, tmp_path, monkeypatch, 
     (InputError("scan x.ply: too low (try up='+y' for phone scans)", option="up"),
      "--up: scan x.ply: too low (try --up +y for phone scans)"),
     (InputError("cloud: x.ply: the file is empty", option="cloud"), "x.ply: the file is empty"),
+    (InputError("coverage_gap: solver 'mip' takes no option 'coverage_gap'", option="coverage_gap"),
+     "--coverage-gap: solver 'mip' takes no option '--coverage-gap'"),
     (InputError("scene.yaml: voxel_size: expected > 0"), "scene.yaml: voxel_size: expected > 0"),
     (InputError("nothing to word here", option="not_a_cli_parameter"), "nothing to word here"),
 ])

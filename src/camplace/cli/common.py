@@ -60,13 +60,15 @@ def word_error(err: CamplaceError) -> str:
     """The error's line for the command line. With ``err.option`` set, the library's
     leading 'param:' (or '(param)') becomes the flag, else the flag is put in front
     (an option of "" - the command's argument - only drops 'param: '); 'param=value'
-    advice in the message is worded as flags too."""
+    advice and the quoted 'param' in the message are worded as flags too."""
     msg = str(err)
     opt = getattr(err, "option", None)
     if opt is None or opt not in FLAGS:
         return msg
     flag = FLAGS[opt]
     msg = _PARAM_VALUE.sub(_flag_for, msg)
+    if flag:
+        msg = msg.replace(f"'{opt}'", f"'{flag}'")  # "takes no option 'coverage_gap'"
     if msg.startswith(f"{opt}:"):
         return flag + msg[len(opt):] if flag else msg[len(opt) + 1:].lstrip()
     if f"({opt})" in msg:
