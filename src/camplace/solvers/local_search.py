@@ -111,7 +111,8 @@ class NominalObjective:
     """The squared-shortfall cost. A key is (improvement δ, tolerance); the current
     selection's key is None and a move beats it when δ > tolerance (abs_tol for an add,
     max(abs_tol, rel_tol · cost) for a swap); moves compare by δ. For each a, moves()
-    gives the one best b (largest gain at the coverage without a; ties: lowest id)."""
+    gives the one best b (largest gain at the coverage without a; ties: lowest id). Its
+    keys are relative to the current selection, so it serves descent only (max_stall = 0)."""
 
     adds_first = True
 
@@ -177,6 +178,8 @@ def swap_search(problem: PlacementProblem, selected: Iterable[int], objective: S
     t0 = time.perf_counter()
     state = SwapState(problem, selected, money_tol)
     cur = objective.start(state)
+    if max_stall > 0 and cur is None:
+        raise ValueError("swap_search: max_stall > 0 needs an objective with absolute keys")
     best_key, best_sel = cur, list(state.sel)
     tabu_until = np.zeros(problem.n_candidates, np.int64)
     moves = passes = stall = 0

@@ -1,4 +1,4 @@
-"""``--robust 1``: the placement that minimises the worst single-failure cost, with a bound."""
+"""Run option robust=1: the placement that minimises the worst single-failure cost, with a bound."""
 
 from __future__ import annotations
 
@@ -41,7 +41,7 @@ def robust_placement(problem: PlacementProblem, nominal: Placement, *, time_limi
                      exact_max_nnz: int = 200_000, bound_mip_s: float = 0.0, mean_bound_s: float = 60.0,
                      seed: int = 0,
                      should_stop=None) -> RobustResult:
-    """``--robust 1`` from the nominal placement, with figures for both placements and a
+    """Run option robust=1 from the nominal placement, with figures for both placements and a
     lower bound on the optimal worst case. method 'auto': the swap/tabu heuristic
     (``robust_search``, 30 % of the time), then the exact scenario MIP on the whole problem
     when V has at most ``exact_max_nnz`` nonzeros (half of the time left; optimal when it
