@@ -98,7 +98,7 @@ def test_registry_parameters_and_refusals():
     with pytest.raises(InputError, match="^probe: ") as err:
         get_engine("voxel", probe=1.0)  # the any-part rule is not implemented in the voxel engine yet
     assert err.value.option == "probe"
-    with pytest.raises(InputError, match="^visibility mode: expected one of 'voxel', 'pixel', got 'raster'") as err:
+    with pytest.raises(InputError, match="^visibility_mode: expected one of 'voxel', 'pixel', got 'raster'") as err:
         get_engine("raster")
     assert err.value.option == "visibility_mode"
     with pytest.raises(InputError, match="^stride: expected a positive integer") as err:

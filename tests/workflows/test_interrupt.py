@@ -3,7 +3,6 @@ an interrupted visibility stage resumes from its cached chunks."""
 
 from __future__ import annotations
 
-import functools
 import json
 import os
 import signal
@@ -157,10 +156,13 @@ def test_solver_errors_propagate_through_the_worker_thread():
 def test_interrupted_visibility_resumes_from_cached_chunks(tmp_path, monkeypatch):
     """Stop after two visibility chunks: Interrupted (nothing to write); the next run
     loads those two chunks from the cache and computes the rest, giving the same V."""
-    import camplace.workflows.run as pipeline
-    from camplace.visibility.voxel import compute_visibility
+    import dataclasses
 
-    monkeypatch.setattr(pipeline, "compute_visibility", functools.partial(compute_visibility, chunk_size=64))
+    import camplace.workflows.run as pipeline
+    from camplace.visibility.registry import get_engine
+
+    monkeypatch.setattr(pipeline, "get_engine", lambda mode, **kw: dataclasses.replace(get_engine(mode, **kw),
+                                                                                       chunk_size=64))
     calls = {"n": 0}
 
     def stop_after_two_chunks() -> bool:

@@ -27,7 +27,7 @@ def engine_params(mode: str) -> tuple[str, ...]:
 def get_engine(mode: str, **params: Any) -> VisibilityEngine:
     """The engine ``mode`` ('voxel', 'pixel') with ``params`` (None values = defaults)."""
     if mode not in ENGINES:
-        raise InputError(f"visibility mode: expected one of {', '.join(map(repr, ENGINES))}, got {mode!r}",
+        raise InputError(f"visibility_mode: expected one of {', '.join(map(repr, ENGINES))}, got {mode!r}",
                          option="visibility_mode")
     given = {k: v for k, v in params.items() if v is not None}
     for k in given:
@@ -38,4 +38,4 @@ def get_engine(mode: str, **params: Any) -> VisibilityEngine:
     try:
         return ENGINES[mode](**given)
     except TypeError as err:  # a required parameter is missing
-        raise InputError(f"visibility mode {mode!r}: {err}", option="visibility_mode") from None
+        raise InputError(f"visibility_mode {mode!r}: {err}", option="visibility_mode") from None
