@@ -46,13 +46,16 @@ def subprocess_run(tmp_path_factory):
 
 def test_same_run_twice_is_byte_identical(tmp_path, monkeypatch, capsys, subprocess_run):
     monkeypatch.setenv("CAMPLACE_CACHE", str(tmp_path / "cache"))
-    outs = []
+    outs, pages = [], []
     for k in range(2):
         out = tmp_path / f"out{k}"
         code, text = run_cli(["run", "demo", "--out", out, "--no-cache", "--repeatable"], monkeypatch, capsys)
         assert code == 0, text
         outs.append(_bytes(out))
+        pages.append((out / "report.html").read_bytes())
     assert outs[0] == outs[1]
+    assert pages[0] == pages[1], "report.html differs between two --repeatable runs"
+    assert (subprocess_run / "report.html").read_bytes() == pages[0]
     # another process, another hash seed, 2 worker processes for visibility: same bytes
     assert _bytes(subprocess_run) == outs[0]
     m = json.loads(outs[0]["metrics.json"])

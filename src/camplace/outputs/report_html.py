@@ -181,15 +181,17 @@ def render_report(view: SceneView, placement: dict, metrics: dict, positions: np
                   coverage: np.ndarray, gamma: np.ndarray, region_ids: np.ndarray, region_names,
                   region_kinds=(), n_candidates: int | None = None, files: list[str] = (),
                   slices: list[CoverageSlice] | None = None, max_points: int = MAX_POINTS,
-                  views: list[dict] | None = None, views_skipped: int = 0) -> str:
+                  views: list[dict] | None = None, views_skipped: int = 0, dated: bool = True) -> str:
     """The report page as one HTML string (plotly.js embedded).
 
     positions: (N_p, 3) m; is_surface, coverage, gamma, region_ids: (N_p,);
     placement / metrics: the placement.json / metrics.json dicts; files: names of
-    sibling output files to link."""
+    sibling output files to link; ``dated``: say when the page was written (off for repeatable
+    runs, so that the page depends only on the inputs)."""
     positions = np.asarray(positions, float)
     coverage = np.asarray(coverage, np.int64)
     cameras = placement.get("cameras", [])
+    written = f" \u00b7 written {time.strftime('%Y-%m-%d %H:%M:%S')}" if dated else ""
     if slices is None:
         slices = coverage_slices(view, positions, is_surface, coverage)
     region_names = [str(r) for r in region_names]
@@ -217,7 +219,7 @@ def render_report(view: SceneView, placement: dict, metrics: dict, positions: np
 <title>camplace report: {title}</title><style>{_CSS}</style></head>
 <body data-plots-total="{len(figs)}">
 <header><h1>camplace report: {title}</h1>
-<p>{html.escape(str(placement.get('solver')))} placement of {len(cameras)} cameras \u00b7 written {time.strftime('%Y-%m-%d %H:%M:%S')} \u00b7 self-contained, works offline</p></header>
+<p>{html.escape(str(placement.get('solver')))} placement of {len(cameras)} cameras{written} \u00b7 self-contained, works offline</p></header>
 <main>
 <div class="top"><section class="summary"><h2>Summary</h2><table>{_rows(_summary_pairs(placement, metrics, len(positions), n_candidates))}</table></section>
 <section class="view"><h2>3D view</h2><p class="legend">{legend}</p>
@@ -256,14 +258,16 @@ def render_report(view: SceneView, placement: dict, metrics: dict, positions: np
 def write_report(out_dir: str | Path, targets, coverage: np.ndarray, placement: dict, metrics: dict,
                  view: SceneView | None = None, n_candidates: int | None = None,
                  html_report: bool = True, figures: bool = True, exports: bool = True,
-                 scene=None, vis=None, selected: np.ndarray | None = None) -> dict[str, Path]:
+                 scene=None, vis=None, selected: np.ndarray | None = None,
+                 repeatable: bool = False) -> dict[str, Path]:
     """Write exports (opencv/, colmap/), PNG figures and report.html into out_dir.
 
     targets: camplace.targets.build.Targets (N_p); coverage: (N_p,) achieved coverage of the
     placement; placement / metrics: the placement.json / metrics.json dicts. With
     ``scene`` (camplace.scene.build.Scene), ``vis`` (camplace.visibility.engine.Visibility) and
-    ``selected`` (rows of vis.V) the page also shows each camera's rendered view.
-    Returns file name (relative to out_dir) -> path."""
+    ``selected`` (rows of vis.V) the page also shows each camera's rendered view (as many as
+    fit VIEW_BUDGET_S seconds). ``repeatable``: every view and no date, so that the page
+    depends only on the inputs (byte-identical between identical runs). Returns file name (relative to out_dir) -> path."""
     from camplace.outputs.exports import write_exports
     from camplace.outputs.figures import write_figures
 
@@ -287,9 +291,10 @@ def write_report(out_dir: str | Path, targets, coverage: np.ndarray, placement: 
                  *sorted(p for p in paths if p.endswith(".png")), *(["opencv/", "colmap/"] if exports else [])]
         views, skipped = (None, 0)
         if scene is not None and vis is not None and selected is not None:
-            views, skipped = camera_views(scene, vis, selected)
+            views, skipped = camera_views(scene, vis, selected,
+                                          budget_s=float("inf") if repeatable else VIEW_BUDGET_S)
         text = render_report(view, placement, metrics, targets.positions, is_surface, coverage, targets.gamma,
                              targets.region_ids, targets.region_names, targets.region_kinds, n_candidates, files,
-                             slices, views=views, views_skipped=skipped)
+                             slices, views=views, views_skipped=skipped, dated=not repeatable)
         paths["report.html"] = atomic_write_text(out / "report.html", text)
     return paths

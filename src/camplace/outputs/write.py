@@ -110,7 +110,8 @@ def write_outputs(out_dir: str | Path, scene_name: str, vis: Visibility, placeme
     out.mkdir(parents=True, exist_ok=True)
     pdict = placement_dict(scene_name, placement, budget, vis.candidates)
     timings = dict(timings)
-    report_timings = {k: round(float(v), 4) for k, v in timings.items()}  # shown in report.html (no "report")
+    # shown in report.html (no "report"); repeatable: 0.0 as in metrics.json, so the page is byte-identical
+    report_timings = {k: 0.0 if repeatable else round(float(v), 4) for k, v in timings.items()}
     with AtomicBatch() as batch:  # the contract files replace the old ones together, once all are written
         paths = {
             "visibility.npz": batch.stage_savez(out / "visibility.npz", **visibility_arrays(vis)),
@@ -122,7 +123,7 @@ def write_outputs(out_dir: str | Path, scene_name: str, vis: Visibility, placeme
     if not report:
         return paths
     try:
-        paths.update(_write_report_set(out, vis, placement, pdict, metrics, report_timings, scene))
+        paths.update(_write_report_set(out, vis, placement, pdict, metrics, report_timings, scene, repeatable))
     except BaseException as err:
         if "report.html" not in paths:  # an earlier run's page would contradict the new contract files
             _unlink_quietly(out / "report.html")
@@ -145,8 +146,10 @@ def _metrics_dict(metrics: Metrics, timings: dict[str, float], repeatable: bool)
 
 
 def _write_report_set(out: Path, vis: Visibility, placement: Placement, pdict: dict, metrics: Metrics,
-                      timings: dict[str, float], scene) -> dict[str, Path]:
-    """report.html, PNG figures and exports (camplace.outputs.report_html.write_report)."""
+                      timings: dict[str, float], scene, repeatable: bool = False) -> dict[str, Path]:
+    """report.html, PNG figures and exports (camplace.outputs.report_html.write_report); with
+    ``repeatable`` every camera view is rendered (no time budget), so the page depends only on
+    the inputs."""
     from camplace.outputs.figures import SceneView
     from camplace.outputs.report_html import write_report
 
@@ -154,7 +157,8 @@ def _write_report_set(out: Path, vis: Visibility, placement: Placement, pdict: d
     cov = np.bincount(vis.V[sel].indices, minlength=vis.V.shape[1]).astype(np.int64)
     m = dict(metrics.to_dict(), timings_s=timings)
     return write_report(out, vis.targets, cov, pdict, m, SceneView.from_scene(scene) if scene else None,
-                        n_candidates=int(vis.V.shape[0]), scene=scene, vis=vis, selected=sel)
+                        n_candidates=int(vis.V.shape[0]), scene=scene, vis=vis, selected=sel,
+                        repeatable=repeatable)
 
 
 def _unlink_quietly(path: Path) -> None:
