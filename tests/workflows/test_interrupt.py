@@ -108,14 +108,17 @@ def test_solver_that_ignores_the_stop_request_is_left_behind():
 
     release = threading.Event()
 
-    def stubborn(problem, **_):
+    def stubborn(problem, *, time_limit_s=None, threads=None, seed=0, should_stop=None, progress=None,
+                 on_incumbent=None):
         release.wait(30)
         raise AssertionError("never returns in time")
 
     rng = np.random.default_rng(0)
     V = sp.csr_matrix((rng.random((30, 50)) < 0.2).astype(np.uint8))
     prob = PlacementProblem(V, np.full(50, 2, np.int64), np.ones(50), 5, np.arange(30) // 2)
-    solvers.SOLVERS["stubborn-test"] = stubborn
+    from camplace.solvers.contract import make_solver
+
+    solvers.SOLVERS["stubborn-test"] = make_solver("stubborn-test", stubborn)
     try:
         t0 = time.perf_counter()
         asked = t0 + 0.2
@@ -140,12 +143,15 @@ def test_solver_errors_propagate_through_the_worker_thread():
     from camplace.workflows.run import solve_stoppable
     from camplace.problem.model import PlacementProblem
 
-    def broken(problem, **_):
+    def broken(problem, *, time_limit_s=None, threads=None, seed=0, should_stop=None, progress=None,
+               on_incumbent=None):
         raise ValueError("boom")
 
     V = sp.csr_matrix(np.eye(3, dtype=np.uint8))
     prob = PlacementProblem(V, np.ones(3, np.int64), np.ones(3), 1, np.arange(3))
-    solvers.SOLVERS["broken-test"] = broken
+    from camplace.solvers.contract import make_solver
+
+    solvers.SOLVERS["broken-test"] = make_solver("broken-test", broken)
     try:
         with pytest.raises(ValueError, match="boom"):
             solve_stoppable(prob, "broken-test", should_stop=lambda: False)
@@ -188,9 +194,11 @@ def test_time_limit_option_reaches_the_solver(monkeypatch):
 
     def spy(problem, **options):
         got.update(options)
-        return real(problem, **options)
+        return real.fn(problem, **options)
 
-    monkeypatch.setitem(solvers.SOLVERS, "greedy", spy)
+    import dataclasses
+
+    monkeypatch.setitem(solvers.SOLVERS, "greedy", dataclasses.replace(real, fn=spy))
     run("demo", time_limit_s=7.5)
     assert got["time_limit_s"] == 7.5
     run("demo")
