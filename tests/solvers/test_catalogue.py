@@ -19,7 +19,9 @@ def _mixed_problem(seed: int = 0, money: float = 7.0) -> PlacementProblem:
     n_g, n_p = 60, 150
     V = sp.csr_matrix((rng.random((n_g, n_p)) < 0.08).astype(np.uint8))
     price = np.where(np.arange(n_g) % 2 == 0, 1.0, 2.5)
-    return PlacementProblem(V, rng.integers(1, 3, n_p), np.ones(n_p), 8, np.arange(n_g) // 2, price, money)
+    return PlacementProblem(V, rng.integers(1, 3, n_p), np.ones(n_p), 8, np.arange(n_g) // 2, price, money,
+                            candidate_positions=rng.uniform(0, 10, (n_g, 3)),
+                            target_positions=rng.uniform(0, 10, (n_p, 3)))
 
 
 def _check(prob: PlacementProblem, placement, solver: str) -> None:
@@ -27,7 +29,7 @@ def _check(prob: PlacementProblem, placement, solver: str) -> None:
     assert prob.costs[sel].sum() <= prob.money_budget + 1e-9, solver
     locs = prob.location_ids[sel]
     assert len(np.unique(locs)) == len(locs), solver
-    if not getattr(SOLVERS[solver], "ignores_budget", False):
+    if not SOLVERS[solver].tags.ignores_camera_budget:
         assert len(sel) <= prob.budget, solver
     assert placement.objective == pytest.approx(prob.cost(sel)), solver  # reported cost == recomputed cost
 

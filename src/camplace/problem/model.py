@@ -20,7 +20,9 @@ from camplace.problem.gains import shortfall_cost  # the one home of gains and c
 class PlacementProblem:
     """V: (N_g, N_p) CSR 0/1; gamma: (N_p,) int64; weights: (N_p,) float64;
     budget: at most this many cameras; location_ids: (N_g,) int64, at most one camera
-    per location; camera_costs: (N_g,) float64 price of each candidate (default 1)."""
+    per location; camera_costs: (N_g,) float64 price of each candidate (default 1);
+    candidate_positions / target_positions: optional (N_g, 3) / (N_p, 3) positions in m,
+    only for solvers tagged needs_positions (not kept by reduce_problem)."""
 
     V: sp.csr_matrix
     gamma: np.ndarray
@@ -29,6 +31,8 @@ class PlacementProblem:
     location_ids: np.ndarray
     camera_costs: np.ndarray | None = None
     money_budget: float | None = None  # Σ camera_costs[selected] must not exceed this (None: no limit)
+    candidate_positions: np.ndarray | None = None  # (N_g, 3) m, for solvers that need geometry
+    target_positions: np.ndarray | None = None  # (N_p, 3) m, for solvers that need geometry
 
     def __post_init__(self) -> None:
         n_g, n_p = self.V.shape

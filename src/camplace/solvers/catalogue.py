@@ -11,67 +11,21 @@ not bind). Both use the lazy (CELF) evaluation of ``camplace.solvers.greedy``: a
 submodular gain divided by a fixed price still only shrinks. Optional 1-swap descent
 afterwards (``local_search=True``) keeps the budget, the money budget and one camera
 per location.
+
+The two greedy runs (``cost_scaled_greedy``, ``solve_catalogue_greedy``, registered as
+solver 'greedy-money') live in camplace.solvers.greedy, next to the plain greedy that
+delegates to them under a money budget; this module keeps the repair for solvers whose
+moves ignore prices.
 """
 
 from __future__ import annotations
-
-import time
 
 import numpy as np
 
 from camplace.problem.gains import removal_losses
 from camplace.problem.model import PlacementProblem
-from camplace.solvers.base import OnIncumbent, Placement, ProgressFn, ShouldStop, deadline, stopped
-from camplace.solvers.greedy import lazy_greedy, marginal_gains, row_gain, swap_local_search
-
-MIN_PRICE = 1e-9  # a free camera gets this price in the ratio (it is then always worth taking first)
-
-
-def cost_scaled_greedy(problem: PlacementProblem, *, end: float = float("inf"), should_stop: ShouldStop | None = None,
-                       progress: ProgressFn | None = None) -> tuple[list[int], int, bool]:
-    """CELF greedy on gain / price; returns (selected in order, evaluations, interrupted)."""
-    price = np.maximum(problem.costs, MIN_PRICE)
-    sel, _, ev, cut = lazy_greedy(problem, lambda c: marginal_gains(problem, c) / price,
-                                  lambda i, c: row_gain(problem, i, c) / price[i], end=end, should_stop=should_stop,
-                                  progress=progress, stage="greedy (cost-scaled)")
-    return sel, ev, cut
-
-
-def solve_catalogue_greedy(problem: PlacementProblem, *, time_limit_s: float | None = None,
-                           threads: int | None = None, seed: int = 0, should_stop: ShouldStop | None = None,
-                           progress: ProgressFn | None = None, on_incumbent: OnIncumbent | None = None,
-                           local_search: bool = False, **_: object) -> Placement:
-    """Best of the cost-scaled and the plain greedy (both within the money budget, if
-    any), then optional 1-swap descent. Status 'heuristic' (or 'time_limit' /
-    'interrupted'); info['variant'] says which greedy won."""
-    t0 = time.perf_counter()
-    end = deadline(time_limit_s)
-    runs = {}
-    scaled, ev1, cut1 = cost_scaled_greedy(problem, end=end, should_stop=should_stop, progress=progress)
-    runs["cost-scaled"] = scaled
-    plain, _, ev2, cut2 = lazy_greedy(problem, lambda c: marginal_gains(problem, c),
-                                      lambda i, c: row_gain(problem, i, c), end=end, should_stop=should_stop,
-                                      progress=progress)
-    runs["plain"] = plain
-    costs = {k: problem.cost(np.array(v, np.int64)) for k, v in runs.items()}
-    variant = min(costs, key=lambda k: (costs[k], k != "cost-scaled"))
-    selected = list(runs[variant])
-    cut = cut1 or cut2
-    if on_incumbent:
-        on_incumbent(costs[variant], None)
-    info: dict = {"variant": variant, "greedy_costs": costs, "gain_evaluations": ev1 + ev2,
-                  "order": [int(i) for i in selected]}
-    if local_search and not cut:
-        selected, moves, cut = swap_local_search(problem, selected, end=end, should_stop=should_stop,
-                                                 on_incumbent=on_incumbent)
-        info["local_search_moves"] = moves
-    sel = np.array(sorted(int(i) for i in selected), np.int64)
-    status = "heuristic"
-    if cut:
-        status = "interrupted" if stopped(should_stop) else "time_limit"
-    info["local_search"] = bool(local_search)
-    info["money_spent"] = float(problem.costs[sel].sum()) if len(sel) else 0.0
-    return Placement(sel, problem.cost(sel), None, status, "greedy", time.perf_counter() - t0, info)
+from camplace.solvers.greedy import (MIN_PRICE, cost_scaled_greedy, marginal_gains, solve_catalogue_greedy,
+                                     swap_local_search)
 
 
 def repair_to_money_budget(problem: PlacementProblem, selected: np.ndarray, *, end: float = float("inf"),

@@ -81,17 +81,14 @@ def swap_local_search(problem: PlacementProblem, selected: list[int], *, end: fl
 
 def solve_greedy(problem: PlacementProblem, *, time_limit_s: float | None = None, threads: int | None = None,
                  seed: int = 0, should_stop: ShouldStop | None = None, progress: ProgressFn | None = None,
-                 on_incumbent: OnIncumbent | None = None, local_search: bool = False, cost_scaled: bool = True,
-                 **_: object) -> Placement:
+                 on_incumbent: OnIncumbent | None = None, local_search: bool = False, cost_scaled: bool = True) -> Placement:
     """Add the candidate with the largest cost drop until the budget is spent or no
     candidate lowers the cost; one camera per location (and within the money budget,
     if any). Ties go to the lowest id. local_search=True then runs 1-swap descent
     (:func:`swap_local_search`). Status 'heuristic', or 'interrupted' / 'time_limit'.
     With a money budget and cost_scaled=True: the best of cost-scaled and plain greedy
-    (camplace.solvers.catalogue)."""
+    (:func:`solve_catalogue_greedy`)."""
     if cost_scaled and problem.money_budget is not None:
-        from camplace.solvers.catalogue import solve_catalogue_greedy
-
         return solve_catalogue_greedy(problem, time_limit_s=time_limit_s, threads=threads, seed=seed,
                                       should_stop=should_stop, progress=progress, on_incumbent=on_incumbent,
                                       local_search=local_search)
@@ -121,3 +118,56 @@ def finish_greedy(problem: PlacementProblem, selected: list[int], info: dict, cu
         status = "interrupted" if stopped(should_stop) else "time_limit"
     info["local_search"] = bool(local_search)
     return Placement(sel, problem.cost(sel), None, status, name, time.perf_counter() - t0, info)
+
+
+# ---------------------------------------------------------------------------
+# Under a money budget (camplace.solvers.catalogue has the method's notes)
+
+MIN_PRICE = 1e-9  # a free camera gets this price in the ratio (it is then always worth taking first)
+
+
+def cost_scaled_greedy(problem: PlacementProblem, *, end: float = float("inf"), should_stop: ShouldStop | None = None,
+                       progress: ProgressFn | None = None) -> tuple[list[int], int, bool]:
+    """CELF greedy on gain / price; returns (selected in order, evaluations, interrupted)."""
+    price = np.maximum(problem.costs, MIN_PRICE)
+    sel, _, ev, cut = lazy_greedy(problem, lambda c: marginal_gains(problem, c) / price,
+                                  lambda i, c: row_gain(problem, i, c) / price[i], end=end, should_stop=should_stop,
+                                  progress=progress, stage="greedy (cost-scaled)")
+    return sel, ev, cut
+
+
+def solve_catalogue_greedy(problem: PlacementProblem, *, time_limit_s: float | None = None,
+                           threads: int | None = None, seed: int = 0, should_stop: ShouldStop | None = None,
+                           progress: ProgressFn | None = None, on_incumbent: OnIncumbent | None = None,
+                           local_search: bool = False) -> Placement:
+    """Best of the cost-scaled and the plain greedy (both within the money budget, if
+    any), then optional 1-swap descent. Status 'heuristic' (or 'time_limit' /
+    'interrupted'); info['variant'] says which greedy won."""
+    t0 = time.perf_counter()
+    end = deadline(time_limit_s)
+    runs = {}
+    scaled, ev1, cut1 = cost_scaled_greedy(problem, end=end, should_stop=should_stop, progress=progress)
+    runs["cost-scaled"] = scaled
+    plain, _, ev2, cut2 = lazy_greedy(problem, lambda c: marginal_gains(problem, c),
+                                      lambda i, c: row_gain(problem, i, c), end=end, should_stop=should_stop,
+                                      progress=progress)
+    runs["plain"] = plain
+    costs = {k: problem.cost(np.array(v, np.int64)) for k, v in runs.items()}
+    variant = min(costs, key=lambda k: (costs[k], k != "cost-scaled"))
+    selected = list(runs[variant])
+    cut = cut1 or cut2
+    if on_incumbent:
+        on_incumbent(costs[variant], None)
+    info: dict = {"variant": variant, "greedy_costs": costs, "gain_evaluations": ev1 + ev2,
+                  "order": [int(i) for i in selected]}
+    if local_search and not cut:
+        selected, moves, cut = swap_local_search(problem, selected, end=end, should_stop=should_stop,
+                                                 on_incumbent=on_incumbent)
+        info["local_search_moves"] = moves
+    sel = np.array(sorted(int(i) for i in selected), np.int64)
+    status = "heuristic"
+    if cut:
+        status = "interrupted" if stopped(should_stop) else "time_limit"
+    info["local_search"] = bool(local_search)
+    info["money_spent"] = float(problem.costs[sel].sum()) if len(sel) else 0.0
+    return Placement(sel, problem.cost(sel), None, status, "greedy", time.perf_counter() - t0, info)

@@ -97,10 +97,10 @@ def _steps(indptr, indices, col_ptr, col_rows, weights, deficit, gain, alive, lo
     return n_sel, money, False
 
 
-def solve_greedy_fast(problem: PlacementProblem, *, time_limit_s: float | None = None,
-                      should_stop: ShouldStop | None = None, progress: ProgressFn | None = None,
+def solve_greedy_fast(problem: PlacementProblem, *, time_limit_s: float | None = None, threads: int | None = None,
+                      seed: int = 0, should_stop: ShouldStop | None = None, progress: ProgressFn | None = None,
                       on_incumbent: OnIncumbent | None = None, local_search: bool = False,
-                      cost_scaled: bool = True, **options: object) -> Placement:
+                      cost_scaled: bool = True) -> Placement:
     """The ``greedy`` selection with exact incremental gains in compiled code (see the
     module doc). local_search=True then runs greedy's 1-swap descent. Status
     'heuristic', or 'interrupted' / 'time_limit'. With a money budget and
@@ -109,7 +109,7 @@ def solve_greedy_fast(problem: PlacementProblem, *, time_limit_s: float | None =
         from camplace.solvers.greedy import solve_greedy
 
         return solve_greedy(problem, time_limit_s=time_limit_s, should_stop=should_stop, progress=progress,
-                            on_incumbent=on_incumbent, local_search=local_search, cost_scaled=True, **options)
+                            on_incumbent=on_incumbent, local_search=local_search, cost_scaled=True)
     t0 = time.perf_counter()
     end = deadline(time_limit_s)
     V = problem.V

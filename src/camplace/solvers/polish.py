@@ -27,6 +27,8 @@ from camplace.problem.gains import marginal_gains
 from camplace.problem.model import PlacementProblem
 from camplace.solvers.base import OnIncumbent, Placement, ProgressFn, ShouldStop, deadline, stopped
 from camplace.solvers.greedy_fast import solve_greedy_fast
+from camplace.solvers.mip import solve_mip
+from camplace.solvers.reduction import solve_reduced
 
 
 def restricted_candidates(problem: PlacementProblem, selected: np.ndarray, extra: int) -> np.ndarray:
@@ -44,11 +46,9 @@ def restricted_candidates(problem: PlacementProblem, selected: np.ndarray, extra
 def solve_greedy_polish(problem: PlacementProblem, *, time_limit_s: float | None = None, threads: int | None = None,
                         seed: int = 0, should_stop: ShouldStop | None = None, progress: ProgressFn | None = None,
                         on_incumbent: OnIncumbent | None = None, extra_per_camera: int = 4,
-                        mip_time_s: float = 60.0, bound_time_s: float = 10.0, **_: object) -> Placement:
+                        mip_time_s: float = 60.0, bound_time_s: float = 10.0) -> Placement:
     """Greedy + MIP polishing on a restricted candidate set + full-problem Lagrangian bound
     (module doc). mip_time_s / bound_time_s cap the two phases (within time_limit_s)."""
-    from camplace.solvers import solve
-
     t0 = time.perf_counter()
     end = deadline(time_limit_s)
     g = solve_greedy_fast(problem, time_limit_s=time_limit_s, should_stop=should_stop, progress=progress,
@@ -64,8 +64,9 @@ def solve_greedy_polish(problem: PlacementProblem, *, time_limit_s: float | None
     sub = dataclasses.replace(problem, V=problem.V[R], location_ids=np.asarray(problem.location_ids)[R],
                               camera_costs=costs)
     left = end - time.perf_counter()
-    m = solve(sub, "mip", time_limit_s=max(0.1, min(mip_time_s, 0.8 * left)), threads=threads, seed=seed,
-              should_stop=should_stop, warm_start=True, local_search=True)
+    m = solve_reduced(sub, lambda q: solve_mip(q, time_limit_s=max(0.1, min(mip_time_s, 0.8 * left)),
+                                               threads=threads, seed=seed, should_stop=should_stop,
+                                               warm_start=True, local_search=True))
     polished = np.sort(R[np.asarray(m.selected, np.int64)])
     pcost = problem.cost(polished)
     info.update(restricted_candidates=int(len(R)), mip_status=m.status, mip_objective=pcost,

@@ -345,7 +345,8 @@ class TabuSearch:
 def solve_tabu(problem: PlacementProblem, *, time_limit_s: float | None = None, threads: int | None = None,
                seed: int = 0, should_stop=None, progress=None, on_incumbent=None, max_iterations: int | None = None,
                initial: np.ndarray | None = None, chunk: int = 20, max_stall_restarts: int | None = 200,
-               **options) -> Placement:
+               tenure_add: int | None = None, tenure_rem: int | None = None, stall_limit: int | None = None,
+               perturb: int | None = None, k_rcl: int = 3) -> Placement:
     """Tabu search from greedy. Stops at `time_limit_s` (default 10 s when no
     `max_iterations` is given), after `max_iterations`, or when should_stop() is true.
     With `max_iterations` and no time limit the result depends only on the seed. It also
@@ -356,8 +357,8 @@ def solve_tabu(problem: PlacementProblem, *, time_limit_s: float | None = None, 
     if time_limit_s is None and max_iterations is None:
         time_limit_s = 10.0
     end = t0 + time_limit_s if time_limit_s is not None else float("inf")
-    keys = ("tenure_add", "tenure_rem", "stall_limit", "perturb", "k_rcl")
-    ts = TabuSearch(problem, seed=seed, initial=initial, **{k: options[k] for k in keys if k in options})
+    ts = TabuSearch(problem, seed=seed, initial=initial, tenure_add=tenure_add, tenure_rem=tenure_rem,
+                    stall_limit=stall_limit, perturb=perturb, k_rcl=k_rcl)
     best = ts.best_cost
     if on_incumbent is not None:
         on_incumbent(float(problem.cost(ts.best_selected)), None)

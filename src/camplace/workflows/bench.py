@@ -26,7 +26,9 @@ from camplace.problem.model import PlacementProblem
 
 DEFAULT_METHODS = ("greedy", "mip", "paper-mip", "zhao", "horster")
 LABELS = {"certify": "Certified (tabu + bounds)", "greedy": "Proposed Greedy", "mip": "Proposed MIP",
-          "paper-mip": "Proposed MIP (paper model, CBC)", "zhao": "Zhao et al.", "horster": "Greedy (Hörster)", "greedy+ls": "Proposed Greedy + 1-swap"}
+          "paper-mip": "Proposed MIP (paper model, CBC)", "zhao": "Zhao et al.", "horster": "Greedy (Hörster)", "greedy+ls": "Proposed Greedy + 1-swap",
+          "greedy-ls": "Proposed Greedy + 1-swap"}
+ALIASES = {"greedy+ls": "greedy-ls"}  # earlier method names -> registered solvers
 
 # Coverage optimality gap from the paper (Tables I and II), method -> {N_s: gap}.
 PAPER_TABLES: dict[str, dict[str, dict[int, float]]] = {
@@ -63,19 +65,20 @@ class BenchRow:
 def restrict_targets(problem: PlacementProblem, keep: np.ndarray) -> PlacementProblem:
     """The same problem on the targets where keep (N_p,) bool is True."""
     cols = np.nonzero(keep)[0]
-    return replace(problem, V=problem.V[:, cols].tocsr(), gamma=problem.gamma[cols], weights=problem.weights[cols])
+    tp = None if problem.target_positions is None else np.asarray(problem.target_positions)[cols]
+    return replace(problem, V=problem.V[:, cols].tocsr(), gamma=problem.gamma[cols], weights=problem.weights[cols],
+                   target_positions=tp)
 
 
 def bench_problem(problem: PlacementProblem, budget: int, method: str, *, time_limit_s: float | None = None,
                   threads: int | None = None, should_stop: Callable[[], bool] | None = None,
                   scene: str = "") -> BenchRow:
-    """Run one method ('greedy+ls' = greedy with 1-swap) at one budget; score it."""
+    """Run one registered solver (or an alias, ALIASES: 'greedy+ls' = 'greedy-ls') at one budget; score it."""
     from camplace.metrics.coverage import compute_metrics
     from camplace.solvers import solve
 
     p = replace(problem, budget=int(budget))
-    name, opts = (("greedy", {"local_search": True}) if method == "greedy+ls" else (method, {}))
-    pl = solve(p, name, time_limit_s=time_limit_s, threads=threads, should_stop=should_stop, **opts)
+    pl = solve(p, ALIASES.get(method, method), time_limit_s=time_limit_s, threads=threads, should_stop=should_stop)
     m = compute_metrics(p, pl.selected)
     return BenchRow(scene, int(budget), method, int(len(pl.selected)), float(pl.objective), float(m.coverage_gap),
                     float(m.non_triangulatable_pct), pl.bound, pl.gap, pl.status, float(pl.seconds))
@@ -99,7 +102,7 @@ def run_bench(scene: str | Path, budgets: Sequence[int], methods: Sequence[str] 
             raise InputError(f"certify_s: expected seconds > 0, got {certify_s}", option="certify_s")
         methods = [m for m in methods if m != "certify"] + ["certify"]
     for m in methods:
-        if m not in SOLVERS and m != "greedy+ls":
+        if ALIASES.get(m, m) not in SOLVERS:
             raise InputError(f"methods: unknown method '{m}'; expected some of {', '.join(sorted(SOLVERS))}",
                              option="methods")
     if targets not in ("volume", "all"):

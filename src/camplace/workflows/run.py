@@ -66,7 +66,7 @@ def prepare(scene: str | Path | SceneSpec, progress: Progress | None = None,
     both visibility modes.
 
     Refuses (InputError) a scene whose grids would exceed ``max_memory_bytes`` (default:
-    camplace.spec.schema.memory_limit_bytes()) before allocating them. Targets that cannot
+    camplace.core.memory.memory_limit_bytes()) before allocating them. Targets that cannot
     reach their coverage are a warning in ``log``, an InputError if ``require_feasible``.
     ``should_stop()`` polled between visibility chunks raises camplace.core.errors.Interrupted."""
     timings = {} if timings is None else timings
@@ -194,9 +194,8 @@ def solve_stoppable(problem: PlacementProblem, solver: str, *, log: list | None 
         raise out["error"]
     if "placement" in out:
         return out["placement"]
-    fallback_opts = {k: v for k, v in options.items() if k not in ("should_stop", "progress", "on_incumbent")}
-    fallback_opts["time_limit_s"] = 5.0
-    g = solve(problem, "greedy", **{k: v for k, v in fallback_opts.items() if k != "local_search"})
+    fallback_opts = {k: options[k] for k in ("threads", "seed") if k in options}  # the common options only
+    g = solve(problem, "greedy", time_limit_s=5.0, **fallback_opts)
     b = bound["bound"]
     if b is not None and b > g.objective:  # cannot happen for a valid bound; never report one above the cost
         b = None
@@ -217,11 +216,26 @@ def check_solver_name(name: str, key: str) -> None:
                          f"{', '.join(sorted(SOLVERS))}")
 
 
+def check_solver_options(name: str, options: dict, triangulation_deg: tuple[float, float] = (20.0, 160.0)) -> None:
+    """InputError(option=key) for a solver option that solver ``name`` does not take, before
+    any heavy stage (callbacks pass; 'greedy-triangulated' also gets the angle range)."""
+    from camplace.solvers import build_options
+    from camplace.solvers.contract import HOOK_FIELDS
+
+    opts = {k: v for k, v in options.items() if k not in HOOK_FIELDS}
+    if name == "greedy-triangulated":
+        opts.update(min_deg=triangulation_deg[0], max_deg=triangulation_deg[1])
+    build_options(name, **opts)
+
+
 def problem_from_visibility(vis: Visibility, budget: int, money_budget: float | None = None) -> PlacementProblem:
+    """The placement problem of a visibility result, with candidate and target positions
+    (m) for the solvers that need geometry (tag needs_positions)."""
     t = vis.targets
     return PlacementProblem(vis.V, t.gamma, t.weights, int(budget), vis.candidates.location_ids,
                             np.array([vis.candidates.cameras[c].cost for c in vis.candidates.camera_ids]),
-                            money_budget)
+                            money_budget, candidate_positions=np.asarray(vis.candidates.positions, np.float64),
+                            target_positions=np.asarray(t.positions, np.float64))
 
 
 def improve_placement(sc: Scene, vis: Visibility, problem: PlacementProblem, placement: Placement, *,
@@ -244,17 +258,13 @@ def improve_placement(sc: Scene, vis: Visibility, problem: PlacementProblem, pla
                          "nominal cost)", option="robust")
     if adaptive < 0:
         raise InputError(f"adaptive: expected a non-negative number of rounds, got {adaptive}", option="adaptive")
-    if robust:
-        from camplace.solvers.robust import robust_placement
+    if robust:  # the registered solver 'robust' from the nominal placement (stop hook, time limit)
+        from camplace.solvers.robust_solver import describe_robust
 
-        rr = robust_placement(problem, placement, time_limit_s=time_limit_s or 60.0, should_stop=should_stop)
-        placement = rr.placement
-        log.append(f"robust: nominal {rr.nominal['cost']:.6g} -> {rr.robust['cost']:.6g}, worst single failure "
-                   f"{rr.nominal['worst_case_cost']:.6g} -> {rr.robust['worst_case_cost']:.6g}"
-                   + ("" if rr.bound is None else f" (lower bound {rr.bound:.6g}, {rr.info['bound_method']})")
-                   + f" by {rr.info['method']}; coverage gap {rr.nominal['coverage_gap']:.4f} -> "
-                   f"{rr.robust['coverage_gap']:.4f}, worst-case gap {rr.nominal['worst_case_gap']:.4f} -> "
-                   f"{rr.robust['worst_case_gap']:.4f}")
+        placement = solve_stoppable(problem, "robust", log=log, nominal=placement, time_limit_s=time_limit_s or 60.0,
+                                    should_stop=should_stop)
+        if "robust" in placement.info:
+            log.append(describe_robust(placement.info["robust"]))
     if adaptive:
         from camplace.improve.adaptive import adaptive_rounds
 
@@ -295,6 +305,8 @@ def run(scene: str | Path | SceneSpec, budget: int | None = None, solver: str | 
         check_solver_name(spec.placement.solver, f"{source}: placement.solver")
     else:
         check_solver_name(solver, "solver")
+    check_solver_options("greedy-triangulated" if well_triangulated else solver or spec.placement.solver,
+                         solver_options, triangulation_deg)
     if budget is not None and (isinstance(budget, bool) or int(budget) != budget or budget < 0):
         raise InputError(f"budget: expected a non-negative integer, got {budget!r}")
     if time_limit_s is not None and not (time_limit_s > 0 and np.isfinite(time_limit_s)):
@@ -315,11 +327,10 @@ def run(scene: str | Path | SceneSpec, budget: int | None = None, solver: str | 
     problem = problem_from_visibility(vis, budget, money)
     t = time.perf_counter()
     _stage(progress, "solve")
-    if well_triangulated:  # the greedy with the triangulation requirement (needs geometry: not a registry solver)
-        from camplace.metrics.triangulation import solve_greedy_triangulated
-
-        placement = solve_greedy_triangulated(problem, vis.candidates.positions, vis.targets.positions,
-                                              *triangulation_deg)
+    if well_triangulated:  # the greedy with the triangulation requirement (positions come with the problem)
+        min_deg, max_deg = triangulation_deg
+        placement = solve_stoppable(problem, "greedy-triangulated", log=log, min_deg=min_deg, max_deg=max_deg,
+                                    **solver_options)
         log.append(f"greedy-triangulated: triangulation-aware cost {placement.info['triangulated_cost']:.6g}")
     else:
         placement = solve_stoppable(problem, solver, log=log, **solver_options)
