@@ -21,6 +21,7 @@ import inspect
 import io
 import json
 import os
+import zipfile
 from pathlib import Path
 from types import ModuleType
 from typing import Any
@@ -145,7 +146,7 @@ class BlockStore:
         try:
             with np.load(self.path(k), allow_pickle=False) as z:
                 indptr = z["indptr"]
-        except (OSError, ValueError, KeyError, EOFError):
+        except (OSError, ValueError, KeyError, EOFError, zipfile.BadZipFile):
             return None
         return int(indptr[-1]) if len(indptr) == b - a + 1 else None
 
@@ -155,7 +156,7 @@ class BlockStore:
         try:
             with np.load(self.path(k), allow_pickle=False) as z:
                 indptr, indices = z["indptr"], z["indices"]
-        except (OSError, ValueError, KeyError, EOFError):
+        except (OSError, ValueError, KeyError, EOFError, zipfile.BadZipFile):
             return None
         if len(indptr) != b - a + 1 or int(indptr[-1]) != len(indices) or \
                 (len(indices) and (indices.min() < 0 or indices.max() >= self.n_cols)):

@@ -205,13 +205,22 @@ def chunked_rows(n_cols: int, bounds: list[tuple[int, int]], task: Callable, mak
     pos = 0
     for k, (s, e) in enumerate(bounds):
         blk = blocks.pop(k) if store is None else store.load(k)
-        if blk is None:  # pragma: no cover - a block vanished from the cache during the run
+        if blk is None or len(blk[1]) != nnz[k]:  # damaged or replaced in the cache since its count was read
             shared = make_shared() if shared is None else shared
             blk = task(shared, (s, e))
+            if store is not None:
+                store.save(k, *blk)
+            if k in cached:
+                cached.remove(k)
+            grow = len(blk[1]) - int(nnz[k])
+            nnz[k] = len(blk[1])
+            if grow > 0:  # rare: make room for the recomputed block
+                indices = np.concatenate([indices, np.empty(grow, np.int32)])
         bp, bi = blk
         indptr[s + 1:e + 1] = bp[1:] + pos
         indices[pos:pos + len(bi)] = bi
         pos += len(bi)
+    indices = indices[:pos]
     V = sp.csr_matrix((np.ones(len(indices), np.uint8), indices, indptr), shape=(n, n_cols))
     return V, cached
 
