@@ -144,3 +144,32 @@ def test_bad_files_raise_input_error(tmp_path):
     (tmp_path / "images.txt").write_text("")
     with pytest.raises(InputError, match="cameras.txt:1"):
         read_colmap_text(tmp_path)
+
+
+def test_exports_in_the_input_frame_see_the_world_as_before(tmp_path):
+    """Cameras moved into another frame (camplace.outputs.write.cameras_in_frame, as
+    --frame input writes them): the exports read back the moved poses, and a world point
+    lands at the same camera coordinates in either frame."""
+    from scipy.spatial.transform import Rotation
+
+    from camplace.outputs.write import cameras_in_frame
+
+    T = np.eye(4)
+    T[:3, :3] = Rotation.from_euler("zx", [25.0, -90.0], degrees=True).as_matrix()  # y up
+    T[:3, 3] = [4.0, -1.5, 12.25]
+    cams = _cameras()
+    moved = json.loads(json.dumps(cameras_in_frame(cams, T)))
+    write_exports(tmp_path, moved)
+    imgs = read_colmap_text(tmp_path / "colmap")
+    x_scene = np.array([1.5, 2.5, 1.0])
+    x_input = T[:3, :3] @ x_scene + T[:3, 3]
+    for img, cam, mv in zip(imgs, cams, moved):
+        d = read_opencv_yaml(tmp_path / f"opencv/camera_{cam['candidate_id']}.yaml")
+        assert np.allclose(mv["position"], T[:3, :3] @ cam["position"] + T[:3, 3], atol=1e-12)
+        R, t = world_to_camera(cam["rotation"], cam["position"])
+        for got in (img, d):
+            assert np.allclose(got["position"], mv["position"], atol=1e-9)
+            assert np.allclose(got["R"] @ x_input + got["t"], R @ x_scene + t, atol=1e-9)
+        assert np.allclose(rotation_from_ypr(mv["yaw_deg"], mv["pitch_deg"], mv["roll_deg"])[0], mv["rotation"],
+                           atol=1e-6)
+        assert mv["intrinsics"] == cam["intrinsics"] and mv["candidate_id"] == cam["candidate_id"]

@@ -7,7 +7,7 @@ from typing import Optional
 
 import typer
 
-from camplace.cli.common import (MAX_MEMORY_OPT, REPEATABLE_OPT, SCHEDULER_OPT, WORKERS_OPT, RichProgress,
+from camplace.cli.common import (FRAME_OPT, MAX_MEMORY_OPT, REPEATABLE_OPT, SCHEDULER_OPT, WORKERS_OPT, RichProgress,
                                  check_options, memory_bytes, progress_bars, repeatable_requested)
 from camplace.cli.summary import write_and_summarise
 
@@ -18,17 +18,22 @@ def evaluate_cmd(scene: str = typer.Argument(..., help="Scene YAML file or built
                  out: Optional[Path] = typer.Option(None, "--out", help="Output folder (default "
                                                     "camplace-out/<scene>-evaluated)."),
                  workers: int = WORKERS_OPT, scheduler: Optional[str] = SCHEDULER_OPT,
-                 max_memory_gb: Optional[float] = MAX_MEMORY_OPT, repeatable: bool = REPEATABLE_OPT) -> None:
+                 max_memory_gb: Optional[float] = MAX_MEMORY_OPT, repeatable: bool = REPEATABLE_OPT,
+                 frame: str = typer.Option("scene", "--frame", help="Frame of the placement's poses and of the "
+                                           "written ones: scene (levelled, z up) or input (the scene's scanned / "
+                                           "meshed file's own frame).")) -> None:
     """Score a given placement on a scene with the same metrics as a run.
 
     The poses are raycast afresh (they need not be grid candidates) and written as a run
     with solver 'file': placement.json, metrics.json, visibility.npz (row i = pose i),
-    placement.csv, report.html, figures and exports."""
+    placement.csv, report.html, figures and exports. With --frame input the placement's
+    poses are in the input file's frame (mapped into the scene before raycasting) and the
+    written poses are too."""
     from camplace.workflows.evaluate import evaluate
 
     check_options(None, None, max_memory_gb, out)
     repeatable = repeatable_requested(repeatable)
     with progress_bars() as prog:
         result = evaluate(scene, placement, progress=RichProgress(prog), workers=workers, scheduler=scheduler or None,
-                          max_memory_bytes=memory_bytes(max_memory_gb))
-    write_and_summarise(result, out or Path("camplace-out") / f"{result.scene.name}-evaluated", repeatable)
+                          max_memory_bytes=memory_bytes(max_memory_gb), frame=frame)
+    write_and_summarise(result, out or Path("camplace-out") / f"{result.scene.name}-evaluated", repeatable, frame)

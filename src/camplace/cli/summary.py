@@ -68,14 +68,14 @@ def _table(result, out_dir: Path, paths: dict) -> Table:
     return t
 
 
-def write_and_summarise(result, out_dir: Path, repeatable: bool = False) -> None:
-    """Write every output of ``result`` into ``out_dir`` and print the summary."""
+def write_and_summarise(result, out_dir: Path, repeatable: bool = False, frame: str = "scene") -> None:
+    """Write every output of ``result`` into ``out_dir`` (poses in ``frame``) and print the summary."""
     from camplace.outputs.write import write_outputs
 
     p = result.placement
     t0 = time.perf_counter()
     paths = write_outputs(out_dir, result.scene.name, result.visibility, p, result.problem.budget, result.metrics,
-                          result.timings_s, repeatable=repeatable, scene=result.scene)
+                          result.timings_s, repeatable=repeatable, scene=result.scene, frame=frame)
     result.timings_s["report"] = time.perf_counter() - t0
     _show_log(result, paths, out_dir)
     if state["json"]:

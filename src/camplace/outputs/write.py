@@ -13,10 +13,11 @@ from pathlib import Path
 
 import numpy as np
 
-from camplace.cameras.candidates import Candidates
-from camplace.core.errors import Interrupted
+from camplace.cameras.candidates import Candidates, ypr_from_rotation
+from camplace.core.errors import InputError, Interrupted
 from camplace.core.files import AtomicBatch, atomic_savez, atomic_write_json, atomic_write_text
 from camplace.metrics.coverage import Metrics
+from camplace.scene.frames import map_poses
 from camplace.solvers.base import Placement
 from camplace.visibility.voxel import Visibility
 
@@ -43,7 +44,36 @@ def camera_entries(candidates: Candidates, selected: np.ndarray) -> list[dict]:
     return out
 
 
-def placement_dict(scene_name: str, placement: Placement, budget: int, candidates: Candidates) -> dict:
+FRAMES = ("scene", "input")
+
+
+def check_frame(frame: str) -> None:
+    """InputError(option='frame') unless ``frame`` is 'scene' or 'input'."""
+    if frame not in FRAMES:
+        raise InputError(f"frame: expected 'scene' or 'input', got {frame!r}", option="frame")
+
+
+def cameras_in_frame(cameras: list[dict], T: np.ndarray) -> list[dict]:
+    """placement.json camera objects moved by the 4x4 ``T`` (camplace.scene.frames: e.g.
+    input_from_scene): position, rotation and yaw/pitch/roll recomputed from the moved
+    rotation (camplace.cameras.candidates.ypr_from_rotation, the same formulas in the new
+    frame). New dicts; the rest of each object is kept."""
+    if not cameras:
+        return []
+    pos, rot = map_poses(T, [c["position"] for c in cameras], [c["rotation"] for c in cameras])
+    ang = ypr_from_rotation(rot)
+    return [dict(c, position=[float(v) for v in p], rotation=[[float(v) for v in row] for row in R],
+                 yaw_deg=_round(a[0]), pitch_deg=_round(a[1]), roll_deg=_round(a[2]))
+            for c, p, R, a in zip(cameras, pos, rot, ang)]
+
+
+def placement_dict(scene_name: str, placement: Placement, budget: int, candidates: Candidates,
+                   input_from_scene: np.ndarray | None = None, frame: str = "scene") -> dict:
+    """placement.json (docs/output-contract.md). ``input_from_scene`` (4x4, default
+    identity) is written as is; with ``frame='input'`` the cameras' poses are mapped by it."""
+    check_frame(frame)
+    T = np.eye(4) if input_from_scene is None else np.asarray(input_from_scene, np.float64)
+    cameras = camera_entries(candidates, placement.selected)
     out = {
         "scene": scene_name,
         "solver": placement.solver,
@@ -55,7 +85,9 @@ def placement_dict(scene_name: str, placement: Placement, budget: int, candidate
         **{k: str(placement.info[k]) for k in ("incumbent_method", "bound_method") if k in placement.info},
         **{k: placement.info[k] for k in ("refine", "adaptive", "robust") if k in placement.info},  # issue 10
         "n_cameras": int(len(placement.selected)),
-        "cameras": camera_entries(candidates, placement.selected),
+        "frame": frame,
+        "input_from_scene": [[float(v) for v in row] for row in T],
+        "cameras": cameras_in_frame(cameras, T) if frame == "input" else cameras,
     }
     src = placement.info.get("source_ids")
     if src is not None:  # an evaluated placement (camplace.workflows.evaluate): the ids its file gave the cameras
@@ -92,12 +124,17 @@ def visibility_arrays(vis: Visibility) -> dict[str, np.ndarray]:
 
 def write_outputs(out_dir: str | Path, scene_name: str, vis: Visibility, placement: Placement, budget: int,
                   metrics: Metrics, timings: dict[str, float], scene=None, report: bool = True,
-                  repeatable: bool = False) -> dict[str, Path]:
+                  repeatable: bool = False, frame: str = "scene") -> dict[str, Path]:
     """Write the contract files into out_dir and, with ``report``, the report set
     (report.html, PNG figures, opencv/ and colmap/ exports; camplace.outputs.report_html);
     ``scene`` (camplace.scene.build.Scene) adds the room and obstacles to the pictures;
     ``repeatable`` writes every timing as 0.0 (byte-identical metrics.json for
     identical runs). Returns name -> path.
+
+    ``frame``: 'scene' (default) writes the poses of placement.json / .csv and the exports
+    in the scene frame; 'input' in the input file's frame (``scene.input_from_scene``,
+    camplace.scene.frames; identity without a scene). visibility.npz, metrics and the
+    report's pictures stay in the scene frame.
 
     The contract files (visibility.npz, placement.json, placement.csv, metrics.json) land
     first, together (camplace.core.files.AtomicBatch: all new or all old); the report comes
@@ -108,7 +145,8 @@ def write_outputs(out_dir: str | Path, scene_name: str, vis: Visibility, placeme
     t0 = time.perf_counter()
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
-    pdict = placement_dict(scene_name, placement, budget, vis.candidates)
+    T = getattr(scene, "input_from_scene", None)
+    pdict = placement_dict(scene_name, placement, budget, vis.candidates, T, frame)
     timings = dict(timings)
     # shown in report.html (no "report"); repeatable: 0.0 as in metrics.json, so the page is byte-identical
     report_timings = {k: 0.0 if repeatable else round(float(v), 4) for k, v in timings.items()}
@@ -123,7 +161,13 @@ def write_outputs(out_dir: str | Path, scene_name: str, vis: Visibility, placeme
     if not report:
         return paths
     try:
-        paths.update(_write_report_set(out, vis, placement, pdict, metrics, report_timings, scene, repeatable))
+        # the report's pictures and mount table are drawn in the scene frame; exports follow ``frame``
+        shown = pdict if frame == "scene" else placement_dict(scene_name, placement, budget, vis.candidates, T)
+        paths.update(_write_report_set(out, vis, placement, shown, metrics, report_timings, scene, repeatable))
+        if frame != "scene" and "colmap/images.txt" in paths:
+            from camplace.outputs.exports import write_exports
+
+            paths.update(write_exports(out, pdict["cameras"]))
     except BaseException as err:
         if "report.html" not in paths:  # an earlier run's page would contradict the new contract files
             _unlink_quietly(out / "report.html")

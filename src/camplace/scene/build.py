@@ -72,6 +72,8 @@ class Scene:
     free_space: "FreeSpace | None" = None  # walkable free space from scans / OctoMaps (issue 5)
     points: np.ndarray | None = None  # (N, 3) cleaned scan points (scene frame), for surface targets
     viewpoints: np.ndarray | None = None  # (K, 3) scanner positions (scene frame)
+    # (4, 4) p_input = T @ [p_scene, 1]: back to the input file's frame (camplace.scene.frames)
+    input_from_scene: np.ndarray = field(default_factory=lambda: np.eye(4))
 
     @property
     def polygon(self) -> Polygon:
@@ -145,8 +147,10 @@ def build_scene(spec: SceneSpec, base_dir: Path | None = None, source: str = "<s
                                                                        loaded)}
         free_space, points, viewpoints = scene_free_space(grid, spec, loaded, progress)
         info["free_space"] = free_space.info if free_space is not None else None
+    from camplace.scene.frames import input_from_scene
+
     return Scene(spec.name, spec, fp, float(spec.room.height), boxes, grid, base_dir, info,
-                 free_space, points, viewpoints)
+                 free_space, points, viewpoints, input_from_scene(spec, info.get("obstacle_files")))
 
 
 def rasterize_box(grid: OccupancyGrid, bmin: np.ndarray, bmax: np.ndarray) -> None:

@@ -235,12 +235,28 @@ def candidates_from_poses(poses: Poses, cameras: dict[str, CameraModel]) -> Cand
                       {"generated": len(poses), "dropped_inside_obstacle": 0, "source": poses.source})
 
 
+def poses_in_frame(poses: Poses, T: np.ndarray) -> Poses:
+    """``poses`` moved by the 4x4 T (camplace.scene.frames.map_poses), angles recomputed
+    from the moved rotations."""
+    from dataclasses import replace
+
+    from camplace.scene.frames import map_poses
+
+    pos, rot = map_poses(T, poses.positions, poses.rotations)
+    return replace(poses, positions=pos, rotations=rot, angles_deg=ypr_from_rotation(rot))
+
+
 def evaluate(scene: str | Path | SceneSpec, placement: str | Path | Poses, progress=None, *,
-             max_memory_bytes: int | None = None, workers: int = 1, scheduler: str | None = None):
+             max_memory_bytes: int | None = None, workers: int = 1, scheduler: str | None = None,
+             frame: str = "scene"):
     """Score a placement file (or Poses) on a scene -> camplace.workflows.run.RunResult.
 
     Every pose is raycast afresh (no cache) and selected; the Placement has solver
-    'file', status 'feasible', budget = number of poses, bound None."""
+    'file', status 'feasible', budget = number of poses, bound None. ``frame``: the
+    poses' frame, 'scene' (default) or 'input' (the scene's input file: they are mapped
+    into the scene frame by the inverse of Scene.input_from_scene, camplace.scene.frames)."""
+    from camplace.outputs.write import check_frame
+    from camplace.scene.frames import invert
     from camplace.visibility.executors import make_executor
     from camplace.workflows.run import RunResult, placement_metrics, problem_from_visibility, scene_inputs
     from camplace.solvers.base import Placement
@@ -248,8 +264,11 @@ def evaluate(scene: str | Path | SceneSpec, placement: str | Path | Poses, progr
     from camplace.visibility.voxel import VoxelEngine
 
     timings: dict[str, float] = {}
+    check_frame(frame)
     poses = placement if isinstance(placement, Poses) else read_placement(placement)
     sc, targets, cameras, _ = scene_inputs(scene, progress, timings, max_memory_bytes)
+    if frame == "input":
+        poses = poses_in_frame(poses, invert(sc.input_from_scene))
     t = time.perf_counter()
     if progress:
         progress("candidates", 0, 1)

@@ -132,7 +132,7 @@ def clean_cloud(cloud: PointCloud, scale: float = 1.0, rotate_deg=(0.0, 0.0, 0.0
             raise InputError(f"{cloud.info.get('path', '<cloud>')}: level_floor: no floor plane found "
                              f"(no plane within 30° of '{up}' up); give a transform instead") from None
         p, vp = apply_matrix(p, m), apply_matrix(vp, m)
-        report.append({"step": "level_floor", **info, "points": len(p)})
+        report.append({"step": "level_floor", **info, "matrix": m.tolist(), "points": len(p)})  # scene.frames
     if crop is not None:
         keep = crop_mask(p, crop[0], crop[1])
         report.append({"step": "crop", "min": list(crop[0]), "max": list(crop[1]),
