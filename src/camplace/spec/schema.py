@@ -301,7 +301,7 @@ class Mount(_Strict):
     roll_deg: Angles = [0.0]
 
 
-class Placement(_Strict):
+class PlacementSettings(_Strict):
     budget: Annotated[int, Field(ge=0, strict=True)] = 20
     solver: str = "greedy"
     time_limit_s: PositiveFloat = 600.0
@@ -317,7 +317,7 @@ class SceneSpec(_Strict):
     targets: list[TargetRegion] = Field(min_length=1)
     cameras: list[Camera] = Field(min_length=1)
     mounts: list[Mount] = Field(min_length=1)
-    placement: Placement = Placement()
+    placement: PlacementSettings = PlacementSettings()
     free_space: FreeSpaceSpec = FreeSpaceSpec()
 
     @model_validator(mode="after")
