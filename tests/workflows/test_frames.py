@@ -242,3 +242,24 @@ def test_box_scenes_write_the_identity(tmp_path):
     _invoke(["run", "demo", "--budget", "2", "--frame", "input", "--out", tmp_path / "o", "--no-cache"])
     p = json.loads((tmp_path / "o" / "placement.json").read_text())
     assert p["frame"] == "input" and p["input_from_scene"] == np.eye(4).tolist()
+
+
+def test_level_floor_in_the_scene_file_maps_back_too(scanned):
+    """A hand-written scene with ``transform: {level_floor: true, up: +y}``: the levelling
+    found at load time (reported with its matrix) is part of input_from_scene."""
+    import yaml
+    from scipy.spatial import cKDTree
+
+    from camplace.scene.build import build_scene
+    from camplace.scene.loaders.pointcloud import load_point_cloud
+
+    data = yaml.safe_load((scanned / "room.yaml").read_text())
+    data["obstacles"][0]["transform"] = {"level_floor": True, "up": "+y"}
+    # the levelled file lies in x 8..13.5, y -2..3.5 (FILE_FROM_BOX turned back up)
+    data["room"] = {"footprint": [[6, -4], [16, -4], [16, 6], [6, 6]], "height": 3.5}
+    sc = build_scene(parse_scene(data, "<level_floor scene>"), scanned)
+    T = sc.input_from_scene
+    assert not np.allclose(T[:3, :3], np.eye(3), atol=0.1)
+    back = sc.points @ T[:3, :3].T + T[:3, 3]
+    d, _ = cKDTree(load_point_cloud(scanned / "room.ply").points).query(back[::50])
+    assert np.max(d) < 0.03  # on the file's points, to the 2 cm downsampling
