@@ -23,6 +23,7 @@ from camplace.visibility import voxel
 from conftest import box_room, same_csr
 
 FAST = {"voxel": {"chunk_size": 8}, "pixel": {"stride": 32, "chunk_size": 8, "probe": 0.5}}
+PROBED = {"voxel": {"chunk_size": 8, "probe": 1.0}}  # the engines again under the any-part rule
 
 
 @pytest.fixture(scope="module")
@@ -38,10 +39,10 @@ def small_scene():
     return sc, t, c
 
 
-@pytest.mark.parametrize("mode", sorted(ENGINES))
-def test_every_engine_conforms(mode, small_scene, tmp_path):
+@pytest.mark.parametrize("mode, params", [(m, FAST[m]) for m in sorted(ENGINES)] + sorted(PROBED.items()))
+def test_every_engine_conforms(mode, params, small_scene, tmp_path):
     sc, t, c = small_scene
-    engine = get_engine(mode, voxel_size=sc.spec.voxel_size, **FAST[mode])
+    engine = get_engine(mode, voxel_size=sc.spec.voxel_size, **params)
     checks = check_engine(engine, sc.occupancy, t, c, tmp_path)
     by_name = {k.name: k for k in checks}
     assert all(k.status in ("ok", "skipped") for k in checks)
@@ -95,9 +96,13 @@ def test_registry_parameters_and_refusals():
     with pytest.raises(InputError, match="^stride: the voxel engine takes no stride .*pixel") as err:
         get_engine("voxel", stride=2)
     assert err.value.option == "stride"
-    with pytest.raises(InputError, match="^probe: ") as err:
-        get_engine("voxel", probe=1.0)  # the any-part rule is not implemented in the voxel engine yet
+    with pytest.raises(InputError, match="^probe: expected a fraction in \\[0, 1\\], got 1.5") as err:
+        get_engine("voxel", probe=1.5)
     assert err.value.option == "probe"
+    with pytest.raises(InputError, match="^voxel_size: a probe > 0 needs") as err:
+        get_engine("voxel", probe=1.0)  # the any-part rule needs the voxel edge
+    assert err.value.option == "voxel_size"
+    assert get_engine("voxel", probe=1.0, voxel_size=0.25) == VoxelEngine(1.0, 0.25)
     with pytest.raises(InputError, match="^visibility_mode: expected one of 'voxel', 'pixel', got 'raster'") as err:
         get_engine("raster")
     assert err.value.option == "visibility_mode"
@@ -115,7 +120,8 @@ def test_registry_parameters_and_refusals():
 
 
 def test_cache_tags_name_the_parameters():
-    assert VoxelEngine().cache_tag() == "voxel:probe=0.0"
+    assert VoxelEngine().cache_tag() == VoxelEngine(voxel_size=0.25).cache_tag() == "voxel:probe=0.0"
+    assert VoxelEngine(1.0, 0.25).cache_tag() == "voxel:probe=1.0:voxel=0.25:lattice=5x3"
     assert PixelEngine(0.25, 8, 0.5).cache_tag() == "pixel:stride=8:probe=0.5:voxel=0.25:skip=True"
     assert PixelEngine(0.25, 8).cache_tag() != PixelEngine(0.25, 4).cache_tag()
 

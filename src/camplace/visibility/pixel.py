@@ -31,7 +31,6 @@ from pathlib import Path
 import numba
 import numpy as np
 
-from camplace.cameras.models import px_per_m_nb
 from camplace.cameras.candidates import Candidates
 from camplace.core.errors import InputError
 from camplace.spec.quality import target_min_px
@@ -39,8 +38,9 @@ from camplace.scene.build import OccupancyGrid
 from camplace.targets.build import Targets
 from camplace.visibility import engine as _engine
 from camplace.visibility.engine import Progress, Visibility
+from camplace.visibility.footprint import surface_cell_map  # noqa: F401 (re-exported)
 from camplace.visibility.raywalk import dda_axis, dda_step, first_hit, free_distance
-from camplace.visibility.voxel import target_cos_limits
+from camplace.visibility.voxel import density_ok, target_cos_limits
 
 DEFAULT_STRIDE = 4
 DEFAULT_PROBE = 1.0
@@ -89,21 +89,6 @@ def _ray_near_centre(px, py, pz, dx, dy, dz, cx, cy, cz, k, t_end):
     return perp2 <= (k * t) * (k * t)
 
 
-@numba.njit(cache=True, inline="always")
-def _density_ok(p, R, params, tpos, tnrm, j, min_px):
-    if min_px <= 0.0:
-        return True
-    vx, vy, vz = tpos[j, 0] - p[0], tpos[j, 1] - p[1], tpos[j, 2] - p[2]
-    nx_, ny_, nz_ = tnrm[j, 0], tnrm[j, 1], tnrm[j, 2]
-    xc = R[0, 0] * vx + R[1, 0] * vy + R[2, 0] * vz
-    yc = R[0, 1] * vx + R[1, 1] * vy + R[2, 1] * vz
-    zc = R[0, 2] * vx + R[1, 2] * vy + R[2, 2] * vz
-    nxc = R[0, 0] * nx_ + R[1, 0] * ny_ + R[2, 0] * nz_
-    nyc = R[0, 1] * nx_ + R[1, 1] * ny_ + R[2, 1] * nz_
-    nzc = R[0, 2] * nx_ + R[1, 2] * ny_ + R[2, 2] * nz_
-    return px_per_m_nb(params, xc, yc, zc, nxc, nyc, nzc) >= min_px
-
-
 @numba.njit(cache=True, parallel=True)
 def _pixel_kernel(occ, dist, origin, res, cam_pos, cam_rot, cam_ids, cam_params, rays, ray_start,
                   bgrid, bshape, b_start, b_ids, thalf, s_keys, s_ids,
@@ -145,7 +130,7 @@ def _pixel_kernel(occ, dist, origin, res, cam_pos, cam_rot, cam_ids, cam_params,
                             px, py, pz, dx, dy, dz, tpos[j, 0], tpos[j, 1], tpos[j, 2], foot, t_end + res)):
                         c = -(dx * tnrm[j, 0] + dy * tnrm[j, 1] + dz * tnrm[j, 2])
                         if c > 0.0 and c >= tcos[j]:
-                            row[j] = 1 if _density_ok(p, R, params, tpos, tnrm, j, tpx[j]) else 2
+                            row[j] = 1 if density_ok(p, R, params, tpos, tnrm, j, tpx[j]) else 2
             # volume targets: DDA through the bucket grid up to t_end
             jx = int(math.floor((px - box) / bc))
             jy = int(math.floor((py - boy) / bc))
@@ -166,7 +151,7 @@ def _pixel_kernel(occ, dist, origin, res, cam_pos, cam_rot, cam_ids, cam_params,
                     else:
                         hit = _ray_hits_cube(px, py, pz, dx, dy, dz, tpos[j, 0], tpos[j, 1], tpos[j, 2], thalf[j], t_end)
                     if hit:
-                        row[j] = 1 if _density_ok(p, R, params, tpos, tnrm, j, tpx[j]) else 2
+                        row[j] = 1 if density_ok(p, R, params, tpos, tnrm, j, tpx[j]) else 2
                 jx, jy, jz, tmx, tmy, tmz, _, t = dda_step(jx, jy, jz, tmx, tmy, tmz, sx, sy, sz, tdx, tdy, tdz)
                 if t > t_end or jx < 0 or jy < 0 or jz < 0 or jx >= bnx or jy >= bny or jz >= bnz:
                     break
@@ -213,61 +198,6 @@ def volume_buckets(occupancy: OccupancyGrid, targets: Targets, probe: float, vox
     cells_a, ids_a = cells_a[order], ids_a[order]
     b_start = np.searchsorted(cells_a, np.arange(int(np.prod(shape)) + 1)).astype(np.int64)
     return np.r_[org, v], shape, b_start, ids_a.astype(np.int32), thalf
-
-
-def surface_cell_map(occupancy: OccupancyGrid, targets: Targets, probe: float, voxel_size: float):
-    """Map face cells to surface targets: (keys (K,) int64 sorted, ids (K,) int32).
-
-    key = linear occupancy cell index * 6 + face code (2 * axis + (0 for +, 1 for -)). A
-    face cell is an occupied cell whose outward neighbour is free; it belongs to the
-    nearest patch centre on the same face plane, and counts when its centre lies within
-    max(probe * voxel_size / 2, resolution / 2) of that centre on both in-plane axes."""
-    res = float(occupancy.resolution)
-    occ = occupancy.occupied
-    shape = np.array(occupancy.shape)
-    surf = np.nonzero(targets.is_surface)[0]
-    if len(surf) == 0:
-        return np.zeros(0, np.int64), np.zeros(0, np.int32)
-    v = float(voxel_size)
-    core = max(0.5 * probe * v, 0.5 * res) + 1e-9
-    m = int(math.ceil(v / res)) + 2
-    offs = np.arange(-m // 2 - 1, m // 2 + 2)
-    keys_all, ids_all, dist_all = [], [], []
-    for j0 in range(0, len(surf), 4096):
-        js = surf[j0:j0 + 4096]
-        c = targets.positions[js]
-        n = targets.normals[js]
-        axis = np.argmax(np.abs(n), axis=1)
-        sign = np.sign(n[np.arange(len(js)), axis]).astype(np.int64)
-        inside = c - n * 0.5 * res
-        base = np.floor((inside - occupancy.origin) / res).astype(np.int64)
-        for du in offs:
-            for dw in offs:
-                cell = base.copy()
-                uax = (axis + 1) % 3
-                wax = (axis + 2) % 3
-                cell[np.arange(len(js)), uax] += du
-                cell[np.arange(len(js)), wax] += dw
-                nb = cell.copy()
-                nb[np.arange(len(js)), axis] += sign
-                ok = np.all((cell >= 0) & (cell < shape), axis=1) & np.all((nb >= 0) & (nb < shape), axis=1)
-                ok[ok] &= occ[cell[ok, 0], cell[ok, 1], cell[ok, 2]] & ~occ[nb[ok, 0], nb[ok, 1], nb[ok, 2]]
-                centre = occupancy.origin + (cell + 0.5) * res
-                d = np.maximum(np.abs(centre[np.arange(len(js)), uax] - c[np.arange(len(js)), uax]),
-                               np.abs(centre[np.arange(len(js)), wax] - c[np.arange(len(js)), wax]))
-                ok &= d <= 0.5 * v + res
-                lin = (cell[:, 0] * shape[1] + cell[:, 1]) * shape[2] + cell[:, 2]
-                face = 2 * axis + (sign < 0)
-                keys_all.append((lin * 6 + face)[ok])
-                ids_all.append(js[ok])
-                dist_all.append(d[ok])
-    keys, ids, dist = np.concatenate(keys_all), np.concatenate(ids_all), np.concatenate(dist_all)
-    order = np.lexsort((ids, dist, keys))  # by key, then nearest patch first
-    keys, ids, dist = keys[order], ids[order], dist[order]
-    first = np.r_[True, keys[1:] != keys[:-1]]
-    keys, ids, dist = keys[first], ids[first], dist[first]
-    keep = dist <= core
-    return keys[keep].astype(np.int64), ids[keep].astype(np.int32)
 
 
 def camera_rays(candidates: Candidates, stride: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
