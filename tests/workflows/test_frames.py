@@ -242,6 +242,7 @@ def test_box_scenes_write_the_identity(tmp_path):
     _invoke(["run", "demo", "--budget", "2", "--frame", "input", "--out", tmp_path / "o", "--no-cache"])
     p = json.loads((tmp_path / "o" / "placement.json").read_text())
     assert p["frame"] == "input" and p["input_from_scene"] == np.eye(4).tolist()
+    _contract_holds(tmp_path / "o")
 
 
 def test_level_floor_in_the_scene_file_maps_back_too(scanned):
