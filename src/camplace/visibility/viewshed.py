@@ -119,11 +119,14 @@ def contour_polygons(xs: np.ndarray, ys: np.ndarray, z: np.ndarray, lower: float
 
 
 def viewshed(occupancy: OccupancyGrid, camera: CameraModel, position: np.ndarray, rotation: np.ndarray,
-             height: float = WORKING_HEIGHT, step: float = STEP) -> Viewshed:
+             height: float = WORKING_HEIGHT, step: float = STEP, clip=None) -> Viewshed:
     """The viewshed of one camera pose (position (3,) m, world-from-camera rotation (3, 3))
-    at ``height`` m, with its DORI bands (DORI_LEVELS)."""
+    at ``height`` m, with its DORI bands (DORI_LEVELS). ``clip`` (a shapely geometry, e.g.
+    the free floor at that height) trims the half sample the contour may reach past a wall."""
     xs, ys, seen, dens = sample_grid(occupancy, camera, position, rotation, height, step)
     poly = contour_polygons(xs, ys, seen, 0.5)
+    if clip is not None and not poly.is_empty:
+        poly = poly.intersection(clip)
     bands = {}
     for name, level in DORI_LEVELS:
         band = contour_polygons(xs, ys, dens, level) if dens.max() >= level and not poly.is_empty else Polygon()
@@ -132,11 +135,11 @@ def viewshed(occupancy: OccupancyGrid, camera: CameraModel, position: np.ndarray
 
 
 def viewsheds(occupancy: OccupancyGrid, candidates, selected: np.ndarray, height: float = WORKING_HEIGHT,
-              step: float = STEP) -> list[Viewshed]:
+              step: float = STEP, clip=None) -> list[Viewshed]:
     """One Viewshed per selected candidate row (camplace.cameras.candidates.Candidates), in
     the order given."""
     c = candidates
-    return [viewshed(occupancy, c.cameras[int(c.camera_ids[i])], c.positions[i], c.rotations[i], height, step)
+    return [viewshed(occupancy, c.cameras[int(c.camera_ids[i])], c.positions[i], c.rotations[i], height, step, clip)
             for i in np.asarray(selected, np.int64)]
 
 

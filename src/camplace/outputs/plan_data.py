@@ -1,0 +1,119 @@
+"""What the hand-over plan set draws, gathered once: cameras, viewsheds, schedule rows.
+
+``PlanData`` holds the scene, the placement.json dict (scene frame), metrics, each
+selected camera's viewshed at the working height (camplace.visibility.viewshed), its
+DORI distances, price and the regions it serves, so plan.pdf / plan.svg / plan.dxf /
+scene.glb and report.html's plan view all show the same numbers. Cameras are marked
+C1..Cn in candidate-id order (the order of placement.json).
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+import shapely
+
+from camplace.core.errors import InputError
+from camplace.visibility.viewshed import DORI_LEVELS, STEP, WORKING_HEIGHT, Viewshed, dori_distances, viewsheds
+
+PAPERS_MM: dict[str, tuple[float, float]] = {"A4": (297.0, 210.0), "A3": (420.0, 297.0), "letter": (279.4, 215.9)}
+DORI_COLOURS = {"detect": "#fef0d9", "observe": "#fdcc8a", "recognise": "#fc8d59", "identify": "#d7301f"}
+SCHEDULE_HEAD = ("mark", "id", "x (m)", "y (m)", "height (m)", "yaw (\u00b0)", "pitch (\u00b0)", "roll (\u00b0)",
+                 "type", "lens", "price", "DORI I/R/O/D (m)", "serves", "status")
+
+
+def check_paper(paper: str) -> str:
+    """The paper name as PAPERS_MM spells it (case-insensitive), else InputError(option='paper')."""
+    for name in PAPERS_MM:
+        if str(paper).lower() == name.lower():
+            return name
+    raise InputError(f"paper: expected one of {', '.join(PAPERS_MM)}, got {paper!r}", option="paper")
+
+
+@dataclass(frozen=True)
+class PlanData:
+    """Inputs of every hand-over file. cameras: placement.json camera objects (scene
+    frame); marks: 'C1'..; shed: one Viewshed per camera; dori: level -> m per camera;
+    price: per camera; served: region -> targets seen, per camera; coverage: (N_p,)
+    achieved coverage; dated: the date line of the title block (None: repeatable)."""
+
+    scene: object  # camplace.scene.build.Scene
+    placement: dict
+    metrics: dict
+    cameras: list[dict]
+    marks: list[str]
+    shed: list[Viewshed]
+    dori: list[dict[str, float]]
+    price: list[float]
+    served: list[dict[str, int]]
+    targets: object  # camplace.targets.build.Targets
+    coverage: np.ndarray
+    height: float = WORKING_HEIGHT
+    paper: str = "A3"
+    dated: str | None = None
+    views: list[dict] = field(default_factory=list)  # report_html.camera_views cards (may be fewer than cameras)
+
+    @property
+    def title_pairs(self) -> list[tuple[str, str]]:
+        """The title block: (label, value) lines."""
+        p, m = self.placement, self.metrics
+        bound = p.get("bound")
+        out = [("scene", str(p.get("scene", self.scene.name))), ("solver", f"{p.get('solver')} ({p.get('status')})"),
+               ("cameras", f"{len(self.cameras)} (budget {p.get('budget')})"),
+               ("cost", f"{float(m.get('cost', p.get('objective', 0.0))):.6g}"),
+               ("coverage gap", f"{float(m.get('coverage_gap', 0.0)):.4f}"),
+               ("bound", "\u2013" if bound is None else f"{float(bound):.6g}"),
+               ("working height", f"{self.height:.2f} m")]
+        if self.dated:
+            out.append(("date", self.dated))
+        return out
+
+    def schedule_rows(self) -> list[tuple[str, ...]]:
+        """One row of SCHEDULE_HEAD per camera (strings)."""
+        rows = []
+        for c, mark, d, price, served in zip(self.cameras, self.marks, self.dori, self.price, self.served):
+            x, y, z = c["position"]
+            k = c.get("intrinsics", {})
+            lens = f"{k.get('model', '')} {k.get('width', '')}x{k.get('height', '')} f {float(k.get('fx', 0)):.0f}"
+            dori = "/".join(f"{d[n]:.1f}" for n, _ in reversed(DORI_LEVELS))
+            serves = ", ".join(f"{r} ({n})" for r, n in served.items()) or "\u2013"
+            rows.append((mark, str(c.get("source_id", c["candidate_id"])), f"{x:.2f}", f"{y:.2f}", f"{z:.2f}",
+                         f"{c['yaw_deg']:.1f}", f"{c['pitch_deg']:.1f}", f"{c['roll_deg']:.1f}", str(c["camera"]),
+                         lens, f"{price:g}", dori, serves, "existing" if c.get("existing") else "new"))
+        return rows
+
+
+def free_floor(scene, height: float):
+    """The footprint less the box obstacles that cross ``height`` m (a shapely geometry)."""
+    from shapely.geometry import box
+
+    occluding = {o.name for o in scene.spec.obstacles if o.occludes}
+    cut = [box(b0[0], b0[1], b1[0], b1[1]) for name, (b0, b1) in scene.boxes.items()
+           if name in occluding and b0[2] <= height <= b1[2]]
+    return scene.polygon.difference(shapely.union_all(cut)) if cut else scene.polygon
+
+
+def plan_data(scene, vis, placement: dict, metrics: dict, selected: np.ndarray, *, height: float = WORKING_HEIGHT,
+              paper: str = "A3", repeatable: bool = False, views: list[dict] | None = None,
+              step: float = STEP) -> PlanData:
+    """PlanData of a placement: ``vis`` (camplace.visibility.engine.Visibility) and
+    ``selected`` (rows of vis.V, the cameras of placement['cameras'] in the same order)."""
+    if not (np.isfinite(height) and 0.0 <= height <= scene.height):
+        raise InputError(f"working height: expected 0..{scene.height:g} m (the room's height), got {height!r}",
+                         option="height")
+    sel = np.sort(np.asarray(selected, np.int64))
+    c, t, V = vis.candidates, vis.targets, vis.V
+    cams = [c.cameras[int(c.camera_ids[i])] for i in sel]
+    per_type = {cam.name: dori_distances(cam) for cam in cams}
+    served = []
+    for i in sel:
+        seen = V.indices[V.indptr[i]:V.indptr[i + 1]]
+        n = np.bincount(t.region_ids[seen], minlength=len(t.region_names))
+        served.append({str(t.region_names[r]): int(n[r]) for r in np.nonzero(n)[0]})
+    cov = np.bincount(V[sel].indices, minlength=V.shape[1]).astype(np.int64) if len(sel) else np.zeros(V.shape[1], int)
+    return PlanData(scene, placement, metrics, list(placement.get("cameras", [])), [f"C{k + 1}" for k in range(len(sel))],
+                    viewsheds(scene.occupancy, c, sel, height, step, free_floor(scene, height)), [per_type[cam.name] for cam in cams],
+                    [float(cam.cost) for cam in cams], served, t, cov, float(height), check_paper(paper),
+                    None if repeatable else time.strftime("%Y-%m-%d %H:%M"), list(views or []))

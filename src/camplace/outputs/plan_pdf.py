@@ -1,0 +1,383 @@
+"""plan.pdf and plan.svg: the printed plan set (matplotlib, vector; no pyplot, no global state).
+
+Pages: 1 the floor plan at a stated scale (1:N, chosen from the usual architectural scales
+so the room fits the paper) with scale bar and north arrow (north = +y of the scene
+frame): walls, labelled obstacles, each camera as a numbered symbol pointing along its
+yaw with its viewshed at the working height, filled by DORI band; 2 the coverage map
+(achieved coverage class per target height in the paper's Fig. 2 colours, and the share
+of targets meeting Γ) with the per-region table; 3 the camera schedule (more pages when
+it is long); 4 the camera views (camplace.outputs.report_html.camera_views cards). Every
+page carries the title block (PlanData.title_pairs). plan.svg is page 1 as SVG, with one
+``<g id="camera-C1">`` group per camera symbol.
+"""
+
+from __future__ import annotations
+
+import base64
+import io
+import math
+from pathlib import Path
+
+import numpy as np
+
+from camplace.core.files import atomic_write_bytes
+from camplace.outputs.figures import COVERAGE_CLASSES, SceneView, coverage_slices
+from camplace.outputs.plan_data import DORI_COLOURS, PAPERS_MM, SCHEDULE_HEAD, PlanData
+from camplace.visibility.viewshed import DORI_LEVELS
+
+MM = 1.0 / 25.4  # inches per millimetre
+REGION_HEAD = ("region", "targets", "\u0393", "gap", "non-tri %", "unseen")
+SCALES = (20, 25, 50, 75, 100, 125, 150, 200, 250, 300, 400, 500, 750, 1000, 1250, 1500, 2000, 2500, 5000, 10000,
+          20000, 50000, 100000)
+SIDE_MM = 100.0  # right-hand column of page 1: title block and legend
+MARGIN_MM = 12.0
+OUTLINE = "#1f4fd1"  # viewshed outlines and new cameras
+RC = {"pdf.fonttype": 3, "svg.fonttype": "none", "font.size": 7.0, "hatch.linewidth": 0.4}  # text stays text
+
+
+def page_size_mm(paper: str) -> tuple[float, float]:
+    """(width, height) mm of the landscape page."""
+    return PAPERS_MM[paper]
+
+
+def plan_scale(extent_m: tuple[float, float], area_mm: tuple[float, float]) -> int:
+    """The smallest of SCALES (1:N) at which extent_m (m) fits area_mm (mm)."""
+    need = max(extent_m[0] * 1000.0 / area_mm[0], extent_m[1] * 1000.0 / area_mm[1])
+    return next((s for s in SCALES if s >= need), int(math.ceil(need)))
+
+
+def geom_path(geom):
+    """A matplotlib Path of a shapely (Multi)Polygon, holes kept (exteriors counter-clockwise)."""
+    from matplotlib.path import Path as MPath
+    from shapely.geometry.polygon import orient
+
+    paths = []
+    for poly in getattr(geom, "geoms", [geom]):
+        if poly.is_empty or poly.geom_type != "Polygon":
+            continue
+        poly = orient(poly, 1.0)
+        for ring in [poly.exterior, *poly.interiors]:
+            paths.append(MPath(np.asarray(ring.coords), closed=True))
+    return MPath.make_compound_path(*paths) if paths else None
+
+
+def _figure(paper: str):
+    from matplotlib.figure import Figure
+
+    w, h = page_size_mm(paper)
+    return Figure(figsize=(w * MM, h * MM))
+
+
+def _title_block(fig, data: PlanData, page: str) -> None:
+    w, h = page_size_mm(data.paper)
+    bw, bh = SIDE_MM - 6.0, 6.0 + 4.2 * (len(data.title_pairs) + 2)
+    ax = fig.add_axes(((w - MARGIN_MM - bw) / w, MARGIN_MM / h, bw / w, bh / h))
+    ax.set_xticks([])
+    ax.set_yticks([])
+    ax.set_xlim(0, bw)
+    ax.set_ylim(0, bh)
+    ax.text(3, bh - 4, "camplace \u2013 camera plan", fontsize=9, weight="bold", va="top")
+    for k, (lab, val) in enumerate(data.title_pairs):
+        y = bh - 10 - 4.2 * k
+        ax.text(3, y, lab, fontsize=6.5, color="#555555", va="top")
+        ax.text(30, y, val, fontsize=6.5, va="top")
+    ax.text(3, 2.5, page, fontsize=6.5, weight="bold", va="bottom")
+
+
+def _plan_axes(fig, data: PlanData):
+    """Axes placed so that 1 m of the scene is 1000 / N mm on paper; returns (ax, N, extent)."""
+    fp = np.asarray(data.scene.footprint, float)
+    pad = 0.4
+    lo, hi = fp.min(0) - pad, fp.max(0) + pad
+    ext = hi - lo
+    w, h = page_size_mm(data.paper)
+    area = (w - 2 * MARGIN_MM - SIDE_MM, h - 2 * MARGIN_MM - 14.0)
+    n = plan_scale((float(ext[0]), float(ext[1])), area)
+    aw, ah = ext[0] * 1000.0 / n, ext[1] * 1000.0 / n
+    bottom = MARGIN_MM + 14.0 + (area[1] - ah) / 2
+    ax = fig.add_axes((MARGIN_MM / w, bottom / h, aw / w, ah / h))
+    ax.set_xlim(lo[0], hi[0])
+    ax.set_ylim(lo[1], hi[1])
+    ax.set_axis_off()
+    return ax, n, (lo, hi)
+
+
+def _scale_bar(ax, n: int, lo: np.ndarray) -> None:
+    from matplotlib.patches import Rectangle
+
+    full = (ax.get_xlim()[1] - ax.get_xlim()[0])
+    length = next((s for s in (10.0, 5.0, 2.0, 1.0, 0.5) if s * 4 <= full * 0.6), 0.5)
+    y = lo[1] - 0.0
+    bar_h = 1.5 * n / 1000.0  # 1.5 mm on paper
+    for k in range(4):
+        ax.add_patch(Rectangle((lo[0] + k * length, y - 3 * bar_h), length, bar_h, facecolor="black" if k % 2 == 0
+                               else "white", edgecolor="black", linewidth=0.5, clip_on=False))
+        ax.text(lo[0] + k * length, y - 3.5 * bar_h, f"{k * length:g}", fontsize=5.5, ha="center", va="top",
+                clip_on=False)
+    ax.text(lo[0] + 4 * length, y - 3.5 * bar_h, f"{4 * length:g} m", fontsize=5.5, ha="center", va="top",
+            clip_on=False)
+    ax.text(lo[0] + 4 * length + 0.6 * length, y - 2.5 * bar_h, f"scale 1:{n} (on {ax.figure._camplace_paper})",
+            fontsize=6.5, va="center", clip_on=False)
+
+
+def _north_arrow(fig, data: PlanData) -> None:
+    w, h = page_size_mm(data.paper)
+    x, y = (w - MARGIN_MM - 12.0) / w, (h - MARGIN_MM - 22.0) / h
+    fig.patches.append(_arrow_patch(fig, x, y, 16.0 / h))
+    fig.text(x, y + 18.0 / h, "N", ha="center", va="bottom", fontsize=10, weight="bold")
+    fig.text(x, y - 2.0 / h, "+y", ha="center", va="top", fontsize=5.5, color="#555555")
+
+
+def _arrow_patch(fig, x: float, y: float, length: float):
+    from matplotlib.patches import FancyArrow
+
+    return FancyArrow(x, y, 0, length, width=0.004, head_width=0.018, head_length=length * 0.35,
+                      transform=fig.transFigure, color="black", length_includes_head=True)
+
+
+def _draw_room(ax, data: PlanData, n: int) -> None:
+    from matplotlib.patches import Polygon as MPolygon, Rectangle
+
+    fp = np.asarray(data.scene.footprint, float)
+    ax.add_patch(MPolygon(fp, closed=True, facecolor="#fbfbf8", edgecolor="none", zorder=0))
+    ax.add_patch(MPolygon(fp, closed=True, fill=False, edgecolor="black", linewidth=2.2, zorder=5, joinstyle="miter"))
+    for name, (bmin, bmax) in data.scene.boxes.items():
+        ax.add_patch(Rectangle((bmin[0], bmin[1]), bmax[0] - bmin[0], bmax[1] - bmin[1], facecolor="#c8c8c8",
+                               edgecolor="#444444", linewidth=0.6, hatch="///", zorder=4))
+        vertical = (bmax[1] - bmin[1]) > 1.5 * (bmax[0] - bmin[0])
+        ax.text((bmin[0] + bmax[0]) / 2, (bmin[1] + bmax[1]) / 2, f"{name}\n{bmax[2]:.2f} m", fontsize=5,
+                ha="center", va="center", rotation=90 if vertical else 0, zorder=6,
+                bbox={"facecolor": "white", "edgecolor": "none", "alpha": 0.75, "pad": 0.6})
+
+
+def dori_union(data: PlanData) -> list[tuple[str, object]]:
+    """(level, geometry) of the plan's fill, coarsest first: 'seen' = the union of every
+    viewshed, then each DORI level = the union of the cameras' bands of that level (where
+    at least one camera reaches it)."""
+    import shapely
+
+    out = [("seen", shapely.union_all([v.polygon for v in data.shed]))]
+    for name, _ in DORI_LEVELS:
+        out.append((name, shapely.union_all([v.bands[name] for v in data.shed if name in v.bands])))
+    return out
+
+
+def _draw_viewsheds(ax, data: PlanData) -> None:
+    """The best DORI level reached at each point (filled), and each camera's viewshed outline."""
+    from matplotlib.collections import PatchCollection
+    from matplotlib.patches import PathPatch
+
+    fills = {"seen": "#e3e3e3", **DORI_COLOURS}
+    patches, colours = [], []
+    for name, geom in dori_union(data):
+        path = geom_path(geom)
+        if path is not None:
+            patches.append(PathPatch(path))
+            colours.append(fills[name])
+    ax.add_collection(PatchCollection(patches, facecolors=colours, edgecolors="none", alpha=0.75, zorder=1),
+                      autolim=False)
+    outlines = [PathPatch(p) for p in (geom_path(v.polygon) for v in data.shed) if p is not None]
+    ax.add_collection(PatchCollection(outlines, facecolors="none", edgecolors=OUTLINE, linewidths=0.4, alpha=0.7,
+                                      zorder=2), autolim=False)
+
+
+def _draw_cameras(ax, data: PlanData, n: int) -> None:
+    from matplotlib.patches import Circle, Polygon as MPolygon
+
+    r = 2.2 * n / 1000.0  # symbol radius: 2.2 mm on paper
+    for c, mark in zip(data.cameras, data.marks):
+        x, y = c["position"][:2]
+        a = math.radians(c["yaw_deg"])
+        d, s = np.array([math.cos(a), math.sin(a)]), np.array([-math.sin(a), math.cos(a)])
+        tip = np.array([x, y]) + 2.4 * r * d
+        wedge = np.array([np.array([x, y]) + 0.6 * r * s, tip, np.array([x, y]) - 0.6 * r * s])
+        colour = "#7b3294" if c.get("existing") else "#1f4fd1"
+        for art in (MPolygon(wedge, closed=True, facecolor=colour, edgecolor="white", linewidth=0.3, zorder=7),
+                    Circle((x, y), r, facecolor="white", edgecolor=colour, linewidth=0.9, zorder=8)):
+            art.set_gid(f"camera-{mark}")
+            ax.add_patch(art)
+        t = ax.text(x, y, mark[1:], fontsize=5, ha="center", va="center", weight="bold", color=colour, zorder=9)
+        t.set_gid(f"camera-{mark}")
+        ax.text(x - 1.4 * r * d[0], y - 1.4 * r * d[1], mark, fontsize=5.5, ha="center", va="center", zorder=9,
+                color="black")
+
+
+def _legend(fig, data: PlanData) -> None:
+    from matplotlib.patches import Patch
+
+    w, h = page_size_mm(data.paper)
+    handles = [Patch(facecolor="#e3e3e3", label="seen, below detect"),
+               *[Patch(facecolor=DORI_COLOURS[nm], alpha=0.75, label=f"{nm} \u2265 {v:g} px/m") for nm, v in DORI_LEVELS],
+               Patch(facecolor="none", edgecolor=OUTLINE, label="one camera's viewshed (outline)"),
+               Patch(facecolor="#c8c8c8", hatch="///", edgecolor="#444444", label="obstacle (top height)"),
+               Patch(facecolor="white", edgecolor="#1f4fd1", label="new camera (mark, facing yaw)")]
+    fig.legend(handles=handles, loc="upper left", bbox_to_anchor=((w - MARGIN_MM - SIDE_MM + 6) / w,
+                                                                  (h - MARGIN_MM - 40.0) / h),
+               fontsize=6.5, frameon=False, title=f"viewsheds at {data.height:.2f} m: best DORI level\nof any camera (EN/IEC 62676-4)",
+               title_fontsize=7)
+
+
+def plan_figure(data: PlanData):
+    """Page 1: the floor plan (a matplotlib Figure of the paper's size)."""
+    fig = _figure(data.paper)
+    fig._camplace_paper = data.paper
+    ax, n, (lo, hi) = _plan_axes(fig, data)
+    _draw_room(ax, data, n)
+    _draw_viewsheds(ax, data)
+    _draw_cameras(ax, data, n)
+    _scale_bar(ax, n, lo)
+    _north_arrow(fig, data)
+    _legend(fig, data)
+    fig.text(MARGIN_MM / page_size_mm(data.paper)[0], 1 - 8.0 / page_size_mm(data.paper)[1],
+             f"{data.placement.get('scene', data.scene.name)}: floor plan, {len(data.cameras)} cameras",
+             fontsize=11, weight="bold", va="top")
+    _title_block(fig, data, "sheet 1: floor plan")
+    return fig
+
+
+def coverage_figure(data: PlanData):
+    """Page 2: coverage class per target height (Fig. 2 colours) and the per-region table."""
+    from matplotlib.colors import BoundaryNorm, ListedColormap
+    from matplotlib.patches import Patch, Polygon as MPolygon
+
+    fig = _figure(data.paper)
+    w, h = page_size_mm(data.paper)
+    t = data.targets
+    view = SceneView.from_scene(data.scene)
+    slices = coverage_slices(view, t.positions, t.is_surface, data.coverage)
+    vol = ~np.asarray(t.is_surface, bool)
+    cmap = ListedColormap([c for _, c in COVERAGE_CLASSES]).with_extremes(bad=(0, 0, 0, 0))
+    ncol = max(1, math.ceil(math.sqrt(len(slices) or 1)))
+    nrow = max(1, math.ceil(len(slices) / ncol))
+    left, right, top, bottom = MARGIN_MM / w, (w - MARGIN_MM - SIDE_MM) / w, 1 - 16.0 / h, (MARGIN_MM + 6) / h
+    gs = fig.add_gridspec(nrow, ncol, left=left, right=right, top=top, bottom=bottom, wspace=0.12, hspace=0.25)
+    fp = np.asarray(data.scene.footprint, float)
+    v = view.voxel_size
+    for k, sl in enumerate(slices):
+        ax = fig.add_subplot(gs[k // ncol, k % ncol])
+        cls = np.where(np.isnan(sl.coverage), np.nan, np.minimum(sl.coverage, 3))
+        ax.imshow(np.ma.masked_invalid(cls), origin="lower", cmap=cmap, norm=BoundaryNorm([-0.5, 0.5, 1.5, 2.5, 3.5], 4),
+                  interpolation="nearest", extent=(sl.x[0] - v / 2, sl.x[-1] + v / 2, sl.y[0] - v / 2, sl.y[-1] + v / 2))
+        ax.add_patch(MPolygon(fp, closed=True, fill=False, edgecolor="black", linewidth=0.8))
+        at = vol & (np.abs(t.positions[:, 2] - sl.height) < 1e-6)
+        met = float(np.mean(data.coverage[at] >= t.gamma[at]) * 100) if at.any() else 0.0
+        ax.set_title(f"z = {sl.height:.2f} m: {met:.1f} % of targets reach \u0393", fontsize=7)
+        ax.set_aspect("equal")
+        ax.tick_params(labelsize=5)
+    fig.legend(handles=[Patch(color=c, label=lab) for lab, c in COVERAGE_CLASSES], title="cameras seeing",
+               loc="upper left", bbox_to_anchor=((w - MARGIN_MM - SIDE_MM + 6) / w, 1 - 16.0 / h), fontsize=7,
+               frameon=False)
+    rows = region_rows(data)
+    if rows:
+        tall = (len(rows) + 1) * 6.0 * 1.6 * 25.4 / 72.0 / h
+        tax = fig.add_axes(((w - MARGIN_MM - SIDE_MM + 4) / w, 0.62 - tall, (SIDE_MM - 6) / w, tall))
+        tax.set_axis_off()
+        _column_table(tax, REGION_HEAD, rows, (6, 3, 2, 3, 3, 3), 6.0)
+    fig.text(left, 1 - 8.0 / h, f"{data.placement.get('scene', data.scene.name)}: coverage against \u0393 per target "
+             f"height", fontsize=11, weight="bold", va="top")
+    _title_block(fig, data, "sheet 2: coverage")
+    return fig
+
+
+def region_rows(data: PlanData) -> list[tuple[str, ...]]:
+    """(region, targets, Γ, coverage gap, non-triangulatable %, not seen) per region of metrics.json."""
+    t, out = data.targets, []
+    for r, name in enumerate(t.region_names):
+        m = (data.metrics.get("regions") or {}).get(str(name), {})
+        g = int(t.gamma[t.region_ids == r].max()) if np.any(t.region_ids == r) else 0
+        out.append((str(name), str(m.get("targets", "")), str(g), f"{float(m.get('coverage_gap', 0.0)):.4f}",
+                    f"{float(m.get('non_triangulatable_pct', 0.0)):.1f}",
+                    str((m.get("coverage_histogram") or {}).get("0", 0))))
+    return out
+
+
+def _column_table(ax, head: tuple[str, ...], rows: list[tuple[str, ...]], widths: tuple[float, ...],
+                  fontsize: float) -> None:
+    """A table drawn as one text per column (rows joined by newlines; fast in every backend) with
+    rules between rows; ax spans the table, (0, 0) bottom left to (1, 1) top right."""
+    n = len(rows) + 1
+    x = np.r_[0.0, np.cumsum(widths)] / float(sum(widths))
+    for k, name in enumerate(head):
+        col = "\n".join([name, *[r[k] for r in rows]])
+        ax.text(x[k] + 0.003, 1.0, col, fontsize=fontsize, va="top", ha="left", linespacing=1.6,
+                family="DejaVu Sans", transform=ax.transAxes)
+    ax.hlines(1.0 - np.arange(n + 1) / n, 0, 1, colors="#bbbbbb", linewidth=0.3, transform=ax.transAxes)
+
+
+def schedule_figures(data: PlanData) -> list:
+    """Page(s) 3: the camera schedule, as many rows a page as the paper holds."""
+    rows = data.schedule_rows()
+    w, h = page_size_mm(data.paper)
+    fs = 6.0 if data.paper == "A3" else 4.6
+    row_mm = fs * 1.6 * 25.4 / 72.0  # one text line at linespacing 1.6
+    per_page = max(5, int((h - 2 * MARGIN_MM - 60.0) / row_mm) - 1)
+    figs = []
+    chunks = [rows[a:a + per_page] for a in range(0, len(rows), per_page)] or [[]]
+    for p, chunk in enumerate(chunks):
+        fig = _figure(data.paper)
+        top = 1 - 18.0 / h
+        tall = (len(chunk) + 1) * row_mm / h
+        ax = fig.add_axes((MARGIN_MM / w, top - tall, 1 - 2 * MARGIN_MM / w, tall))
+        ax.set_axis_off()
+        _column_table(ax, SCHEDULE_HEAD, chunk, (3, 3, 3.5, 3.5, 4.5, 3.5, 3.5, 3.5, 5, 11, 3, 8, 20, 4), fs)
+        more = f" ({p + 1}/{len(chunks)})" if len(chunks) > 1 else ""
+        fig.text(MARGIN_MM / w, 1 - 8.0 / h, f"camera schedule{more}: DORI distances along the optical axis "
+                 f"(identify / recognise / observe / detect)", fontsize=11, weight="bold", va="top")
+        _title_block(fig, data, f"sheet 3: camera schedule{more}")
+        figs.append(fig)
+    return figs
+
+
+def views_figure(data: PlanData):
+    """Page 4: a grid of the camera views (as report.html renders them)."""
+    from PIL import Image
+
+    fig = _figure(data.paper)
+    w, h = page_size_mm(data.paper)
+    views = data.views
+    fig.text(MARGIN_MM / w, 1 - 8.0 / h, "camera views: what each camera sees, dots = the targets it covers "
+             "(coloured by coverage class)", fontsize=11, weight="bold", va="top")
+    if views:
+        ncol = max(1, math.ceil(math.sqrt(len(views) * 1.6)))
+        nrow = math.ceil(len(views) / ncol)
+        gs = fig.add_gridspec(nrow, ncol, left=MARGIN_MM / w, right=1 - MARGIN_MM / w, top=1 - 18.0 / h,
+                              bottom=(MARGIN_MM + 50.0) / h, wspace=0.05, hspace=0.25)
+        marks = {int(c["candidate_id"]): m for c, m in zip(data.cameras, data.marks)}
+        for k, v in enumerate(views):
+            ax = fig.add_subplot(gs[k // ncol, k % ncol])
+            img = Image.open(io.BytesIO(base64.b64decode(v["uri"].split(",", 1)[1])))
+            ax.imshow(np.asarray(img), interpolation="bilinear")
+            ax.set_axis_off()
+            ax.set_title(f"{marks.get(int(v['id']), '')} (id {v['id']})", fontsize=6, pad=2)
+    missing = len(data.cameras) - len(views)
+    if missing:
+        fig.text(MARGIN_MM / w, (MARGIN_MM + 44.0) / h, f"{missing} views not rendered within the time budget "
+                 "(camplace render draws any camera).", fontsize=7)
+    _title_block(fig, data, "sheet 4: camera views")
+    return fig
+
+
+def write_plan_pdf(path: str | Path, data: PlanData) -> Path:
+    """Write plan.pdf (every page above); repeatable runs (data.dated None) carry no creation date."""
+    from matplotlib import rc_context
+    from matplotlib.backends.backend_pdf import PdfPages
+
+    buf = io.BytesIO()
+    meta = {"Title": f"camplace plan: {data.placement.get('scene', data.scene.name)}", "Creator": "camplace"}
+    if data.dated is None:
+        meta["CreationDate"] = None
+    with rc_context(RC):
+        with PdfPages(buf, metadata=meta) as pdf:
+            for fig in [plan_figure(data), coverage_figure(data), *schedule_figures(data), views_figure(data)]:
+                pdf.savefig(fig)
+    return atomic_write_bytes(Path(path), buf.getvalue())
+
+
+def plan_svg(data: PlanData) -> str:
+    """Page 1 as an SVG document (text kept as text; no date in repeatable runs)."""
+    from matplotlib import rc_context
+
+    buf = io.StringIO()
+    with rc_context(RC):
+        plan_figure(data).savefig(buf, format="svg", metadata={"Date": None} if data.dated is None else None)
+    return buf.getvalue()
