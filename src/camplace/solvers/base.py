@@ -49,9 +49,33 @@ def stopped(should_stop: ShouldStop | None) -> bool:
     return bool(should_stop is not None and should_stop())
 
 
-def deadline(time_limit_s: float | None) -> float:
-    """perf_counter() value at which the time limit runs out (inf when None)."""
-    return float("inf") if time_limit_s is None else time.perf_counter() + max(0.0, float(time_limit_s))
+def deadline(time_limit_s: float | None, start: float | None = None) -> float:
+    """perf_counter() value at which the time limit runs out, counted from ``start``
+    (a perf_counter() value; default now); inf when time_limit_s is None."""
+    t0 = time.perf_counter() if start is None else float(start)
+    return float("inf") if time_limit_s is None else t0 + max(0.0, float(time_limit_s))
+
+
+def time_left(end: float) -> float | None:
+    """Seconds (>= 0) until the perf_counter() deadline ``end``; None when there is none (inf)."""
+    if not np.isfinite(end):
+        return None
+    return max(0.0, end - time.perf_counter())
+
+
+def out_of_time(end: float, need_s: float = 0.0) -> bool:
+    """True when fewer than ``need_s`` seconds are left before the deadline ``end``."""
+    left = time_left(end)
+    return left is not None and left < need_s
+
+
+def limit_left(end: float, time_limit_s: float | None = None) -> float | None:
+    """The time limit to hand a phase: the smaller of ``time_limit_s`` and the time left
+    before ``end`` (None when neither is set)."""
+    left = time_left(end)
+    if left is None:
+        return time_limit_s
+    return left if time_limit_s is None else min(float(time_limit_s), left)
 
 
 def trivial_placement(problem, name: str, t0: float) -> Placement | None:

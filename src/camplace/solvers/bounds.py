@@ -355,14 +355,22 @@ def build_highs(problem: PlacementProblem, *, integer: bool, threads: int | None
 
 
 def lp_bound(problem: PlacementProblem, *, time_limit_s: float | None = None, threads: int | None = 1,
-             method: str = "ipm") -> BoundResult:
+             method: str = "ipm", end: float = float("inf")) -> BoundResult:
     """The LP relaxation of the convex model by HiGHS (interior point + crossover by
     default). The bound is the dual objective when HiGHS reports optimality, so it is
-    valid; on a time limit the result is -inf (no bound)."""
+    valid; on a time limit, or no time to start before the deadline ``end``, the bound is 0."""
     import highspy
 
+    from camplace.solvers.highs_util import convex_model_nnz, limit_to_deadline, model_fits, subscribe_stop
+
     t0 = time.perf_counter()
-    h, n_x = build_highs(problem, integer=False, threads=threads, time_limit_s=time_limit_s, solver=method)
+    end = min(end, t0 + time_limit_s) if time_limit_s is not None else end
+    h = None
+    if model_fits(end, convex_model_nnz(problem)):
+        h, n_x = build_highs(problem, integer=False, threads=threads, time_limit_s=None, solver=method)
+    if h is None or not limit_to_deadline(h, end):
+        return BoundResult(0.0, "lp", time.perf_counter() - t0, None, {"status": "skipped: no time left"})
+    subscribe_stop(h, None, end)
     h.run()
     status = h.getModelStatus()
     if status == highspy.HighsModelStatus.kOptimal:
@@ -406,20 +414,24 @@ def reduce_by_fixing(problem: PlacementProblem, lam: np.ndarray, ub: float, lagr
 
 def solve_reduced_mip(problem: PlacementProblem, red: Reduction, incumbent: np.ndarray | None, *,
                       time_limit_s: float, threads: int | None = 1, seed: int = 0,
-                      should_stop: StopFn | None = None,
-                      mip_rel_gap: float = 0.0) -> tuple[float, np.ndarray | None, dict]:
+                      should_stop: StopFn | None = None, mip_rel_gap: float = 0.0,
+                      end: float = float("inf")) -> tuple[float, np.ndarray | None, dict]:
     """HiGHS branch-and-cut on the convex model restricted to the reduction.
     Returns (bound, better selection or None, info); HiGHS stops at `mip_rel_gap`
     (0: proven optimal). The bound min(ub, reduced MIP dual bound) is valid for the whole
     problem because every selection cheaper than ub lies in the reduced problem
     (docs/certify.md §3). The restricted model is shrunk once more by
-    camplace.problem.model.reduce_problem (same optimum), and HiGHS prunes with ub as cutoff."""
+    camplace.problem.model.reduce_problem (same optimum), and HiGHS prunes with ub as cutoff.
+    ``end``: perf_counter() deadline of the whole solve (with t0 + time_limit_s, whichever is
+    first); the model is not built, or HiGHS not started, when it cannot end before it."""
     import highspy
 
     from camplace.problem.model import reduce_problem
-    from camplace.solvers.highs_util import set_start, subscribe_stop
+    from camplace.solvers.highs_util import (convex_model_nnz, limit_to_deadline, model_fits, set_start,
+                                            subscribe_stop)
 
     t0 = time.perf_counter()
+    end = min(end, t0 + time_limit_s)
     keep_ids = np.flatnonzero(red.keep)
     info: dict = {"candidates_kept": int(len(keep_ids)), "locations_forced": int(len(red.forced))}
     if len(red.forced) > problem.budget:
@@ -445,13 +457,15 @@ def solve_reduced_mip(problem: PlacementProblem, red: Reduction, incumbent: np.n
     forced = red.forced[np.isin(red.forced, small.location_ids)]
     small = PlacementProblem(small.V, small.gamma, small.weights, problem.budget - len(blind), small.location_ids)
     info.update(targets_kept=int(small.n_targets), candidates_after_reduction=int(small.n_candidates))
+    if not model_fits(end, convex_model_nnz(small)):
+        info["status"] = "skipped: no time left to build the reduced model"
+        return red.lagrangian, None, info
     h, n_x = build_highs(small, integer=True, threads=threads, time_limit_s=None, seed=seed,
                          forced_locations=forced)
-    left = time_limit_s - (time.perf_counter() - t0)  # building counts against the limit
-    if left <= 0.05:
+    # building counts against the limit
+    if end - time.perf_counter() <= 0.05 or not limit_to_deadline(h, end):
         info["status"] = "no time left after building"
         return red.lagrangian, None, info
-    h.setOptionValue("time_limit", float(left))
     h.setOptionValue("mip_rel_gap", float(mip_rel_gap))
     h.setOptionValue("mip_abs_gap", 0.5 * float(np.min(problem.weights[problem.weights > 0], initial=1.0)) * 1e-3)
     # prune everything not cheaper than ub (a tiny slack keeps an incumbent of cost ub)
@@ -466,7 +480,7 @@ def solve_reduced_mip(problem: PlacementProblem, red: Reduction, incumbent: np.n
             set_start(h, convex_start(small, x))
             # with a near-optimal start the proof is the work: spend nothing on heuristics
             h.setOptionValue("mip_heuristic_effort", 0.0)
-    subscribe_stop(h, should_stop)
+    subscribe_stop(h, should_stop, end)
     h.run()
     status = h.getModelStatus()
     hinfo = h.getInfo()

@@ -179,7 +179,7 @@ def solve_certify(problem: PlacementProblem, *, time_limit_s: float | None = Non
         if want_lp and not stop_now() and board.gap() > 0:
             remaining = end - time.perf_counter()
             # under 5 minutes the LP is the best bound in reach: give it most of the time
-            lpr = lp_bound(problem, time_limit_s=(0.5 if T >= 300 else 0.75) * remaining, threads=1)
+            lpr = lp_bound(problem, time_limit_s=(0.5 if T >= 300 else 0.75) * remaining, threads=1, end=end)
             lp_info = {"status": lpr.info.get("status"), "seconds": round(lpr.seconds, 2)}
             if lpr.info.get("status") == "optimal":
                 board.offer_bound(lpr.bound, "lp")
@@ -241,7 +241,7 @@ def solve_certify(problem: PlacementProblem, *, time_limit_s: float | None = Non
             small = red.keep.sum() <= 0.25 * problem.n_candidates or kept_nnz <= 100_000
             if remaining > 2 and (small or remaining >= 120) and not stop_now():
                 bnd, sel, info = solve_reduced_mip(problem, red, inc, time_limit_s=remaining - 1.0,
-                                                   threads=1, seed=seed, should_stop=stop_now)
+                                                   threads=1, seed=seed, should_stop=stop_now, end=end)
                 red_info.update(info)
                 if sel is not None:
                     board.offer_incumbent(sel, "reduced-mip")

@@ -13,9 +13,17 @@ import highspy
 import numpy as np
 import scipy.sparse as sp
 
-from camplace.solvers.base import OnIncumbent, ShouldStop, stopped
+from camplace.solvers.base import OnIncumbent, ShouldStop, out_of_time, stopped, time_left
 
 INF = highspy.kHighsInf
+
+# Measured on store-a (3.1 M nonzeros, 2 shared cores): building the arrays 0.6-2.3 s,
+# passModel 0.5 s, HiGHS presolve / MIP set-up before its first callback 1-2.5 s, reading
+# the solution back 0.2-0.4 s. HiGHS checks its time limit only after presolve, so a model
+# whose set-up cannot end before the deadline is not started at all.
+BUILD_S_PER_NNZ = 0.4e-6  # seconds per nonzero to build the arrays and pass them to HiGHS
+SETUP_S_PER_NNZ = 0.6e-6  # seconds per nonzero HiGHS spends before it polls its time limit
+FINISH_S_PER_NNZ = 0.1e-6  # seconds per nonzero to stop and read the solution back
 
 
 @dataclass
@@ -69,6 +77,51 @@ def new_highs() -> highspy.Highs:
     return h
 
 
+def build_seconds(nnz: int) -> float:
+    """Estimated seconds to build and pass a model with ``nnz`` nonzeros."""
+    return BUILD_S_PER_NNZ * float(nnz)
+
+
+def setup_seconds(nnz: int) -> float:
+    """Estimated seconds HiGHS needs (presolve, set-up, read-back) before a model with
+    ``nnz`` nonzeros can return anything."""
+    return (SETUP_S_PER_NNZ + FINISH_S_PER_NNZ) * float(nnz)
+
+
+def model_fits(end: float, nnz: int) -> bool:
+    """True when building a model of ``nnz`` nonzeros and starting HiGHS on it can end
+    before the perf_counter() deadline ``end`` (always True without a deadline)."""
+    return not out_of_time(end, build_seconds(nnz) + setup_seconds(nnz))
+
+
+def convex_model_nnz(problem) -> int:
+    """Nonzeros of the tight convex model of a PlacementProblem, known before building it:
+    V, the u columns (Σ Γ_j), the budget and location rows (2 per candidate)."""
+    return int(problem.V.nnz + int(np.sum(problem.gamma)) + 2 * problem.n_candidates)
+
+
+def deadline_room(h: highspy.Highs, end: float) -> float | None:
+    """Seconds HiGHS ``h`` may run before the perf_counter() deadline ``end``, less the
+    read-back of its solution; None without a deadline; 0.0 when the time left is less
+    than HiGHS needs to start on the model (setup_seconds)."""
+    left = time_left(end)
+    if left is None:
+        return None
+    nnz = int(h.getNumNz())
+    if left < setup_seconds(nnz):
+        return 0.0
+    return max(0.01, left - FINISH_S_PER_NNZ * nnz)
+
+
+def limit_to_deadline(h: highspy.Highs, end: float) -> bool:
+    """Set HiGHS' time_limit to the room before ``end`` (deadline_room); False when there
+    is too little room to start."""
+    room = deadline_room(h, end)
+    if room is not None and room > 0:
+        h.setOptionValue("time_limit", room)
+    return room is None or room > 0
+
+
 def highs_from_arrays(m: MilpArrays, *, integer: bool = True) -> highspy.Highs:
     """A silent highspy.Highs holding the model (integer=False: its LP relaxation)."""
     h = new_highs()
@@ -85,6 +138,14 @@ def highs_from_arrays(m: MilpArrays, *, integer: bool = True) -> highspy.Highs:
     if status == highspy.HighsStatus.kError:
         raise RuntimeError("HiGHS rejected the model")
     return h
+
+
+def target_rows(V: sp.spmatrix, targets: np.ndarray) -> sp.csr_matrix:
+    """(len(targets), N_g) float64 csr: V[:, targets].T, without the (slow) column indexing
+    when ``targets`` are all the columns in order."""
+    if len(targets) == V.shape[1] and np.array_equal(targets, np.arange(V.shape[1])):
+        return sp.csr_matrix(V.T, dtype=np.float64)
+    return sp.csr_matrix(V[:, targets].T, dtype=np.float64)
 
 
 def location_rows(location_ids: np.ndarray) -> sp.csr_matrix:
@@ -111,17 +172,27 @@ class HighsOutcome:
     model_status: str
 
 
-def subscribe_stop(h: highspy.Highs, should_stop: ShouldStop | None) -> dict:
-    """Poll should_stop from HiGHS' MIP, simplex and IPM interrupt callbacks. Returns a
-    dict whose "stop" turns True once HiGHS was interrupted."""
-    flag = {"stop": False}
+def skipped_outcome(reason: str) -> HighsOutcome:
+    """The outcome of a HiGHS run not started because the deadline would not allow it."""
+    return HighsOutcome("time_limit", None, None, None, None, 0.0, 0, f"skipped: {reason}")
+
+
+def subscribe_stop(h: highspy.Highs, should_stop: ShouldStop | None, end: float = float("inf")) -> dict:
+    """Poll should_stop and the perf_counter() deadline ``end`` from HiGHS' MIP, simplex
+    and IPM interrupt callbacks. Returns a dict whose "stop" (should_stop) or "deadline"
+    turns True once HiGHS was interrupted for that reason."""
+    flag = {"stop": False, "deadline": False}
+    timed = bool(np.isfinite(end))
 
     def interrupt(e) -> None:
         if stopped(should_stop):
             flag["stop"] = True
             e.interrupt()
+        elif timed and time.perf_counter() >= end:
+            flag["deadline"] = True
+            e.interrupt()
 
-    if should_stop is not None:
+    if should_stop is not None or timed:
         h.cbMipInterrupt.subscribe(interrupt)
         h.cbSimplexInterrupt.subscribe(interrupt)
         h.cbIpmInterrupt.subscribe(interrupt)
@@ -139,9 +210,17 @@ def set_start(h: highspy.Highs, values: np.ndarray) -> None:
 def run_highs(h: highspy.Highs, *, time_limit_s: float | None = None, threads: int | None = None, seed: int = 0,
               should_stop: ShouldStop | None = None, on_incumbent: OnIncumbent | None = None,
               start: np.ndarray | None = None, mip_rel_gap: float | None = None,
-              verbose: bool = False, options: dict | None = None) -> HighsOutcome:
+              verbose: bool = False, options: dict | None = None, end: float = float("inf")) -> HighsOutcome:
     """Solve with HiGHS; should_stop is polled from the MIP / simplex / IPM interrupt
-    callbacks; on_incumbent(objective, dual bound) fires on every improving solution."""
+    callbacks; on_incumbent(objective, dual bound) fires on every improving solution.
+    ``end``: perf_counter() deadline; HiGHS gets only the time left before it (less the
+    read-back), is interrupted at it, and is not started when its set-up alone would pass
+    it (status 'time_limit', no values)."""
+    room = deadline_room(h, end)
+    if room == 0.0:
+        return skipped_outcome(f"HiGHS needs about {setup_seconds(h.getNumNz()):.2f} s to start")
+    if room is not None:
+        time_limit_s = room if time_limit_s is None else min(float(time_limit_s), room)
     if time_limit_s is not None:
         h.setOptionValue("time_limit", float(max(time_limit_s, 0.01)))
     if threads is not None:
@@ -153,7 +232,7 @@ def run_highs(h: highspy.Highs, *, time_limit_s: float | None = None, threads: i
         h.setOptionValue(key, value)
     if verbose:
         h.setOptionValue("output_flag", True)
-    flag = subscribe_stop(h, should_stop)
+    flag = subscribe_stop(h, should_stop, end)
     if on_incumbent is not None:
         def improving(e) -> None:
             out = e.data_out
@@ -175,6 +254,8 @@ def run_highs(h: highspy.Highs, *, time_limit_s: float | None = None, threads: i
     if ms in (MS.kOptimal, MS.kModelEmpty):
         status = "optimal"
     elif ms == MS.kTimeLimit:
+        status = "time_limit"
+    elif flag["deadline"] and not flag["stop"]:
         status = "time_limit"
     elif ms in (MS.kInterrupt, MS.kHighsInterrupt) or flag["stop"]:
         status = "interrupted"

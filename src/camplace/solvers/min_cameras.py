@@ -26,8 +26,8 @@ from dataclasses import replace
 import numpy as np
 
 from camplace.problem.model import PlacementProblem
-from camplace.solvers.base import OnIncumbent, Placement, ProgressFn, ShouldStop, stopped
-from camplace.solvers.highs_util import INF, highs_from_arrays, run_highs
+from camplace.solvers.base import OnIncumbent, Placement, ProgressFn, ShouldStop, deadline, limit_left, stopped
+from camplace.solvers.highs_util import INF, convex_model_nnz, highs_from_arrays, model_fits, run_highs, skipped_outcome
 from camplace.solvers.mip import tight_model_arrays, tight_start
 import scipy.sparse as sp
 
@@ -36,17 +36,21 @@ def location_degree(problem: PlacementProblem) -> np.ndarray:
     """(N_p,) int64: number of distinct locations with a candidate seeing each target."""
     V = sp.coo_matrix(problem.V)
     _, loc = np.unique(problem.location_ids, return_inverse=True)
-    pairs = np.unique(np.stack([V.col, loc[V.row]], axis=1), axis=0) if V.nnz else np.zeros((0, 2), np.int64)
-    return np.bincount(pairs[:, 0], minlength=problem.n_targets).astype(np.int64)
+    n_loc = int(loc.max()) + 1 if len(loc) else 1
+    pairs = np.unique(V.col.astype(np.int64) * n_loc + loc[V.row])  # distinct (target, location)
+    return np.bincount(pairs // n_loc, minlength=problem.n_targets).astype(np.int64)
 
 
-def _greedy_start(problem: PlacementProblem, target: float) -> np.ndarray | None:
-    """Shortest prefix of the greedy order (no budget) whose cost is <= target, or None."""
+def _greedy_order(problem: PlacementProblem, end: float = float("inf")) -> list[int]:
+    """The greedy order of candidates with no camera budget (one per location)."""
     from camplace.solvers.greedy import solve_greedy
 
     n_loc = len(np.unique(problem.location_ids))
-    g = solve_greedy(replace(problem, budget=n_loc))
-    order = g.info["order"]
+    return solve_greedy(replace(problem, budget=n_loc), time_limit_s=limit_left(end)).info["order"]
+
+
+def _greedy_start(problem: PlacementProblem, target: float, order: list[int]) -> np.ndarray | None:
+    """Shortest prefix of the greedy order (no budget, ``order``) whose cost is <= target, or None."""
     V = problem.V
     cov = np.zeros(problem.n_targets, np.int64)
     short = np.maximum(problem.gamma - cov, 0).astype(np.float64)
@@ -62,10 +66,13 @@ def _greedy_start(problem: PlacementProblem, target: float) -> np.ndarray | None
     return None
 
 
-def _fewest(problem: PlacementProblem, target: float, prices: np.ndarray, end: float | None, *, threads, seed,
-            should_stop, verbose, integral) -> tuple[np.ndarray | None, np.ndarray | None, object]:
-    """Least-price selection with cost <= target: (selection or None, greedy start, HiGHS outcome)."""
-    start = _greedy_start(problem, target)
+def _fewest(problem: PlacementProblem, target: float, prices: np.ndarray, end: float, order: list[int], *,
+            threads, seed, should_stop, verbose, integral) -> tuple[np.ndarray | None, np.ndarray | None, object]:
+    """Least-price selection with cost <= target: (selection or None, greedy start, HiGHS outcome);
+    HiGHS is skipped (outcome 'time_limit') when its model cannot be built and started before ``end``."""
+    start = _greedy_start(problem, target, order)
+    if not model_fits(end, convex_model_nnz(problem)):
+        return start, start, skipped_outcome("no time left to build the model")
     arrays, layout = tight_model_arrays(problem)
     n_t = len(layout.cover_targets)
     n_x = layout.n_x
@@ -83,8 +90,7 @@ def _fewest(problem: PlacementProblem, target: float, prices: np.ndarray, end: f
     start_cols = None if start is None else tight_start(problem, layout, start)
     if start_cols is not None and target <= 1e-9:
         start_cols[n_x:] = 0.0
-    left = None if end is None else max(0.01, end - time.perf_counter())
-    out = run_highs(h, time_limit_s=left, threads=threads, seed=seed, should_stop=should_stop,
+    out = run_highs(h, threads=threads, seed=seed, should_stop=should_stop, end=end,
                     start=start_cols, verbose=verbose, options={"mip_abs_gap": 0.999} if integral else None)
     sel = start
     if out.values is not None:
@@ -116,26 +122,34 @@ def solve_min_cameras(problem: PlacementProblem, *, time_limit_s: float | None =
     # Reachability: a cheap certificate of unreachability first, else HiGHS says so.
     deg = location_degree(problem)
     floor = float(np.dot(problem.weights, np.maximum(problem.gamma - deg, 0).astype(float) ** 2))
-    end = None if time_limit_s is None else t0 + time_limit_s
+    end = deadline(time_limit_s, t0)
     integral = bool(np.all(np.abs(prices - np.round(prices)) < 1e-9))
     kw = dict(threads=threads, seed=seed, should_stop=should_stop, verbose=verbose, integral=integral)
     sel = start = out = None
+    order = _greedy_order(problem, end)
     if floor <= target + 1e-9:
-        sel, start, out = _fewest(problem, target, prices, end, **kw)
+        sel, start, out = _fewest(problem, target, prices, end, order, **kw)
     if sel is None and (out is None or out.status == "infeasible"):
         from camplace.solvers.mip import solve_mip
 
         n_loc = len(np.unique(problem.location_ids))
-        left = None if end is None else max(0.01, 0.5 * (end - time.perf_counter()))
+        left = limit_left(end)
+        left = None if left is None else max(0.01, 0.5 * left)
         best = solve_mip(replace(problem, budget=n_loc), time_limit_s=left, threads=threads, seed=seed,
                          should_stop=should_stop)
+        if best.status == "time_limit":  # cut short: the greedy with every location may reach further
+            every = np.sort(np.asarray(order, np.int64))
+            if problem.cost(every) < best.objective:
+                best = replace(best, selected=every, objective=problem.cost(every))
         info.update(target_unreachable=True, requested_target_cost=target, cost_floor=floor,
                     least_reachable_cost=best.objective, least_reachable_bound=best.bound)
         target = best.objective
         info["target_cost"] = target
-        sel, start, out = _fewest(problem, target, prices, end, **kw)
+        sel, start, out = _fewest(problem, target, prices, end, order, **kw)
         if sel is None:
             sel = best.selected
+    if sel is None and out is not None and out.status == "time_limit":
+        sel = np.sort(np.asarray(order, np.int64))  # the best reach greedy has, in time
     if sel is None:
         from camplace.core.errors import InputError
 

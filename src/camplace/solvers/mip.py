@@ -27,7 +27,8 @@ import scipy.sparse as sp
 
 from camplace.problem.model import PlacementProblem
 from camplace.solvers.base import OnIncumbent, Placement, ProgressFn, ShouldStop, deadline, trivial_placement
-from camplace.solvers.highs_util import INF, MilpArrays, highs_from_arrays, location_rows, run_highs
+from camplace.solvers.highs_util import (INF, MilpArrays, convex_model_nnz, highs_from_arrays, location_rows,
+                                        model_fits, run_highs, target_rows)
 
 
 @dataclass
@@ -56,7 +57,7 @@ def tight_model_arrays(problem: PlacementProblem) -> tuple[MilpArrays, TightLayo
     u_k = np.arange(int(g.sum())) - np.repeat(starts, g) + 1
     u_target = targets[u_row]
     n_u = len(u_row)
-    cover_x = sp.csr_matrix(V[:, targets].T, dtype=np.float64)  # (n_t, N_g)
+    cover_x = target_rows(V, targets)  # (n_t, N_g)
     cover_u = sp.csr_matrix((np.ones(n_u), (u_row, np.arange(n_u))), shape=(n_t, n_u))
     blocks = [[cover_x, cover_u], [sp.csr_matrix(np.ones((1, n_g))), None]]
     lower = [g.astype(np.float64), [-INF]]
@@ -81,6 +82,14 @@ def tight_model_arrays(problem: PlacementProblem) -> tuple[MilpArrays, TightLayo
                         np.concatenate([np.asarray(x, np.float64) for x in upper]), col_lower, col_upper,
                         integrality, n_g)
     return arrays, TightLayout(n_g, u_target.astype(np.int64), u_k.astype(np.int64), targets.astype(np.int64))
+
+
+def skipped_placement(problem: PlacementProblem, start: np.ndarray, name: str, t0: float, info: dict,
+                      reason: str) -> Placement:
+    """The start placement with status 'time_limit', when a phase cannot fit the time left."""
+    best = np.sort(np.asarray(start, np.int64))
+    info["skipped"] = reason
+    return Placement(best, problem.cost(best), None, "time_limit", name, time.perf_counter() - t0, info)
 
 
 def build_tight_model(problem: PlacementProblem, integer: bool = True) -> highspy.Highs:
@@ -125,12 +134,15 @@ def solve_highs_model(problem: PlacementProblem, h: highspy.Highs, start_cols: n
                       start_sel: np.ndarray, n_x: int, name: str, *, time_limit_s: float | None,
                       threads: int | None, seed: int, should_stop: ShouldStop | None,
                       on_incumbent: OnIncumbent | None, mip_rel_gap: float | None, verbose: bool,
-                      t0: float, info: dict) -> Placement:
+                      t0: float, info: dict, end: float = float("inf")) -> Placement:
     """Run HiGHS on a model whose optimum is the placement cost, keep the better of
-    its incumbent and the start, and report bound / gap / status."""
+    its incumbent and the start, and report bound / gap / status. ``end``: the solve's
+    perf_counter() deadline (HiGHS gets only the time left before it)."""
     left = None if time_limit_s is None else max(0.01, time_limit_s - (time.perf_counter() - t0))
     out = run_highs(h, time_limit_s=left, threads=threads, seed=seed, should_stop=should_stop,
-                    on_incumbent=on_incumbent, start=start_cols, mip_rel_gap=mip_rel_gap, verbose=verbose)
+                    on_incumbent=on_incumbent, start=start_cols, mip_rel_gap=mip_rel_gap, verbose=verbose, end=end)
+    if out.model_status.startswith("skipped"):
+        info["skipped"] = out.model_status
     found = None if out.values is None else selection_from_x(out.values, n_x)
     best, best_cost = better_selection(problem, start_sel, found, info, "highs_solution_rejected")
     bound = out.bound
@@ -181,6 +193,8 @@ def solve_mip(problem: PlacementProblem, *, time_limit_s: float | None = None, t
         p = _solve_fixed(problem, start, end=end, time_limit_s=time_limit_s, threads=threads, seed=seed,
                          should_stop=should_stop, on_incumbent=on_incumbent,
                          mip_rel_gap=1e-4 if mip_rel_gap is None else mip_rel_gap, info=info)
+    elif not model_fits(end, convex_model_nnz(problem)):
+        p = skipped_placement(problem, start, "mip", t0, info, "no time left to build the tight model")
     else:
         tb = time.perf_counter()
         arrays, layout = tight_model_arrays(problem)
@@ -191,7 +205,8 @@ def solve_mip(problem: PlacementProblem, *, time_limit_s: float | None = None, t
         left = None if time_limit_s is None else max(0.01, end - time.perf_counter())
         p = solve_highs_model(problem, h, start_cols, start, layout.n_x, "mip", time_limit_s=left, threads=threads,
                               seed=seed, should_stop=should_stop, on_incumbent=on_incumbent,
-                              mip_rel_gap=mip_rel_gap, verbose=verbose, t0=time.perf_counter(), info=info)
+                              mip_rel_gap=mip_rel_gap, verbose=verbose, t0=time.perf_counter(), info=info,
+                              end=end)
     if progress:
         progress("mip", 1, 1)
     return Placement(p.selected, p.objective, p.bound, p.status, "mip", time.perf_counter() - t0, p.info)
@@ -234,7 +249,7 @@ def _solve_fixed(problem: PlacementProblem, start: np.ndarray, *, end: float, ti
     if problem.V.nnz <= LP_DUALS_MAX_NNZ and not (should_stop is not None and should_stop()):
         # the exact LP's duals are Lagrange multipliers too (certify.md §1); their fixing
         # differs from the subgradient's, and intersecting two valid reductions is valid
-        lp = lp_bound(problem, time_limit_s=share(0.15, 10.0) or None, threads=threads)
+        lp = lp_bound(problem, time_limit_s=share(0.15, 10.0) or None, threads=threads, end=end)
         if lp.info.get("status") == "optimal":
             lam = np.maximum(lp.info["row_dual"][:problem.n_targets], 0.0)
             red2 = reduce_by_fixing(problem, lam, best_cost, lagr)
@@ -249,7 +264,7 @@ def _solve_fixed(problem: PlacementProblem, start: np.ndarray, *, end: float, ti
         left = 1e9 if time_limit_s is None else end - time.perf_counter()
         if left > 0.05:
             b, sel, sub = solve_reduced_mip(problem, red, best, time_limit_s=left, threads=threads, seed=seed,
-                                            should_stop=should_stop, mip_rel_gap=mip_rel_gap)
+                                            should_stop=should_stop, mip_rel_gap=mip_rel_gap, end=end)
             info["reduced_mip"] = sub
             bound = max(bound, min(b, best_cost))
             if sel is not None:

@@ -30,9 +30,26 @@ import numpy as np
 import scipy.sparse as sp
 
 from camplace.problem.model import PlacementProblem
-from camplace.solvers.base import OnIncumbent, Placement, ProgressFn, ShouldStop, stopped, trivial_placement
-from camplace.solvers.highs_util import INF, MilpArrays, highs_from_arrays, location_rows, run_highs
-from camplace.solvers.mip import better_selection, solve_highs_model
+from camplace.solvers.base import (OnIncumbent, Placement, ProgressFn, ShouldStop, deadline, limit_left, out_of_time,
+                                   stopped, trivial_placement)
+from camplace.solvers.highs_util import INF, MilpArrays, build_seconds, highs_from_arrays, location_rows, model_fits
+from camplace.solvers.mip import better_selection, skipped_placement, solve_highs_model
+
+# Measured on store-a (3.5 M nonzeros, 2 shared cores): HiGHS writes the MPS file in 4 s,
+# Python-MIP reads it in 4.3 s, CBC takes 12 s before it stops at a 1 s max_seconds.
+CBC_IO_S_PER_NNZ = 2.5e-6  # seconds per nonzero to hand the model to CBC (MPS write + read)
+CBC_SETUP_S_PER_NNZ = 3.0e-6  # seconds per nonzero CBC runs before it polls max_seconds
+
+
+def paper_model_nnz(problem: PlacementProblem) -> int:
+    """Nonzeros of the paper's model (an estimate known before building it)."""
+    pieces = int(np.sum(problem.gamma[problem.gamma > 0])) + int(np.count_nonzero(problem.gamma))
+    return int(problem.V.nnz + 6 * pieces + 2 * problem.n_candidates)
+
+
+def cbc_seconds(nnz: int) -> float:
+    """Estimated seconds to hand a model of ``nnz`` nonzeros to CBC and for CBC to stop."""
+    return (CBC_IO_S_PER_NNZ + CBC_SETUP_S_PER_NNZ) * float(nnz)
 
 
 def paper_model_arrays(problem: PlacementProblem) -> tuple[MilpArrays, np.ndarray, np.ndarray]:
@@ -157,14 +174,18 @@ def solve_paper_mip(problem: PlacementProblem, *, time_limit_s: float | None = N
     t0 = time.perf_counter()
     if (easy := trivial_placement(problem, "paper-mip", t0)) is not None:
         return easy
+    end = deadline(time_limit_s, t0)
     info: dict = {"engine": engine}
     start = np.zeros(0, np.int64)
     if warm_start:
-        g = solve_greedy(problem, should_stop=should_stop, local_search=local_search)
+        g = solve_greedy(problem, time_limit_s=limit_left(end), should_stop=should_stop, local_search=local_search)
         start = g.selected
         info["warm_start_objective"] = g.objective
     if stopped(should_stop):
         return Placement(start, problem.cost(start), None, "interrupted", "paper-mip", time.perf_counter() - t0, info)
+    nnz = paper_model_nnz(problem)
+    if not model_fits(end, nnz) or (engine == "cbc" and out_of_time(end, build_seconds(nnz) + cbc_seconds(nnz))):
+        return skipped_placement(problem, start, "paper-mip", t0, info, "no time left to build and solve the model")
     tb = time.perf_counter()
     arrays, piece_target, piece_k = paper_model_arrays(problem)
     info.update(columns=arrays.shape[1], rows=arrays.shape[0], nonzeros=int(arrays.A.nnz))
@@ -177,20 +198,23 @@ def solve_paper_mip(problem: PlacementProblem, *, time_limit_s: float | None = N
             warnings.warn(info["fallback"], RuntimeWarning, stacklevel=2)
             info["engine"] = "highs"
         else:
-            return _solve_cbc(mip, problem, h, arrays, start_cols, start, time_limit_s=time_limit_s,
+            if out_of_time(end, cbc_seconds(arrays.A.nnz)):
+                return skipped_placement(problem, start, "paper-mip", t0, info, "no time left to hand the model to CBC")
+            return _solve_cbc(mip, problem, h, arrays, start_cols, start, end=end,
                               threads=threads, seed=seed, on_incumbent=on_incumbent, mip_rel_gap=mip_rel_gap,
                               verbose=verbose, t0=t0, tb=tb, info=info)
     info["build_seconds"] = time.perf_counter() - tb
     left = None if time_limit_s is None else max(0.01, time_limit_s - (time.perf_counter() - t0))
     p = solve_highs_model(problem, h, start_cols, start, arrays.n_x, "paper-mip", time_limit_s=left,
                           threads=threads, seed=seed, should_stop=should_stop, on_incumbent=on_incumbent,
-                          mip_rel_gap=mip_rel_gap, verbose=verbose, t0=time.perf_counter(), info=info)
+                          mip_rel_gap=mip_rel_gap, verbose=verbose, t0=time.perf_counter(), info=info, end=end)
     return Placement(p.selected, p.objective, p.bound, p.status, "paper-mip", time.perf_counter() - t0, p.info)
 
 
-def _solve_cbc(mip, problem: PlacementProblem, h, arrays: MilpArrays, start_cols, start_sel, *, time_limit_s,
+def _solve_cbc(mip, problem: PlacementProblem, h, arrays: MilpArrays, start_cols, start_sel, *, end: float,
                threads, seed, on_incumbent, mip_rel_gap, verbose, t0, tb, info) -> Placement:
-    """Hand the model to CBC through an MPS file written by HiGHS (fast, exact columns)."""
+    """Hand the model to CBC through an MPS file written by HiGHS (fast, exact columns);
+    CBC's max_seconds is the time left before ``end`` less what CBC runs before polling it."""
     with tempfile.TemporaryDirectory() as tmp:
         path = os.path.join(tmp, "paper.mps")
         h.writeModel(path)
@@ -206,7 +230,8 @@ def _solve_cbc(mip, problem: PlacementProblem, h, arrays: MilpArrays, start_cols
     if start_cols is not None:
         m.start = [(cols[k], float(v)) for k, v in enumerate(start_cols) if v != 0.0]
     info["build_seconds"] = time.perf_counter() - tb
-    left = None if time_limit_s is None else max(0.5, time_limit_s - (time.perf_counter() - t0))
+    left = limit_left(end)
+    left = None if left is None else max(0.1, left - CBC_SETUP_S_PER_NNZ * arrays.A.nnz)
     ts = time.perf_counter()
     st = m.optimize(max_seconds=left if left is not None else float("inf"))
     info["cbc_seconds"] = time.perf_counter() - ts

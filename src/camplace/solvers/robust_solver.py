@@ -15,19 +15,21 @@ from dataclasses import replace
 import numpy as np
 
 from camplace.problem.model import PlacementProblem
-from camplace.solvers.base import OnIncumbent, Placement, ProgressFn, ShouldStop, stopped
+from camplace.solvers.base import OnIncumbent, Placement, ProgressFn, ShouldStop, deadline, stopped
 from camplace.solvers.greedy import solve_greedy
 from camplace.solvers.robust import robust_placement
 
 
 def nominal_placement(problem: PlacementProblem, nominal: Placement | np.ndarray | list | None, *,
-                      seed: int = 0, should_stop: ShouldStop | None = None) -> Placement:
+                      seed: int = 0, should_stop: ShouldStop | None = None,
+                      end: float = float("inf")) -> Placement:
     """The start of the robust search: ``nominal`` as given, selected ids wrapped in a
     Placement (solver 'given'), or greedy + 1-swap when None."""
     if isinstance(nominal, Placement):
         return nominal
     if nominal is None:
-        return solve_greedy(problem, seed=seed, should_stop=should_stop, local_search=True)
+        return solve_greedy(problem, seed=seed, should_stop=should_stop, local_search=True,
+                            time_limit_s=None if np.isinf(end) else 0.4 * max(0.0, end - time.perf_counter()))
     sel = np.unique(np.asarray(nominal, np.int64))
     problem.check_feasible(sel)
     return Placement(sel, problem.cost(sel), None, "heuristic", "given", 0.0, {})
@@ -42,15 +44,18 @@ def solve_robust(problem: PlacementProblem, *, time_limit_s: float | None = None
     """robust_placement(problem, nominal, ...) as a solver; time_limit_s (default 60 s) is
     for the search, the bounds have their own limits (bound_time_s, mean_bound_s,
     bound_mip_s), each capped at time_limit_s and skipped once should_stop() is true.
+    A time_limit_s given is for the whole solve (start, bounds and search within it: the
+    bounds get shares of it, robust_placement's ``end``).
     Status 'heuristic', or 'interrupted' when should_stop() turned true."""
     t0 = time.perf_counter()
     limit = 60.0 if time_limit_s is None else float(time_limit_s)
-    start = nominal_placement(problem, nominal, seed=seed, should_stop=should_stop)
+    end = deadline(time_limit_s, t0)
+    start = nominal_placement(problem, nominal, seed=seed, should_stop=should_stop, end=end)
     cap = 0.0 if stopped(should_stop) else limit
     rr = robust_placement(problem, start, time_limit_s=limit, bound_time_s=min(bound_time_s, cap), pool=pool,
                           max_stall=max_stall, method=method, exact_max_nnz=exact_max_nnz,
                           bound_mip_s=min(bound_mip_s, cap), mean_bound_s=min(mean_bound_s, cap),
-                          seed=seed, should_stop=should_stop)
+                          seed=seed, should_stop=should_stop, end=end)
     p = rr.placement
     if on_incumbent is not None:
         on_incumbent(p.objective, None)

@@ -22,8 +22,10 @@ import numpy as np
 import scipy.sparse as sp
 
 from camplace.problem.model import PlacementProblem
-from camplace.solvers.base import OnIncumbent, Placement, ProgressFn, ShouldStop, trivial_placement
-from camplace.solvers.highs_util import INF, MilpArrays, highs_from_arrays, location_rows, run_highs
+from camplace.solvers.base import OnIncumbent, Placement, ProgressFn, ShouldStop, deadline, trivial_placement
+from camplace.solvers.highs_util import (INF, MilpArrays, highs_from_arrays, location_rows, model_fits,
+                                        target_rows, run_highs,
+                                        skipped_outcome)
 
 
 def zhao_arrays(problem: PlacementProblem) -> MilpArrays:
@@ -31,7 +33,7 @@ def zhao_arrays(problem: PlacementProblem) -> MilpArrays:
     n_g = problem.n_candidates
     targets = np.nonzero(problem.gamma > 0)[0]
     n_t = len(targets)
-    cover_x = -sp.csr_matrix(problem.V[:, targets].T, dtype=np.float64)
+    cover_x = -target_rows(problem.V, targets)
     cover_y = sp.diags(problem.gamma[targets].astype(np.float64), format="csr")
     blocks = [[cover_x, cover_y], [sp.csr_matrix(np.ones((1, n_g))), sp.csr_matrix((1, n_t))]]
     upper = [np.zeros(n_t), [float(problem.budget)]]
@@ -63,16 +65,19 @@ def solve_zhao(problem: PlacementProblem, *, time_limit_s: float | None = None, 
     full = problem.coverage(start)[targets] >= problem.gamma[targets]
     x0 = np.zeros(problem.n_candidates)
     x0[start] = 1
-    arrays = zhao_arrays(problem)
-    h = highs_from_arrays(arrays)
-    left = None if time_limit_s is None else max(0.01, time_limit_s - (time.perf_counter() - t0))
-    out = run_highs(h, time_limit_s=left, threads=threads, seed=seed, should_stop=should_stop,
-                    start=np.concatenate([x0, full.astype(np.float64)]), mip_rel_gap=mip_rel_gap, verbose=verbose)
+    end = deadline(time_limit_s, t0)
+    if model_fits(end, problem.V.nnz + 2 * problem.n_candidates + len(targets)):
+        arrays = zhao_arrays(problem)
+        h = highs_from_arrays(arrays)
+        out = run_highs(h, threads=threads, seed=seed, should_stop=should_stop, end=end, mip_rel_gap=mip_rel_gap,
+                        start=np.concatenate([x0, full.astype(np.float64)]), verbose=verbose)
+    else:
+        out = skipped_outcome("no time left to build Zhao's model")
     sel = np.sort(start)
     covered0 = float(problem.weights[targets][full].sum())
     covered = covered0
     if out.values is not None:
-        cand = np.nonzero(out.values[:arrays.n_x] > 0.5)[0].astype(np.int64)
+        cand = np.nonzero(out.values[:problem.n_candidates] > 0.5)[0].astype(np.int64)
         try:
             problem.check_feasible(cand)
             cov = problem.coverage(cand)[targets] >= problem.gamma[targets]

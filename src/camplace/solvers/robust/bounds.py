@@ -9,7 +9,7 @@ import numpy as np
 
 from camplace.problem.model import PlacementProblem
 from camplace.solvers.bounds import lagrangian_bound
-from camplace.solvers.highs_util import highs_from_arrays, run_highs
+from camplace.solvers.highs_util import convex_model_nnz, highs_from_arrays, model_fits, run_highs
 from camplace.solvers.mip import tight_model_arrays
 
 
@@ -25,16 +25,17 @@ def robust_bound(problem: PlacementProblem, coverage_hint: np.ndarray | None = N
 
 
 def mean_failure_bound(problem: PlacementProblem, *, time_limit_s: float | None = 60.0,
-                       threads: int | None = None) -> float | None:
+                       threads: int | None = None, end: float = float("inf")) -> float | None:
     """Lower bound on min_S W(S) from the mean failure: for 1 <= |S| <= N_s,
     W(S) >= mean_s cost(S minus s) >= cost(S) + (1/N_s) Σ_s loss_s(S) = Σ_j w_j g_j(c_j) with
     g(c) = (Γ − c)+² + (c / N_s) ((Γ − c + 1)+² − (Γ − c)+²), a convex function of the coverage
     c (for N_s >= 2; proof in docs/beyond-the-grid.md), so min Σ_j w_j g_j(c_j) is a placement
     problem of the tight convex form with Γ_j + 1 units per target; its LP relaxation
     (HiGHS interior point + crossover) is the bound. None if the LP does not finish in
-    time or N_s < 2."""
+    time or N_s < 2, or when the LP cannot be built and started before the perf_counter()
+    deadline ``end``."""
     n = problem.budget
-    if n < 2:
+    if n < 2 or not model_fits(end, convex_model_nnz(problem) + int(np.count_nonzero(problem.gamma))):
         return None
     g = np.asarray(problem.gamma, np.int64)
     arrays, lay = tight_model_arrays(replace(problem, gamma=np.where(g > 0, g + 1, 0)))
@@ -45,7 +46,7 @@ def mean_failure_bound(problem: PlacementProblem, *, time_limit_s: float | None 
     slope = np.where(k == 1, G / n, (2 * d - 1) + (2 * c - 2 * d + 1) / n)
     arrays.c[lay.n_x:] = problem.weights[lay.u_target] * slope
     h = highs_from_arrays(arrays, integer=False)
-    out = run_highs(h, time_limit_s=time_limit_s, threads=threads, options={"solver": "ipm"})
+    out = run_highs(h, time_limit_s=time_limit_s, threads=threads, options={"solver": "ipm"}, end=end)
     if out.status != "optimal" or out.objective is None:
         return None
     val = float(out.objective)

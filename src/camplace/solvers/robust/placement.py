@@ -39,8 +39,7 @@ def _figures(problem: PlacementProblem, sel: np.ndarray) -> dict:
 def robust_placement(problem: PlacementProblem, nominal: Placement, *, time_limit_s: float | None = 60.0,
                      bound_time_s: float = 10.0, pool: int = 24, max_stall: int = 20, method: str = "auto",
                      exact_max_nnz: int = 200_000, bound_mip_s: float = 0.0, mean_bound_s: float = 60.0,
-                     seed: int = 0,
-                     should_stop=None) -> RobustResult:
+                     seed: int = 0, should_stop=None, end: float = float("inf")) -> RobustResult:
     """Run option robust=1 from the nominal placement, with figures for both placements and a
     lower bound on the optimal worst case. method 'auto': the swap/tabu heuristic
     (``robust_search``, 30 % of the time), then the exact scenario MIP on the whole problem
@@ -51,12 +50,17 @@ def robust_placement(problem: PlacementProblem, nominal: Placement, *, time_limi
     of the problem with one camera fewer (``bound_time_s``), the mean-failure LP bound
     (``mean_failure_bound``, ``mean_bound_s``) and the scenario-MIP dual bound (from the
     exact solve, or from ``bound_mip_s`` seconds of it on the whole problem). The bounds come
-    first, each with its own time limit; ``time_limit_s`` is for the search."""
+    first, each with its own time limit; ``time_limit_s`` is for the search. ``end``: a
+    perf_counter() deadline for all of it (bounds capped at shares of the time left before
+    it: 15 % the Lagrangian, 25 % the LP; the search ends by it; the MIP bound within it)."""
     if method not in ("auto", "heuristic"):
         raise ValueError(f"robust_placement: method must be 'auto' or 'heuristic', got {method!r}")
     t0 = time.perf_counter()
     bounds: dict[str, float] = {}
     lag = None
+    if np.isfinite(end):
+        bound_time_s = min(bound_time_s, 0.15 * max(0.0, end - t0))
+        mean_bound_s = min(mean_bound_s, 0.25 * max(0.0, end - t0))
     if bound_time_s > 0:  # hint: the nominal placement minus its worst camera is a feasible (N_s − 1) selection
         start = np.asarray(nominal.selected, np.int64)
         w_now, who = worst_case(problem, start)
@@ -64,14 +68,16 @@ def robust_placement(problem: PlacementProblem, nominal: Placement, *, time_limi
         if lag is not None:
             bounds["lagrangian_fewer_camera"] = _round_up(problem, lag)
     if mean_bound_s > 0 and not stopped(should_stop):
-        mb = mean_failure_bound(problem, time_limit_s=mean_bound_s)
+        mb = mean_failure_bound(problem, time_limit_s=mean_bound_s, end=min(end, time.perf_counter() + mean_bound_s))
         if mb is not None:
             bounds["mean_failure_lp"] = mb
     lag = max(bounds.values()) if bounds else None  # t >= lag in every scenario MIP below
     t_search = time.perf_counter()  # the time limit is for the search; the bounds have their own
-    end = None if time_limit_s is None else t_search + time_limit_s
-    left = lambda: None if end is None else max(0.0, end - time.perf_counter())  # noqa: E731
-    share = None if time_limit_s is None else (time_limit_s if method == "heuristic" else 0.3 * time_limit_s)
+    outer = end
+    end = min(end, float("inf") if time_limit_s is None else t_search + time_limit_s)
+    span = None if not np.isfinite(end) else max(0.0, end - t_search)
+    left = lambda: None if span is None else max(0.0, end - time.perf_counter())  # noqa: E731
+    share = None if span is None else (span if method == "heuristic" else 0.3 * span)
     sel, info = robust_search(problem, nominal.selected, time_limit_s=share, pool=pool,
                               should_stop=should_stop, max_stall=max_stall)
     problem.check_feasible(sel)
@@ -80,7 +86,7 @@ def robust_placement(problem: PlacementProblem, nominal: Placement, *, time_limi
     exact_done = False
     if method == "auto" and len(sel) and not stopped(should_stop):
         if problem.V.nnz <= exact_max_nnz:  # exact first, with half of the time left
-            half = None if end is None else 0.5 * left()
+            half = None if span is None else 0.5 * left()
             res = scenario_mip(problem, sel, time_limit_s=half, t_lower=lag or 0.0, init_scenarios=None,
                                mip_rel_gap=0.0, seed=seed, should_stop=should_stop)
             info["scenario_mip"] = dict(res.info, status=res.status)
@@ -96,7 +102,8 @@ def robust_placement(problem: PlacementProblem, nominal: Placement, *, time_limi
             info["lns"] = lns
             used += "+lns" if used != "heuristic" else "+scenario-mip-lns"
     if method == "auto" and bound_mip_s > 0 and not exact_done and not stopped(should_stop):
-        res = scenario_mip(problem, sel, time_limit_s=bound_mip_s, t_lower=lag or 0.0, seed=seed,
+        cap = bound_mip_s if not np.isfinite(outer) else min(bound_mip_s, max(0.0, outer - time.perf_counter()))
+        res = scenario_mip(problem, sel, time_limit_s=cap, t_lower=lag or 0.0, seed=seed,
                            should_stop=should_stop)
         info["bound_mip"] = dict(res.info, status=res.status, bound=res.bound)
         if res.bound is not None and res.bound > (lag or 0.0):  # above t >= lag: proven by the MIP itself
