@@ -11,12 +11,13 @@ Checks are chosen by the solver's tags (camplace.solvers.contract.Tags); each ru
 random problems (at most 8 candidates, brute force gives the optimum) with short time limits:
 feasible selection (budget, one camera per location, money budget when tagged), objective ==
 problem.cost(selected), bound <= the brute-force optimum, exact solvers reach it, a stop
-request gives status 'interrupted', zero budget, same seed -> same result, unknown option
-refused. Solvers tagged needs_positions get random positions, needs_start a greedy start.
+request gives status 'interrupted', a 0.5 s time limit kept within 2 s on a moderate problem,
+zero budget, same seed -> same result, unknown option refused. Solvers tagged needs_positions get random positions, needs_start a greedy start.
 """
 
 from __future__ import annotations
 
+import time
 from dataclasses import replace
 from typing import Any, Callable, Iterable, Mapping
 
@@ -127,6 +128,17 @@ def check_stop_request(solver: Solver) -> None:
     assert p.status in ("interrupted", "optimal"), f"{solver.name}: status {p.status!r} after a stop request"
 
 
+def check_time_limit_kept(solver: Solver) -> None:
+    """Tag anytime: with time_limit_s = 0.5 on a moderate problem (400 x 2,000, about 40 k
+    nonzeros) the solve call returns within the limit + 2 s, with a valid placement."""
+    problem = random_problem(8, n_g=400, n_p=2000, budget=20, n_loc=200, density=0.05)
+    t0 = time.perf_counter()
+    p = run_solver(solver, problem, time_limit_s=0.5)
+    wall = time.perf_counter() - t0
+    assert_valid(solver, problem, p)
+    assert wall <= 2.5, f"{solver.name}: {wall:.2f} s for a 0.5 s time limit"
+
+
 def check_zero_budget(solver: Solver) -> None:
     """Budget 0: no camera, cost = Σ w Γ² (unless tagged ignores_camera_budget); nothing
     to cover: cost 0."""
@@ -175,7 +187,7 @@ def checks_for(solver: Solver) -> list[Check]:
     if solver.tags.exact:
         out.append(check_exact_reaches_optimum)
     if solver.tags.anytime:
-        out.append(check_stop_request)
+        out += [check_stop_request, check_time_limit_kept]
     if solver.tags.deterministic_with_seed:
         out.append(check_same_seed_same_result)
     return out
