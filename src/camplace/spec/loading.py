@@ -13,7 +13,8 @@ from camplace.core.errors import InputError
 from camplace.spec.schema import SceneSpec
 from camplace.spec.wording import format_validation_error
 
-FILE_KEYS = ("mesh", "point_cloud", "octomap", "calibration", "file", "path")  # scene keys that name a file
+FILE_KEYS = ("mesh", "point_cloud", "octomap", "calibration", "file", "path", "points",  # scene keys that name a file
+             "existing")
 
 
 def _walk_files(obj: Any, path: str):

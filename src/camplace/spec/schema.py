@@ -10,37 +10,14 @@ from __future__ import annotations
 import math
 from typing import Annotated, Any, Literal, Union
 
-from pydantic import BaseModel, BeforeValidator, ConfigDict, Discriminator, Field, Tag, model_validator
-from pydantic_core import PydanticCustomError
+from pydantic import BeforeValidator, Discriminator, Field, Tag, model_validator
 
+from camplace.spec.basics import (FACES, Box, Face, Finite, Incidence, Point2, Point3, PositiveFloat,  # noqa: F401
+                                  PositiveInt, PxPerM, _no_bool, _Strict, polygon_problem, scene_error)
+from camplace.spec.sites import ExistingCamera, MountRules, Zone, site_references
 from camplace.spec.wording import did_you_mean, name_list
 
 MAX_ANGLES_PER_AXIS = 3600  # an angle list/range longer than this is a typo (e.g. step 0.001)
-
-
-def _no_bool(v: Any) -> Any:
-    """YAML turns yes/no/true/false into booleans; never accept them as numbers."""
-    if isinstance(v, bool):
-        raise PydanticCustomError("bool_not_number", "expected a number, not a boolean")
-    return v
-
-
-def scene_error(path: str, message: str) -> PydanticCustomError:
-    """A validation error raised by a model validator that names its own key path
-    (relative to the scene's top level), e.g. ``scene_error("mounts[0].camera", "...")``."""
-    return PydanticCustomError("scene", "{message}", {"path": path, "message": message})
-
-
-PositiveFloat = Annotated[float, BeforeValidator(_no_bool), Field(gt=0, allow_inf_nan=False)]
-Finite = Annotated[float, BeforeValidator(_no_bool), Field(allow_inf_nan=False)]
-PositiveInt = Annotated[int, BeforeValidator(_no_bool), Field(gt=0)]
-Point2 = tuple[Finite, Finite]
-Point3 = tuple[Finite, Finite, Finite]
-FACES = ("+x", "-x", "+y", "-y", "+z", "-z")
-
-
-class _Strict(BaseModel):
-    model_config = ConfigDict(extra="forbid", frozen=True)
 
 
 class AngleRange(_Strict):
@@ -95,28 +72,9 @@ class Room(_Strict):
 
     @model_validator(mode="after")
     def _simple_polygon(self) -> "Room":
-        import shapely
-        from shapely.geometry import Polygon
-
-        poly = Polygon(self.footprint)
-        if not poly.is_valid:
-            raise scene_error("footprint", f"expected a simple polygon (edges must not cross or touch), "
-                                           f"got {shapely.is_valid_reason(poly)}")
-        if poly.area <= 1e-9:
-            raise scene_error("footprint", "the polygon has zero area (all corners on one line?)")
-        return self
-
-
-class Box(_Strict):
-    min: Point3
-    max: Point3
-
-    @model_validator(mode="after")
-    def _ordered(self) -> "Box":
-        for k, (lo, hi) in enumerate(zip(self.min, self.max)):
-            if not hi > lo:
-                raise scene_error(f"max[{k}]", f"box max must exceed min on every axis (axis {'xyz'[k]}: "
-                                               f"min {lo}, max {hi})")
+        why = polygon_problem(self.footprint)
+        if why:
+            raise scene_error("footprint", why)
         return self
 
 
@@ -188,11 +146,9 @@ class TargetRegion(_Strict):
     heights: list[Finite] | None = None  # volume: target layer heights (m)
     of: list[str] | None = None  # surface: obstacle names
     box: Box | None = None  # surface on scans: the occupied cells inside this box (normals by PCA)
-    faces: list[Literal["+x", "-x", "+y", "-y", "+z", "-z"]] | None = None
-    max_incidence_deg: Annotated[float, Field(gt=0, le=90, allow_inf_nan=False)] = 90.0
-    # image quality: px/m on the target, or a DORI level (detect, observe, recognise, identify)
-    min_px_per_m: Union[Annotated[float, BeforeValidator(_no_bool), Field(ge=0, allow_inf_nan=False)],
-                        Literal["detect", "observe", "recognise", "recognize", "identify"], None] = None
+    faces: list[Face] | None = None
+    max_incidence_deg: Incidence = 90.0
+    min_px_per_m: PxPerM = None  # image quality: px/m on the target, or a DORI level
 
     @property
     def min_px_per_m_value(self) -> float:
@@ -319,6 +275,9 @@ class SceneSpec(_Strict):
     mounts: list[Mount] = Field(min_length=1)
     placement: PlacementSettings = PlacementSettings()
     free_space: FreeSpaceSpec = FreeSpaceSpec()
+    zones: list[Zone] = []  # later zones win where they overlap (docs/scene-file.md#zones)
+    mount_rules: MountRules = MountRules()
+    existing: list[ExistingCamera] | str | None = None  # or a placement.csv path (relative to the scene file)
 
     @model_validator(mode="after")
     def _references(self) -> "SceneSpec":
@@ -352,7 +311,8 @@ class SceneSpec(_Strict):
                                       f"{h} m is outside the room; expected a height in (0, {H}) m")
                 if h in (t.heights or [])[:k]:
                     raise scene_error(f"targets[{i}].heights[{k}]", f"duplicate height {h} m")
-        if self.targets and all(t.coverage == 0 for t in self.targets):
+        if self.targets and all(t.coverage == 0 for t in self.targets) and not any(
+                z.coverage > 0 and not z.privacy for z in self.zones):
             raise scene_error("targets", "every region has coverage 0, so there is nothing to place cameras for; "
                                          "expected at least one region with coverage >= 1")
         camera_names = [c.name for c in self.cameras]
@@ -372,4 +332,5 @@ class SceneSpec(_Strict):
             for k, seg in enumerate(getattr(m, "walls", None) or []):
                 if math.dist(seg[0], seg[1]) <= 1e-9:
                     raise scene_error(f"mounts[{i}].walls[{k}]", "zero-length wall segment (both ends equal)")
+        site_references(self, obstacle_names, camera_names)
         return self

@@ -10,11 +10,11 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-import shapely
 
 from camplace.spec.schema import TargetRegion
 from camplace.core.errors import InputError
 from camplace.scene.build import Scene
+from camplace.targets.zones import in_polygon, keep_mask, layer_points, privacy_heights, zone_region
 
 FACE_AXES = {"+x": (0, 1.0), "-x": (0, -1.0), "+y": (1, 1.0), "-y": (1, -1.0), "+z": (2, 1.0), "-z": (2, -1.0)}
 DEFAULT_FACES = ("+x", "-x", "+y", "-y")
@@ -47,20 +47,7 @@ class Targets:
 
 def volume_targets(scene: Scene, region: TargetRegion) -> np.ndarray:
     """Free-space voxel centres inside the footprint at each height: (M, 3) metres."""
-    v = float(scene.spec.voxel_size)
-    lo, hi = scene.footprint.min(0), scene.footprint.max(0)
-    nx, ny = (int(np.floor((hi[a] - lo[a]) / v + 1e-9)) for a in range(2))
-    xs = lo[0] + (np.arange(nx) + 0.5) * v
-    ys = lo[1] + (np.arange(ny) + 0.5) * v
-    gx, gy = np.meshgrid(xs, ys, indexing="ij")
-    inside = shapely.contains_xy(scene.polygon, gx, gy)
-    xy = np.c_[gx[inside], gy[inside]]
-    layers = [np.c_[xy, np.full(len(xy), float(h))] for h in region.heights or []]
-    pts = np.concatenate(layers) if layers else np.zeros((0, 3))
-    pts = pts[~scene.occupancy.is_occupied(pts)]
-    if getattr(scene, "free_space", None) is not None:  # scans / OctoMaps: observed walkable space only
-        pts = pts[scene.free_space.contains(pts)]
-    return pts
+    return layer_points(scene, region.heights)
 
 
 def surface_targets(scene: Scene, region: TargetRegion) -> tuple[np.ndarray, np.ndarray]:
@@ -110,9 +97,13 @@ def surface_targets(scene: Scene, region: TargetRegion) -> tuple[np.ndarray, np.
 
 
 def build_targets(scene: Scene) -> Targets:
-    """All target regions of the scene, in the order of ``scene.spec.targets``."""
+    """All target regions of the scene, in the order of ``scene.spec.targets``, then one
+    region per non-privacy zone (camplace.targets.zones: zones replace the volume targets
+    inside their polygons, later zones win)."""
     pos, nrm, gam, wts, rid = [], [], [], [], []
-    for r, region in enumerate(scene.spec.targets):
+    zones = scene.spec.zones
+    regions = list(scene.spec.targets) + [zone_region(z, scene.spec) for z in zones if not z.privacy]
+    for r, region in enumerate(regions):
         if region.kind == "volume":
             p = volume_targets(scene, region)
             n = np.zeros_like(p)
@@ -122,12 +113,14 @@ def build_targets(scene: Scene) -> Targets:
             p, n = scan_surface_targets(scene, region.box.min, region.box.max)
         else:
             p, n = surface_targets(scene, region)
+        if zones:
+            keep = keep_mask(scene, r, p)
+            p, n = p[keep], n[keep]
         pos.append(p)
         nrm.append(n)
         gam.append(np.full(len(p), region.coverage, dtype=np.int64))
         wts.append(np.full(len(p), region.weight, dtype=np.float64))
         rid.append(np.full(len(p), r, dtype=np.int32))
-    regions = scene.spec.targets
     t = Targets(
         np.concatenate(pos), np.concatenate(nrm), np.concatenate(gam), np.concatenate(wts), np.concatenate(rid),
         tuple(r.name for r in regions), tuple(r.kind for r in regions),
@@ -137,3 +130,21 @@ def build_targets(scene: Scene) -> Targets:
     if len(t) == 0:
         raise InputError(f"scene '{scene.name}': targets: no target point lies in free space inside the room")
     return t
+
+
+def privacy_targets(scene: Scene) -> Targets | None:
+    """The points of the privacy zones (one region per zone; at the zone's heights, default
+    every voxel centre from floor to ceiling; free space only), or None without privacy
+    zones. Never part of the cost: the visibility step removes every candidate that sees one."""
+    zones = [z for z in scene.spec.zones if z.privacy]
+    if not zones:
+        return None
+    pos = []
+    for z in zones:
+        p = layer_points(scene, privacy_heights(scene, z))
+        pos.append(p[in_polygon(z.polygon, p[:, :2])])
+    p = np.concatenate(pos)
+    n = len(p)
+    return Targets(p, np.zeros_like(p), np.ones(n, np.int64), np.ones(n), np.repeat(
+        np.arange(len(zones), dtype=np.int32), [len(q) for q in pos]), tuple(z.name for z in zones),
+        ("volume",) * len(zones), np.full(len(zones), 90.0), np.zeros(len(zones)))
