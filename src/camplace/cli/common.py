@@ -35,7 +35,7 @@ FLAGS = {
     "camera_id": "--camera", "width": "--width", "placement": "--placement",
     "up": "--up", "level_floor": "--no-level-floor", "crop": "--crop", "downsample": "--downsample",
     "heights": "--heights", "coverage": "--coverage", "wall_mount_height": "--wall-mounts",
-    "viewpoints": "--viewpoint", "out": "--out", "frame": "--frame",
+    "viewpoints": "--viewpoint", "out": "--out", "frame": "--frame", "paper": "--paper",
     "cloud": "",  # the space file: the message names it already
 }
 
@@ -164,6 +164,9 @@ MAX_MEMORY_OPT = typer.Option(None, "--max-memory-gb", help="Refuse scenes whose
 REPEATABLE_OPT = typer.Option(False, "--repeatable", help="Write timings as 0 so that identical runs give "
                               "byte-identical metrics.json (also CAMPLACE_REPEATABLE=1).")
 THREADS_OPT = typer.Option(None, "--threads", min=1, help="Solver threads.")
+NO_PLAN_OPT = typer.Option(False, "--no-plan", help="Skip the hand-over plan set (plan.pdf, plan.svg, plan.dxf, "
+                           "scene.glb) and report.html's plan view.")
+PAPER_OPT = typer.Option("A3", "--paper", help="Paper of plan.pdf (landscape): A4, A3 or letter.")
 FRAME_OPT = typer.Option("scene", "--frame", help="Frame of the written poses (placement.json/.csv, OpenCV, COLMAP): "
                          "scene (levelled, z up) or input (the scanned / meshed file's own frame; placement.json "
                          "input_from_scene maps one to the other).")

@@ -7,8 +7,8 @@ from typing import Optional
 
 import typer
 
-from camplace.cli.common import (FRAME_OPT, MAX_MEMORY_OPT, REPEATABLE_OPT, SCHEDULER_OPT, WORKERS_OPT, RichProgress,
-                                 check_options, memory_bytes, progress_bars, repeatable_requested)
+from camplace.cli.common import (FRAME_OPT, MAX_MEMORY_OPT, NO_PLAN_OPT, PAPER_OPT, REPEATABLE_OPT, SCHEDULER_OPT,
+                                 WORKERS_OPT, RichProgress, check_options, memory_bytes, progress_bars, repeatable_requested)
 from camplace.cli.summary import write_and_summarise
 
 
@@ -21,7 +21,8 @@ def evaluate_cmd(scene: str = typer.Argument(..., help="Scene YAML file or built
                  max_memory_gb: Optional[float] = MAX_MEMORY_OPT, repeatable: bool = REPEATABLE_OPT,
                  frame: str = typer.Option("scene", "--frame", help="Frame of the placement's poses and of the "
                                            "written ones: scene (levelled, z up) or input (the scene's scanned / "
-                                           "meshed file's own frame).")) -> None:
+                                           "meshed file's own frame)."),
+                 no_plan: bool = NO_PLAN_OPT, paper: str = PAPER_OPT) -> None:
     """Score a given placement on a scene with the same metrics as a run.
 
     The poses are raycast afresh (they need not be grid candidates) and written as a run
@@ -31,9 +32,13 @@ def evaluate_cmd(scene: str = typer.Argument(..., help="Scene YAML file or built
     written poses are too."""
     from camplace.workflows.evaluate import evaluate
 
+    from camplace.outputs.plan_data import check_paper
+
     check_options(None, None, max_memory_gb, out)
+    paper = check_paper(paper)
     repeatable = repeatable_requested(repeatable)
     with progress_bars() as prog:
         result = evaluate(scene, placement, progress=RichProgress(prog), workers=workers, scheduler=scheduler or None,
                           max_memory_bytes=memory_bytes(max_memory_gb), frame=frame)
-    write_and_summarise(result, out or Path("camplace-out") / f"{result.scene.name}-evaluated", repeatable, frame)
+    write_and_summarise(result, out or Path("camplace-out") / f"{result.scene.name}-evaluated", repeatable, frame,
+                        not no_plan, paper)

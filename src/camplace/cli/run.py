@@ -11,7 +11,8 @@ from typing import Optional
 import typer
 from rich.markup import escape
 
-from camplace.cli.common import (CACHE_OPT, FRAME_OPT, MAX_MEMORY_OPT, NO_CACHE_OPT, REPEATABLE_OPT, SCHEDULER_OPT,
+from camplace.cli.common import (CACHE_OPT, FRAME_OPT, MAX_MEMORY_OPT, NO_CACHE_OPT, NO_PLAN_OPT, PAPER_OPT,
+                                 REPEATABLE_OPT, SCHEDULER_OPT,
                                  TIME_LIMIT_OPT, WORKERS_OPT, RichProgress, StopFlag, certify_solver, check_options,
                                  console, memory_bytes, progress_bars, repeatable_requested, scale_options, state)
 from camplace.cli.space import ImportOptions, describe_import, scene_data_from_file, scene_yaml, space_kind
@@ -22,14 +23,16 @@ from camplace.core.errors import InputError
 def run_pipeline(scene, budget: Optional[int], solver: Optional[str], out: Optional[Path],
                  time_limit: Optional[float] = None, require_feasible: bool = False,
                  max_memory_gb: Optional[float] = None, repeatable: bool = False, frame: str = "scene",
-                 **options) -> None:
+                 plan: bool = True, paper: str = "A3", **options) -> None:
     """camplace.workflows.run.run with progress bars and Ctrl-C handling; writes the outputs
     into ``out`` (default camplace-out/<scene>, poses in ``frame``) and prints the summary."""
+    from camplace.outputs.plan_data import check_paper
     from camplace.outputs.write import check_frame
     from camplace.workflows.run import run
 
     check_options(budget, time_limit, max_memory_gb, out)
     check_frame(frame)
+    paper = check_paper(paper)
     repeatable = repeatable_requested(repeatable)
     stop = StopFlag()
     with stop.installed():  # first Ctrl-C: finish with the best placement so far; second: abort
@@ -39,7 +42,7 @@ def run_pipeline(scene, budget: Optional[int], solver: Optional[str], out: Optio
                          time_limit_s=time_limit, should_stop=stop, require_feasible=require_feasible,
                          max_memory_bytes=memory_bytes(max_memory_gb), **options)
         out_dir = out or Path("camplace-out") / result.scene.name
-        write_and_summarise(result, out_dir, repeatable, frame)
+        write_and_summarise(result, out_dir, repeatable, frame, plan, paper)
     if stop():
         console.print(f"[yellow]interrupted: wrote the best placement found so far (status "
                       f"'{result.placement.status}') to {escape(str(out_dir))}[/yellow]")
@@ -109,7 +112,7 @@ def run_cmd(scene: Optional[str] = typer.Argument(None, help="Scene YAML file, b
             require_feasible: bool = typer.Option(False, "--require-feasible", help="Fail (exit 2) when some targets "
                                                   "cannot reach their coverage (default: a warning that names them)."),
             max_memory_gb: Optional[float] = MAX_MEMORY_OPT, repeatable: bool = REPEATABLE_OPT,
-            frame: str = FRAME_OPT,
+            frame: str = FRAME_OPT, no_plan: bool = NO_PLAN_OPT, paper: str = PAPER_OPT,
             visibility: str = typer.Option("voxel", "--visibility",
                                            help="Visibility mode: voxel (fast, centre test) or pixel (per-pixel rays)."),
             stride: Optional[int] = typer.Option(None, "--stride", help="Pixel mode: one ray per STRIDE x STRIDE pixels."),
@@ -163,7 +166,8 @@ def run_cmd(scene: Optional[str] = typer.Argument(None, help="Scene YAML file, b
         scene = scene_from_space_file(Path(scene), budget)
     solver, time_limit = certify_solver(certify, solver, time_limit)
     run_pipeline(scene, budget, solver, out, time_limit, require_feasible, max_memory_gb, repeatable, frame,
-                 **scale_options(workers, scheduler, cache, no_cache), visibility_mode=visibility, stride=stride,
+                 not no_plan, paper, **scale_options(workers, scheduler, cache, no_cache), visibility_mode=visibility,
+                 stride=stride,
                  probe=probe, **({"local_search": True} if local_search else {}),
                  **({"threads": threads} if threads else {}),
                  **({"coverage_gap": coverage_gap} if coverage_gap is not None else {}),

@@ -68,14 +68,17 @@ def _table(result, out_dir: Path, paths: dict) -> Table:
     return t
 
 
-def write_and_summarise(result, out_dir: Path, repeatable: bool = False, frame: str = "scene") -> None:
-    """Write every output of ``result`` into ``out_dir`` (poses in ``frame``) and print the summary."""
+def write_and_summarise(result, out_dir: Path, repeatable: bool = False, frame: str = "scene", plan: bool = True,
+                        paper: str = "A3") -> None:
+    """Write every output of ``result`` into ``out_dir`` (poses in ``frame``; the plan set on
+    ``paper`` unless not ``plan``) and print the summary."""
     from camplace.outputs.write import write_outputs
 
     p = result.placement
     t0 = time.perf_counter()
     paths = write_outputs(out_dir, result.scene.name, result.visibility, p, result.problem.budget, result.metrics,
-                          result.timings_s, repeatable=repeatable, scene=result.scene, frame=frame)
+                          result.timings_s, repeatable=repeatable, scene=result.scene, frame=frame, plan=plan,
+                          paper=paper)
     result.timings_s["report"] = time.perf_counter() - t0
     _show_log(result, paths, out_dir)
     if state["json"]:

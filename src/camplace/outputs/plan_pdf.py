@@ -192,12 +192,13 @@ def _draw_cameras(ax, data: PlanData, n: int) -> None:
         tip = np.array([x, y]) + 2.4 * r * d
         wedge = np.array([np.array([x, y]) + 0.6 * r * s, tip, np.array([x, y]) - 0.6 * r * s])
         colour = "#7b3294" if c.get("existing") else "#1f4fd1"
-        for art in (MPolygon(wedge, closed=True, facecolor=colour, edgecolor="white", linewidth=0.3, zorder=7),
-                    Circle((x, y), r, facecolor="white", edgecolor=colour, linewidth=0.9, zorder=8)):
-            art.set_gid(f"camera-{mark}")
+        for part, art in (("wedge", MPolygon(wedge, closed=True, facecolor=colour, edgecolor="white", linewidth=0.3,
+                                              zorder=7)),
+                          ("symbol", Circle((x, y), r, facecolor="white", edgecolor=colour, linewidth=0.9, zorder=8))):
+            art.set_gid(f"camera-{mark}-{part}")  # plan.svg: <g id="camera-C1-symbol"> (report.html's hover rows)
             ax.add_patch(art)
         t = ax.text(x, y, mark[1:], fontsize=5, ha="center", va="center", weight="bold", color=colour, zorder=9)
-        t.set_gid(f"camera-{mark}")
+        t.set_gid(f"camera-{mark}-label")
         ax.text(x - 1.4 * r * d[0], y - 1.4 * r * d[1], mark, fontsize=5.5, ha="center", va="center", zorder=9,
                 color="black")
 

@@ -181,7 +181,8 @@ def render_report(view: SceneView, placement: dict, metrics: dict, positions: np
                   coverage: np.ndarray, gamma: np.ndarray, region_ids: np.ndarray, region_names,
                   region_kinds=(), n_candidates: int | None = None, files: list[str] = (),
                   slices: list[CoverageSlice] | None = None, max_points: int = MAX_POINTS,
-                  views: list[dict] | None = None, views_skipped: int = 0, dated: bool = True) -> str:
+                  views: list[dict] | None = None, views_skipped: int = 0, dated: bool = True,
+                  extra_html: str = "") -> str:
     """The report page as one HTML string (plotly.js embedded).
 
     positions: (N_p, 3) m; is_surface, coverage, gamma, region_ids: (N_p,);
@@ -230,6 +231,7 @@ def render_report(view: SceneView, placement: dict, metrics: dict, positions: np
 <div class="grid">{slice_divs}</div></section>
 <section><h2>Coverage histogram and regions</h2><div class="grid"><div id="histogram" class="plot"></div>
 <div>{_region_table(metrics, kinds, gammas)}</div></div></section>
+{extra_html}
 {_views_section(views, views_skipped)}
 <section><h2>Mount list</h2>{_mount_table(cameras)}</section>
 <section><h2>Files</h2><p>{links}</p></section>
@@ -259,7 +261,8 @@ def write_report(out_dir: str | Path, targets, coverage: np.ndarray, placement: 
                  view: SceneView | None = None, n_candidates: int | None = None,
                  html_report: bool = True, figures: bool = True, exports: bool = True,
                  scene=None, vis=None, selected: np.ndarray | None = None,
-                 repeatable: bool = False) -> dict[str, Path]:
+                 repeatable: bool = False, extra_html: str = "",
+                 rendered_views: tuple[list[dict], int] | None = None) -> dict[str, Path]:
     """Write exports (opencv/, colmap/), PNG figures and report.html into out_dir.
 
     targets: camplace.targets.build.Targets (N_p); coverage: (N_p,) achieved coverage of the
@@ -267,7 +270,9 @@ def write_report(out_dir: str | Path, targets, coverage: np.ndarray, placement: 
     ``scene`` (camplace.scene.build.Scene), ``vis`` (camplace.visibility.engine.Visibility) and
     ``selected`` (rows of vis.V) the page also shows each camera's rendered view (as many as
     fit VIEW_BUDGET_S seconds). ``repeatable``: every view and no date, so that the page
-    depends only on the inputs (byte-identical between identical runs). Returns file name (relative to out_dir) -> path."""
+    depends only on the inputs (byte-identical between identical runs). ``extra_html``: sections
+    placed before the camera views (the plan view, camplace.outputs.handover); ``rendered_views``:
+    camera_views' result when already rendered. Returns file name (relative to out_dir) -> path."""
     from camplace.outputs.exports import write_exports
     from camplace.outputs.figures import write_figures
 
@@ -289,12 +294,12 @@ def write_report(out_dir: str | Path, targets, coverage: np.ndarray, placement: 
     if html_report:
         files = ["placement.csv", "placement.json", "metrics.json", "visibility.npz",
                  *sorted(p for p in paths if p.endswith(".png")), *(["opencv/", "colmap/"] if exports else [])]
-        views, skipped = (None, 0)
-        if scene is not None and vis is not None and selected is not None:
+        views, skipped = rendered_views or (None, 0)
+        if rendered_views is None and scene is not None and vis is not None and selected is not None:
             views, skipped = camera_views(scene, vis, selected,
                                           budget_s=float("inf") if repeatable else VIEW_BUDGET_S)
         text = render_report(view, placement, metrics, targets.positions, is_surface, coverage, targets.gamma,
                              targets.region_ids, targets.region_names, targets.region_kinds, n_candidates, files,
-                             slices, views=views, views_skipped=skipped, dated=not repeatable)
+                             slices, views=views, views_skipped=skipped, dated=not repeatable, extra_html=extra_html)
         paths["report.html"] = atomic_write_text(out / "report.html", text)
     return paths

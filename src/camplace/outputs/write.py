@@ -124,7 +124,8 @@ def visibility_arrays(vis: Visibility) -> dict[str, np.ndarray]:
 
 def write_outputs(out_dir: str | Path, scene_name: str, vis: Visibility, placement: Placement, budget: int,
                   metrics: Metrics, timings: dict[str, float], scene=None, report: bool = True,
-                  repeatable: bool = False, frame: str = "scene") -> dict[str, Path]:
+                  repeatable: bool = False, frame: str = "scene", plan: bool = True,
+                  paper: str = "A3") -> dict[str, Path]:
     """Write the contract files into out_dir and, with ``report``, the report set
     (report.html, PNG figures, opencv/ and colmap/ exports; camplace.outputs.report_html);
     ``scene`` (camplace.scene.build.Scene) adds the room and obstacles to the pictures;
@@ -135,6 +136,10 @@ def write_outputs(out_dir: str | Path, scene_name: str, vis: Visibility, placeme
     in the scene frame; 'input' in the input file's frame (``scene.input_from_scene``,
     camplace.scene.frames; identity without a scene). visibility.npz, metrics and the
     report's pictures stay in the scene frame.
+
+    ``plan`` (with ``report`` and a ``scene``): the hand-over plan set too (plan.pdf on
+    ``paper`` 'A4' | 'A3' | 'letter', plan.svg, plan.dxf, scene.glb; camplace.outputs.handover)
+    and report.html's plan view.
 
     The contract files (visibility.npz, placement.json, placement.csv, metrics.json) land
     first, together (camplace.core.files.AtomicBatch: all new or all old); the report comes
@@ -160,10 +165,15 @@ def write_outputs(out_dir: str | Path, scene_name: str, vis: Visibility, placeme
         paths["metrics.json"] = batch.stage_json(out / "metrics.json", _metrics_dict(metrics, timings, repeatable))
     if not report:
         return paths
+    if plan:
+        from camplace.outputs.plan_data import check_paper
+
+        paper = check_paper(paper)
     try:
         # the report's pictures and mount table are drawn in the scene frame; exports follow ``frame``
         shown = pdict if frame == "scene" else placement_dict(scene_name, placement, budget, vis.candidates, T)
-        paths.update(_write_report_set(out, vis, placement, shown, metrics, report_timings, scene, repeatable))
+        paths.update(_write_report_set(out, vis, placement, shown, metrics, report_timings, scene, repeatable,
+                                       paper if plan else None))
         if frame != "scene" and "colmap/images.txt" in paths:
             from camplace.outputs.exports import write_exports
 
@@ -190,19 +200,25 @@ def _metrics_dict(metrics: Metrics, timings: dict[str, float], repeatable: bool)
 
 
 def _write_report_set(out: Path, vis: Visibility, placement: Placement, pdict: dict, metrics: Metrics,
-                      timings: dict[str, float], scene, repeatable: bool = False) -> dict[str, Path]:
+                      timings: dict[str, float], scene, repeatable: bool = False,
+                      paper: str | None = None) -> dict[str, Path]:
     """report.html, PNG figures and exports (camplace.outputs.report_html.write_report); with
     ``repeatable`` every camera view is rendered (no time budget), so the page depends only on
-    the inputs."""
+    the inputs. ``paper`` (with a scene): the hand-over plan set on that paper, first."""
     from camplace.outputs.figures import SceneView
     from camplace.outputs.report_html import write_report
 
     sel = np.asarray(placement.selected, np.int64)
     cov = np.bincount(vis.V[sel].indices, minlength=vis.V.shape[1]).astype(np.int64)
     m = dict(metrics.to_dict(), timings_s=timings)
-    return write_report(out, vis.targets, cov, pdict, m, SceneView.from_scene(scene) if scene else None,
-                        n_candidates=int(vis.V.shape[0]), scene=scene, vis=vis, selected=sel,
-                        repeatable=repeatable)
+    paths, extra, views = {}, "", None
+    if paper is not None and scene is not None:  # the hand-over set renders the camera views once for both
+        from camplace.outputs.handover import write_plan_set
+
+        paths, extra, views = write_plan_set(out, scene, vis, pdict, m, sel, paper=paper, repeatable=repeatable)
+    return {**paths, **write_report(out, vis.targets, cov, pdict, m, SceneView.from_scene(scene) if scene else None,
+                                    n_candidates=int(vis.V.shape[0]), scene=scene, vis=vis, selected=sel,
+                                    repeatable=repeatable, extra_html=extra, rendered_views=views)}
 
 
 def _unlink_quietly(path: Path) -> None:
