@@ -14,12 +14,17 @@ SHARED = Path(__file__).resolve().parents[3] / "shared" / "data"
 HEAD = b"# Octomap OcTree binary file\nid OcTree\nsize 9\nres 0.1\ndata\n"
 
 
+def head(nodes: int) -> bytes:
+    """A .bt header whose size (the node count, inner nodes and leaves) is ``nodes``."""
+    return HEAD.replace(b"size 9", b"size %d" % nodes)
+
+
 def test_hand_built_bt_one_occupied_child():
     # root node: child 7 (x, y, z keys >= 32768) is an occupied leaf (bits 14, 15 = 0b10)
     code = np.array([0b10 << 14], "<u2").tobytes()
     path = Path(__file__).parent / "_tmp_hand.bt"
     try:
-        path.write_bytes(HEAD + code)
+        path.write_bytes(head(2) + code)  # the root and one leaf
         om = load_octomap(path)
     finally:
         path.unlink()
@@ -31,7 +36,7 @@ def test_hand_built_bt_one_occupied_child():
 def test_hand_built_bt_nested(tmp_path):
     # root: child 0 inner (0b11); that node: child 1 free (0b01), child 2 occupied (0b10)
     body = np.array([0b11, (0b01 << 2) | (0b10 << 4)], "<u2").tobytes()
-    (tmp_path / "n.bt").write_bytes(HEAD + body)
+    (tmp_path / "n.bt").write_bytes(head(4) + body)  # root, inner node, two leaves
     om = load_octomap(tmp_path / "n.bt")
     size = 0.1 * 2 ** 14
     # child 0 of the root: keys < 32768 on all axes; its child 1 sets x bit 14, child 2 sets y bit 14

@@ -18,6 +18,7 @@ from scipy import ndimage
 
 from camplace.core.errors import InputError
 from camplace.core.files import atomic_write_bytes
+from camplace.scene.loaders.guards import check_glb, check_ply
 
 
 @dataclass(frozen=True)
@@ -38,6 +39,10 @@ def load_mesh(path: str | Path) -> Mesh:
         raise InputError(f"{p}: mesh file not found")
     if p.stat().st_size == 0:
         raise InputError(f"{p}: the file is empty")
+    if p.suffix.lower() == ".glb":
+        check_glb(p)
+    elif p.suffix.lower() == ".ply":
+        check_ply(p)
     try:
         m = trimesh.load(str(p), force="mesh")
     except Exception as err:  # trimesh raises many kinds for bad files

@@ -187,6 +187,7 @@ def describe(name: str, rep: dict) -> str:
     if kind == "point_cloud":
         steps = ", ".join(f"{s['step']} -> {s.get('points', '?'):,}" for s in rep.get("cleanup", []))
         return (f"obstacle '{name}': point cloud ({rep.get('format')}) {rep.get('points_read', 0):,} points read"
+                + (f"; {rep['non_finite_dropped']:,} non-finite points dropped" if rep.get("non_finite_dropped") else "")
                 + (f"; {steps}" if steps else "") + f"; {rep.get('viewpoints', 0)} viewpoint(s); "
                 f"{rep.get('cells_marked', 0):,} cells marked")
     if kind == "mesh":

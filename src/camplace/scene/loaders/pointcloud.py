@@ -6,6 +6,23 @@ binary_compressed), XYZ / CSV / TXT, LAS / LAZ.
 ``VIEWPOINT``; none for the other formats). Large LAS/LAZ and binary PLY files are read
 in chunks (progress per chunk); with ``downsample`` each chunk is reduced to one point
 per voxel as it is read, so memory follows the output, not the file.
+
+Bad files: every header is checked against the file's real size before a body is read
+(camplace.scene.loaders.guards), so a header promising 10^12 points is refused in one
+line instead of allocated; non-finite points are dropped and counted
+(``info["non_finite_dropped"]``, shown in the obstacle's log line); none left is an error.
+
+PCD is read by camplace's own header parser and checks, with the LZF body decoded by
+liblzf (camplace.scene.loaders.lzf), not by pypcd4. Measured by
+``python benchmarks/readers.py --repeat 20`` (docs/benchmarks.md): on
+../shared/data/room_scan1.pcd both give the same points in the same time (5.4 ms here,
+5.8 ms pypcd4 + python-neo-lzf, to finite float64 (N, 3)), but on 121 bad copies of that
+file (cut, flipped, junk inserted, POINTS 10^12) pypcd4 raised 83 raw exceptions
+(pydantic ValidationError, ValueError, RuntimeError, UnicodeDecodeError, ...) that a
+user would see as tracebacks, and it allocates what the header promises
+(``np.zeros(POINTS)``); this reader gives 121 one-line InputErrors or valid clouds.
+Wrapping pypcd4 would need this header check anyway, and it also drops camplace's
+``# viewpoint`` lines (several scanner origins per file).
 """
 
 from __future__ import annotations
@@ -19,7 +36,8 @@ import numpy as np
 from camplace.core.errors import InputError
 from camplace.core.files import atomic_write_bytes
 from camplace.scene.loaders import Progress, header_lines
-from camplace.scene.loaders.lzf import lzf_compress_literal, lzf_decompress
+from camplace.scene.loaders.guards import check_las, check_ply, decode_text, promise
+from camplace.scene.loaders.lzf import LZF_MAX_RATIO, lzf_compress_literal, lzf_decompress
 
 CHUNK_POINTS = 2_000_000
 
@@ -55,7 +73,8 @@ def voxel_downsample(points: np.ndarray, size: float) -> np.ndarray:
 
 def _finite(points: np.ndarray) -> np.ndarray:
     p = np.asarray(points, dtype=np.float64).reshape(-1, 3)
-    return p[np.all(np.isfinite(p), axis=1)]
+    ok = np.isfinite(p).all(axis=1)
+    return p if ok.all() else p[ok]
 
 
 class _Reader:
@@ -88,6 +107,7 @@ class _Reader:
 def _read_ply(path: Path, r: _Reader, progress: Progress | None) -> dict:
     from plyfile import PlyData, PlyParseError
 
+    check_ply(path)
     try:
         ply = PlyData.read(str(path), mmap="r")
     except (PlyParseError, ValueError, EOFError, IndexError, KeyError, UnicodeDecodeError) as err:
@@ -146,11 +166,24 @@ def _pcd_header(path: Path, raw: bytes) -> tuple[dict, int]:
     raise InputError(f"{path}: PCD header has no DATA line")
 
 
+def _pcd_viewpoints(path: Path, head: dict) -> np.ndarray:
+    """(K, 3) scanner origins of a PCD header: camplace's ``# viewpoint`` lines, else VIEWPOINT."""
+    rows = head["_VIEWPOINTS"] or ([head["VIEWPOINT"][:3]] if len(head.get("VIEWPOINT", [])) >= 3 else [])
+    try:
+        vp = np.array([[float(v) for v in row] for row in rows]).reshape(-1, 3)
+    except ValueError:
+        raise InputError(f"{path}: PCD VIEWPOINT holds something other than numbers") from None
+    if not np.all(np.isfinite(vp)):
+        raise InputError(f"{path}: PCD VIEWPOINT is not finite")
+    return vp
+
+
 def _read_pcd(path: Path, r: _Reader, progress: Progress | None) -> tuple[dict, np.ndarray]:
     raw = path.read_bytes()
     if not raw.strip():
         raise InputError(f"{path}: the file is empty")
     head, pos = _pcd_header(path, raw)
+    decode_text(path, raw[:pos], "the PCD header", "utf-8")
     try:
         fields = head["FIELDS"]
         sizes = [int(s) for s in head["SIZE"]]
@@ -160,23 +193,23 @@ def _read_pcd(path: Path, r: _Reader, progress: Progress | None) -> tuple[dict, 
         mode = head["DATA"][0].lower()
     except (KeyError, IndexError, ValueError):
         raise InputError(f"{path}: PCD header lacks FIELDS/SIZE/TYPE/POINTS or has bad values") from None
-    if not (len(fields) == len(sizes) == len(types) == len(counts)):
-        raise InputError(f"{path}: PCD header FIELDS/SIZE/TYPE/COUNT have different lengths")
+    if not (len(fields) == len(sizes) == len(types) == len(counts)) or min(counts, default=0) < 1:
+        raise InputError(f"{path}: PCD header FIELDS/SIZE/TYPE/COUNT have different lengths or a COUNT < 1")
     if not all(k in fields for k in "xyz"):
         raise InputError(f"{path}: PCD file has no x, y, z fields (has {', '.join(fields)})")
     try:
         dts = [np.dtype(_PCD_TYPES[(t.upper(), s)]) for t, s in zip(types, sizes)]
     except KeyError:
         raise InputError(f"{path}: PCD TYPE/SIZE {list(zip(types, sizes))} not supported") from None
-    vp = np.zeros((0, 3))
-    if head["_VIEWPOINTS"]:
-        vp = np.array([[float(v) for v in row] for row in head["_VIEWPOINTS"]])
-    elif "VIEWPOINT" in head and len(head["VIEWPOINT"]) >= 3:
-        vp = np.array([[float(v) for v in head["VIEWPOINT"][:3]]])
+    vp = _pcd_viewpoints(path, head)
     if n == 0:
         raise InputError(f"{path}: the PCD file holds no points (POINTS 0)")
     cols: dict[str, np.ndarray] = {}
     body = raw[pos:]
+    record = sum(d.itemsize * c for d, c in zip(dts, counts))
+    # ascii: at least a digit and a separator per value; compressed: LZF expands at most LZF_MAX_RATIO x
+    promise(path, "points", n, 2 * sum(counts) if mode == "ascii" else record,
+            len(body) * (LZF_MAX_RATIO if mode == "binary_compressed" else 1))
     if mode == "ascii":
         try:
             table = np.loadtxt(body.decode("ascii", "replace").splitlines(), dtype=np.float64, ndmin=2)
@@ -201,7 +234,7 @@ def _read_pcd(path: Path, r: _Reader, progress: Progress | None) -> tuple[dict, 
             raise InputError(f"{path}: PCD binary_compressed block is truncated")
         csize, usize = (int(v) for v in np.frombuffer(body[:8], dtype="<u4"))
         need = sum(n * s * c for s, c in zip(sizes, counts))
-        if usize != need or csize > len(body) - 8:
+        if usize != need or csize > len(body) - 8 or usize > LZF_MAX_RATIO * csize:
             raise InputError(f"{path}: PCD binary_compressed sizes do not match the header "
                              f"(compressed {csize} of {len(body) - 8} bytes, uncompressed {usize}, expected {need})")
         try:
@@ -247,15 +280,21 @@ def write_pcd(path: str | Path, points: np.ndarray, data: str = "binary", viewpo
 # ---------------------------------------------------------------- XYZ / CSV
 
 
+def _numbers(line: str, delim: str | None) -> bool:
+    """Whether the first three fields of a text row are numbers (nan and inf count)."""
+    try:
+        return len([float(v) for v in line.split(delim)[:3]]) == 3
+    except ValueError:
+        return False
+
+
 def _read_text(path: Path, r: _Reader, progress: Progress | None) -> dict:
-    text = path.read_text(errors="replace")
+    text = decode_text(path, path.read_bytes(), "the file", "utf-8")
     lines = [ln for ln in text.splitlines() if ln.strip() and not ln.lstrip().startswith(("#", "//"))]
     if not lines:
         raise InputError(f"{path}: the file is empty (no point rows)")
     delim = "," if "," in lines[-1] else (";" if ";" in lines[-1] else None)
-    skip = 0
-    if re.search(r"[A-DF-Za-df-z_]", lines[0]):  # a header row (letters other than the exponent e/E)
-        skip = 1
+    skip = 0 if _numbers(lines[0], delim) else 1  # a header row such as "x,y,z"
     try:
         table = np.loadtxt(lines[skip:], delimiter=delim, usecols=(0, 1, 2), ndmin=2, dtype=np.float64)
     except (ValueError, IndexError) as err:
@@ -281,6 +320,7 @@ def write_xyz(path: str | Path, points: np.ndarray, delimiter: str = " ") -> Pat
 def _read_las(path: Path, r: _Reader, progress: Progress | None) -> dict:
     import laspy
 
+    check_las(path)
     try:
         with laspy.open(str(path)) as f:
             n = int(f.header.point_count)
@@ -290,7 +330,7 @@ def _read_las(path: Path, r: _Reader, progress: Progress | None) -> dict:
                 done += len(chunk)
                 if progress:
                     progress("load scan", done, max(n, 1))
-    except (laspy.errors.LaspyException, ValueError, OSError, EOFError) as err:
+    except (laspy.errors.LaspyException, ValueError, RuntimeError, OSError, EOFError) as err:  # lazrs: RuntimeError
         msg = str(err).splitlines()[0] if str(err) else type(err).__name__
         raise InputError(f"{path}: not a readable LAS/LAZ file ({msg})") from None
     return {"format": "laz" if path.suffix.lower() == ".laz" else "las"}
