@@ -114,10 +114,12 @@ def run_cmd(scene: Optional[str] = typer.Argument(None, help="Scene YAML file, b
             max_memory_gb: Optional[float] = MAX_MEMORY_OPT, repeatable: bool = REPEATABLE_OPT,
             frame: str = FRAME_OPT, no_plan: bool = NO_PLAN_OPT, paper: str = PAPER_OPT,
             visibility: str = typer.Option("voxel", "--visibility",
-                                           help="Visibility mode: voxel (fast, centre test) or pixel (per-pixel rays)."),
+                                           help="Visibility mode: voxel (fast, sight lines to targets) or pixel "
+                                                "(per-pixel rays)."),
             stride: Optional[int] = typer.Option(None, "--stride", help="Pixel mode: one ray per STRIDE x STRIDE pixels."),
-            probe: Optional[float] = typer.Option(None, "--probe", help="Pixel mode: part of the voxel a ray must cross "
-                                                                         "(1 = any part, the paper's rule; 0 = centre)."),
+            probe: Optional[float] = typer.Option(None, "--probe", help="Part of a target's voxel a sight line must "
+                                                  "reach, 0..1 (1 = any part, the paper's rule; 0 = centre); default 0 "
+                                                  "in voxel mode, 1 in pixel mode."),
             local_search: bool = typer.Option(False, "--local-search", help="Greedy: 1-swap local search afterwards."),
             threads: Optional[int] = typer.Option(None, "--threads", min=1, help="Solver threads (MIP solvers)."),
             coverage_gap: Optional[float] = typer.Option(None, "--coverage-gap", min=0.0,
