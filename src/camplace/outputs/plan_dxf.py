@@ -44,7 +44,21 @@ def _camera_block(doc) -> None:
 
 
 def plan_dxf(data: PlanData) -> str:
-    """The DXF document (R2010) as text."""
+    """The DXF document (R2010) as text; repeatable runs (data.dated None) carry ezdxf's fixed
+    dates and GUIDs, so identical inputs give identical files."""
+    import ezdxf
+
+    fixed = ezdxf.options.write_fixed_meta_data_for_testing
+    ezdxf.options.write_fixed_meta_data_for_testing = data.dated is None
+    try:
+        buf = io.StringIO()
+        _plan_doc(data).write(buf)
+        return buf.getvalue()
+    finally:
+        ezdxf.options.write_fixed_meta_data_for_testing = fixed
+
+
+def _plan_doc(data: PlanData):
     import ezdxf
 
     doc = ezdxf.new("R2010", setup=False)
@@ -77,14 +91,7 @@ def plan_dxf(data: PlanData) -> str:
         ref.add_auto_attribs({"ID": str(c.get("source_id", c["candidate_id"])), "TYPE": str(c["camera"]),
                               "HEIGHT": f"{z:.3f}", "YAW": f"{c['yaw_deg']:.2f}", "PITCH": f"{c['pitch_deg']:.2f}"})
         msp.add_text(mark, height=0.2, dxfattribs={"layer": "CAMPLACE-CAMERAS"}).set_placement((x - 0.45, y + 0.2))
-    buf = io.StringIO()
-    fixed = ezdxf.options.write_fixed_meta_data_for_testing
-    ezdxf.options.write_fixed_meta_data_for_testing = data.dated is None  # repeatable: no dates, no random GUIDs
-    try:
-        doc.write(buf)
-    finally:
-        ezdxf.options.write_fixed_meta_data_for_testing = fixed
-    return buf.getvalue()
+    return doc
 
 
 def _zones(msp, data: PlanData) -> None:

@@ -32,7 +32,8 @@ SCALES = (20, 25, 50, 75, 100, 125, 150, 200, 250, 300, 400, 500, 750, 1000, 125
 SIDE_MM = 100.0  # right-hand column of page 1: title block and legend
 MARGIN_MM = 12.0
 OUTLINE = "#1f4fd1"  # viewshed outlines and new cameras
-RC = {"pdf.fonttype": 3, "svg.fonttype": "none", "font.size": 7.0, "hatch.linewidth": 0.4}  # text stays text
+# text stays text; fixed SVG ids (hash salt) so repeatable runs give identical files
+RC = {"pdf.fonttype": 3, "svg.fonttype": "none", "svg.hashsalt": "camplace", "font.size": 7.0, "hatch.linewidth": 0.4}
 
 
 def page_size_mm(paper: str) -> tuple[float, float]:

@@ -1,0 +1,175 @@
+"""The hand-over plan set read back with real clients: pypdf, pdftoppm, ezdxf, trimesh."""
+
+from __future__ import annotations
+
+import shutil
+import subprocess
+
+import numpy as np
+import pytest
+
+from camplace.core.errors import InputError
+from conftest import box_room
+
+pypdf = pytest.importorskip("pypdf")
+ezdxf = pytest.importorskip("ezdxf")
+
+
+def _spec():
+    pillar = {"name": "pillar", "box": {"min": [2.8, 1.8, 0.0], "max": [3.2, 2.2, 3.0]}}
+    return box_room(obstacles=[pillar], footprint=[[0, 0], [6, 0], [6, 4], [0, 4]],
+                    targets=[{"name": "floor", "kind": "volume", "heights": [1.0, 1.5], "coverage": 2}],
+                    cameras=[{"name": "cam", "resolution": [640, 480], "fov_deg": [90, 70], "max_range": 6.0}],
+                    mounts=[{"kind": "ceiling_grid", "camera": "cam", "spacing": 1.0, "yaw_deg": [0, 90, 180, 270],
+                             "pitch_deg": [45]}])
+
+
+@pytest.fixture(scope="module")
+def run_result():
+    from camplace.workflows.run import run
+
+    return run(_spec(), budget=4, solver="greedy")
+
+
+def _write(out, r, **kw):
+    from camplace.outputs.write import write_outputs
+
+    return write_outputs(out, r.scene.name, r.visibility, r.placement, r.problem.budget, r.metrics, r.timings_s,
+                         scene=r.scene, **kw)
+
+
+@pytest.fixture(scope="module")
+def plan_dir(tmp_path_factory, run_result):
+    out = tmp_path_factory.mktemp("handover")
+    paths = _write(out, run_result, repeatable=True)
+    return out, paths
+
+
+def _cameras(out):
+    import json
+
+    return json.loads((out / "placement.json").read_text())["cameras"]
+
+
+def test_every_file_is_written(plan_dir):
+    out, paths = plan_dir
+    for name in ("plan.pdf", "plan.svg", "plan.dxf", "scene.glb"):
+        assert name in paths and (out / name).stat().st_size > 1000
+
+
+def test_pdf_pages_and_text(plan_dir):
+    out, _ = plan_dir
+    cams = _cameras(out)
+    reader = pypdf.PdfReader(out / "plan.pdf")
+    assert len(reader.pages) == 4
+    box = reader.pages[0].mediabox
+    assert (round(float(box.width)), round(float(box.height))) == (1191, 842)  # A3 landscape, points
+    plan = reader.pages[0].extract_text()
+    assert "floor plan" in plan and "scale 1:" in plan and "test-room" in plan and "pillar" in plan
+    for k in range(len(cams)):
+        assert f"C{k + 1}" in plan
+    schedule = reader.pages[2].extract_text(extraction_mode="layout")  # text by position: one line a row
+    assert "camera schedule" in schedule
+    lines = [" ".join(line.split()) for line in schedule.splitlines()]
+    assert any(line.startswith("mark id x (m) y (m) height (m) yaw") for line in lines)
+    for k, c in enumerate(cams):  # one row per camera: mark, id, position, height, angles, type, status
+        row = (f"C{k + 1} {c['candidate_id']} {c['position'][0]:.2f} {c['position'][1]:.2f} {c['position'][2]:.2f} "
+               f"{c['yaw_deg']:.1f} {c['pitch_deg']:.1f} {c['roll_deg']:.1f} {c['camera']} pinhole")
+        assert sum(line.startswith(row) and line.endswith(" new") for line in lines) == 1, row
+    assert "coverage" in reader.pages[1].extract_text() and "camera views" in reader.pages[3].extract_text()
+    assert "date" not in plan  # repeatable: no date in the title block
+
+
+@pytest.mark.skipif(shutil.which("pdftoppm") is None, reason="pdftoppm (poppler-utils) not installed")
+def test_first_page_renders_with_ink_at_the_cameras(plan_dir, run_result, tmp_path):
+    from PIL import Image
+
+    from camplace.outputs.plan_data import plan_data
+    from camplace.outputs.plan_pdf import plan_figure
+    from camplace.outputs.write import placement_dict
+
+    out, _ = plan_dir
+    dpi = 60
+    subprocess.run(["pdftoppm", "-png", "-r", str(dpi), "-f", "1", "-l", "1", str(out / "plan.pdf"),
+                    str(tmp_path / "page")], check=True)
+    png = next(tmp_path.glob("page*.png"))
+    img = np.asarray(Image.open(png).convert("L"), float)
+    assert img.std() > 5  # not blank
+    r = run_result
+    pd = placement_dict(r.scene.name, r.placement, r.problem.budget, r.visibility.candidates)
+    fig = plan_figure(plan_data(r.scene, r.visibility, pd, r.metrics.to_dict(), r.placement.selected,
+                                repeatable=True))
+    fig.set_dpi(dpi)
+    ax = fig.axes[0]
+    h = img.shape[0]
+    for c in _cameras(out):
+        x, y = ax.transData.transform(c["position"][:2])
+        px, py = int(round(x)), int(round(h - y))
+        win = img[max(py - 4, 0):py + 5, max(px - 4, 0):px + 5]
+        assert win.min() < 140, (c["candidate_id"], px, py)  # the camera symbol's dark outline is there
+    # far outside the room (the bottom-left page margin) the page is white
+    assert img[-5:, :5].min() > 250
+
+
+def test_dxf_layers_and_camera_blocks(plan_dir):
+    out, _ = plan_dir
+    cams = _cameras(out)
+    doc = ezdxf.readfile(out / "plan.dxf")
+    names = {layer.dxf.name for layer in doc.layers}
+    for layer in ("CAMPLACE-CAMERAS", "CAMPLACE-FOV", "CAMPLACE-ZONES", "CAMPLACE-WALLS", "CAMPLACE-DORI-DETECT",
+                  "CAMPLACE-DORI-IDENTIFY"):
+        assert layer in names
+    refs = doc.modelspace().query('INSERT[name=="CAMPLACE_CAMERA"]')
+    assert len(refs) == len(cams)
+    by_id = {ref.get_attrib_text("ID"): ref for ref in refs}
+    for c in cams:
+        ref = by_id[str(c["candidate_id"])]
+        assert ref.dxf.layer == "CAMPLACE-CAMERAS"
+        assert np.allclose(tuple(ref.dxf.insert), c["position"], atol=1e-9)
+        assert ref.get_attrib_text("TYPE") == c["camera"]
+        assert float(ref.get_attrib_text("HEIGHT")) == pytest.approx(c["position"][2], abs=1e-3)
+        assert float(ref.get_attrib_text("YAW")) == pytest.approx(c["yaw_deg"], abs=0.01)
+        assert float(ref.get_attrib_text("PITCH")) == pytest.approx(c["pitch_deg"], abs=0.01)
+        assert ref.dxf.rotation == pytest.approx(c["yaw_deg"])
+    assert len(doc.modelspace().query('LWPOLYLINE[layer=="CAMPLACE-FOV"]')) >= len(cams)
+
+
+def test_glb_cameras_and_bounds(plan_dir, run_result):
+    import trimesh
+
+    out, _ = plan_dir
+    cams = _cameras(out)
+    scene = trimesh.load(out / "scene.glb")
+    nodes = [n for n in scene.graph.nodes_geometry if n.startswith("camera ")]
+    assert len(nodes) == len(cams)
+    assert {n.split(" id ")[1] for n in nodes} == {str(c["candidate_id"]) for c in cams}
+    sc = run_result.scene
+    fp = np.asarray(sc.footprint, float)
+    assert np.allclose(scene.bounds, [[*fp.min(0), 0.0], [*fp.max(0), sc.height]], atol=1e-6)
+    assert "coverage" in scene.graph.nodes_geometry and "obstacles" in scene.graph.nodes_geometry
+
+
+def test_report_shows_the_plan_with_hover_rows(plan_dir):
+    out, _ = plan_dir
+    text = (out / "report.html").read_text()
+    assert "<h2>Plan</h2>" in text and "<svg" in text
+    assert text.count('<g id="camera-C1-symbol"><title>mark: C1; id: ') == 1
+
+
+def test_no_plan_and_paper(tmp_path, run_result):
+    paths = _write(tmp_path / "a", run_result, plan=False)
+    assert not any((tmp_path / "a" / n).exists() for n in ("plan.pdf", "plan.svg", "plan.dxf", "scene.glb"))
+    assert "report.html" in paths and "<h2>Plan</h2>" not in (tmp_path / "a" / "report.html").read_text()
+    _write(tmp_path / "b", run_result, paper="a4")
+    box = pypdf.PdfReader(tmp_path / "b" / "plan.pdf").pages[0].mediabox
+    assert (round(float(box.width)), round(float(box.height))) == (842, 595)
+    with pytest.raises(InputError, match="paper: expected one of A4, A3, letter") as err:
+        _write(tmp_path / "c", run_result, paper="B5")
+    assert err.value.option == "paper"
+
+
+def test_repeatable_plan_set_is_byte_identical(tmp_path, run_result):
+    for d in ("a", "b"):
+        _write(tmp_path / d, run_result, repeatable=True)
+    for name in ("plan.pdf", "plan.svg", "plan.dxf", "scene.glb"):
+        assert (tmp_path / "a" / name).read_bytes() == (tmp_path / "b" / name).read_bytes(), name
