@@ -259,7 +259,7 @@ def coverage_figure(data: PlanData):
         ax = fig.add_subplot(gs[k // ncol, k % ncol])
         cls = np.where(np.isnan(sl.coverage), np.nan, np.minimum(sl.coverage, 3))
         ax.imshow(np.ma.masked_invalid(cls), origin="lower", cmap=cmap, norm=BoundaryNorm([-0.5, 0.5, 1.5, 2.5, 3.5], 4),
-                  interpolation="nearest", extent=(sl.x[0] - v / 2, sl.x[-1] + v / 2, sl.y[0] - v / 2, sl.y[-1] + v / 2))
+                  interpolation="none", extent=(sl.x[0] - v / 2, sl.x[-1] + v / 2, sl.y[0] - v / 2, sl.y[-1] + v / 2))
         ax.add_patch(MPolygon(fp, closed=True, fill=False, edgecolor="black", linewidth=0.8))
         at = vol & (np.abs(t.positions[:, 2] - sl.height) < 1e-6)
         met = float(np.mean(data.coverage[at] >= t.gamma[at]) * 100) if at.any() else 0.0
@@ -348,7 +348,7 @@ def views_figure(data: PlanData):
         for k, v in enumerate(views):
             ax = fig.add_subplot(gs[k // ncol, k % ncol])
             img = Image.open(io.BytesIO(base64.b64decode(v["uri"].split(",", 1)[1])))
-            ax.imshow(np.asarray(img), interpolation="bilinear")
+            ax.imshow(np.asarray(img), interpolation="none")  # embedded as is: no resampling
             ax.set_axis_off()
             ax.set_title(f"{marks.get(int(v['id']), '')} (id {v['id']})", fontsize=6, pad=2)
     missing = len(data.cameras) - len(views)
