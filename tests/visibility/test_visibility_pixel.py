@@ -133,9 +133,9 @@ def test_modes_agree_on_a_grid_of_candidates():
     assert a.candidates == 36 and a.nnz_voxel > 1000
     assert a.voxel_in_pixel > 0.995 and a.jaccard > 0.98
     assert set(a.gap) == {"voxel", "pixel"} and all(0 <= g <= 1 for row in a.gap.values() for g in row.values())
-    paper = compare_visibility(spec, stride=2, probe=1.0, budget=2)
-    assert paper.nnz_pixel > paper.nnz_voxel  # any part of a voxel counts: more entries
-    assert paper.voxel_in_pixel > 0.99
+    paper = compare_visibility(spec, stride=1, probe=1.0, budget=2)  # both modes under the paper's rule
+    assert paper.nnz_pixel > a.nnz_pixel and paper.nnz_voxel > a.nnz_voxel  # any part counts: more entries
+    assert paper.jaccard > 0.98
 
 
 def test_stride_reduces_rays(down_room):

@@ -73,12 +73,12 @@ def compare_visibility(scene: str | Path | SceneSpec, stride: int | None = None,
                        progress: Progress | None = None) -> Agreement:
     """Build V in voxel and pixel mode on the same candidates and compare them.
 
-    probe: pixel mode's probe (0 = centre footprint, the counterpart of voxel mode's
-    centre test; 1 = any part of the voxel, the paper's rule); budget: N_s for the
-    gap comparison (default the scene's)."""
+    probe: the rule both modes use (0 = the target's centre; 1 = any part of its voxel,
+    the paper's rule; fractions between); budget: N_s for the gap comparison (default
+    the scene's)."""
     sc, targets, cameras, _ = scene_inputs(scene, progress)
     cands = build_candidates(sc, cameras)
-    engines = {"voxel": get_engine("voxel"),
+    engines = {"voxel": get_engine("voxel", voxel_size=sc.spec.voxel_size, probe=probe),
                "pixel": get_engine("pixel", voxel_size=sc.spec.voxel_size, stride=stride, probe=probe)}
     vis, secs = {}, {}
     for mode, engine in engines.items():
