@@ -148,8 +148,8 @@ def solve_min_cameras(problem: PlacementProblem, *, time_limit_s: float | None =
         sel, start, out = _fewest(problem, target, prices, end, order, **kw)
         if sel is None:
             sel = best.selected
-    if sel is None and out is not None and out.status == "time_limit":
-        sel = np.sort(np.asarray(order, np.int64))  # the best reach greedy has, in time
+    if sel is None and out is not None and (out.status == "time_limit" or np.isfinite(end)):
+        sel = np.sort(np.asarray(order, np.int64))  # HiGHS found nothing in time: the greedy's reach
     if sel is None:
         from camplace.core.errors import InputError
 
