@@ -173,3 +173,16 @@ def test_repeatable_plan_set_is_byte_identical(tmp_path, run_result):
         _write(tmp_path / d, run_result, repeatable=True)
     for name in ("plan.pdf", "plan.svg", "plan.dxf", "scene.glb"):
         assert (tmp_path / "a" / name).read_bytes() == (tmp_path / "b" / name).read_bytes(), name
+
+
+def test_voxel_surface_keeps_only_exposed_faces():
+    from camplace.outputs.scene_glb import voxel_surface
+
+    mask = np.zeros((3, 3, 3), bool)
+    mask[1, 1, 1] = True
+    one = voxel_surface(mask, np.zeros(3), 0.5)
+    assert len(one.faces) == 12 and np.allclose(one.bounds, [[0.5] * 3, [1.0] * 3])
+    mask[2, 1, 1] = True  # two cells side by side: the shared face is inside, not drawn
+    two = voxel_surface(mask, np.zeros(3), 0.5)
+    assert len(two.faces) == 20 and np.isclose(two.area, 10 * 0.25)
+    assert voxel_surface(np.zeros((2, 2, 2), bool), np.zeros(3), 1.0) is None
