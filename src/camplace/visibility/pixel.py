@@ -49,20 +49,20 @@ DEFAULT_CHUNK = 64  # candidate rows per block
 
 # ----------------------------------------------------------------------------- kernels
 @numba.njit(cache=True, inline="always")
-def _ray_hits_cube(px, py, pz, dx, dy, dz, cx, cy, cz, h, t_end):
-    """True if the segment p + t d, t in [0, t_end], meets the cube of half-size h at c."""
+def _ray_box_span(px, py, pz, dx, dy, dz, lx, ly, lz, hx, hy, hz, t_end):
+    """(t0, t1): the part of the segment p + t d, t in [0, t_end], inside the box [l, h]
+    (t0 > t1 when it misses)."""
     t0, t1 = 0.0, t_end
     for a in range(3):
         if a == 0:
-            p, d, c = px, dx, cx
+            p, d, lo, hi = px, dx, lx, hx
         elif a == 1:
-            p, d, c = py, dy, cy
+            p, d, lo, hi = py, dy, ly, hy
         else:
-            p, d, c = pz, dz, cz
-        lo, hi = c - h, c + h
+            p, d, lo, hi = pz, dz, lz, hz
         if d == 0.0:
             if p < lo or p > hi:
-                return False
+                return 1.0, 0.0
         else:
             ta = (lo - p) / d
             tb = (hi - p) / d
@@ -73,8 +73,15 @@ def _ray_hits_cube(px, py, pz, dx, dy, dz, cx, cy, cz, h, t_end):
             if tb < t1:
                 t1 = tb
             if t0 > t1:
-                return False
-    return True
+                return t0, t1
+    return t0, t1
+
+
+@numba.njit(cache=True, inline="always")
+def _ray_hits_cube(px, py, pz, dx, dy, dz, cx, cy, cz, h, t_end):
+    """True if the segment p + t d, t in [0, t_end], meets the cube of half-size h at c."""
+    t0, t1 = _ray_box_span(px, py, pz, dx, dy, dz, cx - h, cy - h, cz - h, cx + h, cy + h, cz + h, t_end)
+    return t0 <= t1
 
 
 @numba.njit(cache=True, inline="always")
@@ -91,12 +98,13 @@ def _ray_near_centre(px, py, pz, dx, dy, dz, cx, cy, cz, k, t_end):
 
 @numba.njit(cache=True, parallel=True)
 def _pixel_kernel(occ, dist, origin, res, cam_pos, cam_rot, cam_ids, cam_params, rays, ray_start,
-                  bgrid, bshape, b_start, b_ids, thalf, s_keys, s_ids,
+                  bgrid, bshape, b_start, b_ids, thalf, vbox, s_keys, s_ids,
                   tpos, tnrm, tcos, tpx, cam_foot, centre_mode, mask):
     """Fill mask (n_c, n_t) uint8: 1 = candidate i covers target j, 2 = rejected by the
     density limit. Returns the number of rays cast per candidate. centre_mode: a volume
     target counts when a ray's footprint (cam_foot[camera] rad) contains its centre,
-    instead of when the ray meets its probe cube."""
+    instead of when the ray meets its probe cube. vbox (6,): a box (lo, hi, m) holding every
+    non-empty bucket cell: each ray walks the bucket grid only over its part inside."""
     n_c = cam_pos.shape[0]
     ox, oy, oz = origin[0], origin[1], origin[2]
     onx, ony, onz = occ.shape
@@ -137,6 +145,15 @@ def _pixel_kernel(occ, dist, origin, res, cam_pos, cam_rot, cam_ids, cam_params,
             jz = int(math.floor((pz - boz) / bc))
             if jx < 0 or jy < 0 or jz < 0 or jx >= bnx or jy >= bny or jz >= bnz:
                 continue
+            ta, tb = _ray_box_span(px, py, pz, dx, dy, dz, vbox[0], vbox[1], vbox[2], vbox[3], vbox[4], vbox[5], t_end)
+            if ta > tb:
+                continue  # no target voxel along this ray before its hit
+            t_stop = tb
+            t0 = ta - 0.5 * bc
+            if t0 > 0.0:  # start half a bucket cell before the box (its margin cells are empty)
+                jx = min(max(int(math.floor((px + t0 * dx - box) / bc)), 0), bnx - 1)
+                jy = min(max(int(math.floor((py + t0 * dy - boy) / bc)), 0), bny - 1)
+                jz = min(max(int(math.floor((pz + t0 * dz - boz) / bc)), 0), bnz - 1)
             sx, tmx, tdx = dda_axis(jx, px, dx, box, bc)
             sy, tmy, tdy = dda_axis(jy, py, dy, boy, bc)
             sz, tmz, tdz = dda_axis(jz, pz, dz, boz, bc)
@@ -153,7 +170,7 @@ def _pixel_kernel(occ, dist, origin, res, cam_pos, cam_rot, cam_ids, cam_params,
                     if hit:
                         row[j] = 1 if density_ok(p, R, params, tpos, tnrm, j, tpx[j]) else 2
                 jx, jy, jz, tmx, tmy, tmz, _, t = dda_step(jx, jy, jz, tmx, tmy, tmz, sx, sy, sz, tdx, tdy, tdz)
-                if t > t_end or jx < 0 or jy < 0 or jz < 0 or jx >= bnx or jy >= bny or jz >= bnz:
+                if t > t_stop or jx < 0 or jy < 0 or jz < 0 or jx >= bnx or jy >= bny or jz >= bnz:
                     break
         counts[i] = ray_start[cid + 1] - ray_start[cid]
     return counts
@@ -198,6 +215,17 @@ def volume_buckets(occupancy: OccupancyGrid, targets: Targets, probe: float, vox
     cells_a, ids_a = cells_a[order], ids_a[order]
     b_start = np.searchsorted(cells_a, np.arange(int(np.prod(shape)) + 1)).astype(np.int64)
     return np.r_[org, v], shape, b_start, ids_a.astype(np.int32), thalf
+
+
+def bucket_box(bgrid: np.ndarray, bshape: np.ndarray, b_start: np.ndarray) -> np.ndarray:
+    """(6,) float64 [lo (3,), hi (3,)] m: the box of the non-empty cells of a bucket grid
+    (see volume_buckets), one cell wider on every side; an empty box when none holds a target."""
+    full = np.nonzero(np.diff(b_start) > 0)[0]
+    if len(full) == 0:
+        return np.array([1.0, 1.0, 1.0, -1.0, -1.0, -1.0])
+    cell = np.stack(np.unravel_index(full, tuple(int(n) for n in bshape)), 1)
+    org, c = bgrid[:3], float(bgrid[3])
+    return np.r_[org + (cell.min(0) - 1) * c, org + (cell.max(0) + 2) * c].astype(np.float64)
 
 
 def camera_rays(candidates: Candidates, stride: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -270,6 +298,7 @@ class PixelEngine:
         reach = max(c.max_range for c in candidates.cameras) * float(foot.max()) if centre_mode else 0.0
         bprobe = min(1.0, 2.0 * reach / voxel_size) if centre_mode else probe
         bgrid, bshape, b_start, b_ids, thalf = volume_buckets(occupancy, targets, bprobe, voxel_size)
+        vbox = bucket_box(bgrid, bshape, b_start)
         s_keys, s_ids = surface_cell_map(occupancy, targets, 1.0 if centre_mode else probe, voxel_size)
         occ = occupancy.occupied.view(np.uint8)
         dist = free_distance(occupancy) if self.skip_empty else np.zeros((1, 1, 1), np.uint8)
@@ -278,7 +307,7 @@ class PixelEngine:
         poses = (np.ascontiguousarray(candidates.positions, dtype=np.float64),
                  np.ascontiguousarray(candidates.rotations, dtype=np.float64),
                  np.ascontiguousarray(candidates.camera_ids, dtype=np.int64))
-        tgt = (bgrid, bshape, b_start, b_ids, thalf, s_keys, s_ids,
+        tgt = (bgrid, bshape, b_start, b_ids, thalf, vbox, s_keys, s_ids,
                np.ascontiguousarray(targets.positions, dtype=np.float64),
                np.ascontiguousarray(targets.normals, dtype=np.float64), target_cos_limits(targets),
                target_min_px(targets))
@@ -303,7 +332,7 @@ class PixelEngine:
         out = {"stride": self.stride, "probe": self.probe, "rays": int(per_cam[candidates.camera_ids].sum()),
                "rays_cast": cast, "rays_per_s": cast / seconds if seconds > 0 else 0.0}
         if shared is not None:
-            out["surface_face_cells"] = int(len(shared[3][5]))  # s_keys
+            out["surface_face_cells"] = int(len(shared[3][6]))  # s_keys
         return out
 
 

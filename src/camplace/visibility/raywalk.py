@@ -19,6 +19,7 @@ import numpy as np
 from camplace.scene.build import OccupancyGrid
 
 NO_HIT, BOUNDARY = -2, -1  # first_hit's axis: nothing hit within range / started inside or left the grid
+SKIP_MIN = 3  # first_hit jumps from cells at least this many cells (Chebyshev) from any occupied one
 
 
 @numba.njit(cache=True, inline="always")
@@ -83,8 +84,9 @@ def first_hit(occ, dist, ox, oy, oz, res, px, py, pz, dx, dy, dz, rng):
     step that entered the hit cell (axis = BOUNDARY when the ray starts in an occupied
     cell or leaves the grid). ``dist`` (same shape as occ, see ``free_distance``) lets the
     ray jump through empty space: from a cell whose Chebyshev distance to the nearest
-    occupied cell is d, every point within (d - 1) cells is free, so the ray advances
-    (d - 1) * res at once; pass a (1, 1, 1) array to step cell by cell. Same result."""
+    occupied cell is d, the cube of cells within (d - 1) is free, so the ray jumps to
+    where it leaves that cube (the DDA state advanced by whole boundary crossings, no
+    re-flooring); pass a (1, 1, 1) array to step cell by cell. Same result."""
     nx, ny, nz = occ.shape
     skip = dist.shape[0] == nx and dist.shape[1] == ny and dist.shape[2] == nz
     ix = int(math.floor((px - ox) / res))
@@ -95,33 +97,38 @@ def first_hit(occ, dist, ox, oy, oz, res, px, py, pz, dx, dy, dz, rng):
     sx, tmx, tdx = dda_axis(ix, px, dx, ox, res)
     sy, tmy, tdy = dda_axis(iy, py, dy, oy, res)
     sz, tmz, tdz = dda_axis(iz, pz, dz, oz, res)
-    t_in = 0.0  # ray parameter where it entered the current cell
+    # boundaries crossed per unit of t along each axis (the jumps count crossings with them)
+    ux_, uy_, uz_ = abs(dx) / res, abs(dy) / res, abs(dz) / res
     while True:
         if skip:
             dd = dist[ix, iy, iz]
-            if dd >= 4:
-                t_in = t_in + (dd - 1) * res
-                if t_in > rng:
+            if dd >= SKIP_MIN:
+                # every cell within k = dd - 1 cells (Chebyshev) is free: jump to where the ray
+                # leaves that cube, crossing each axis's boundaries before it (at most k)
+                k = dd - 1
+                te = min(tmx + k * tdx, tmy + k * tdy, tmz + k * tdz)
+                if te > rng:
                     return rng, ix, iy, iz, NO_HIT, 0
-                ix = int(math.floor((px + t_in * dx - ox) / res))
-                iy = int(math.floor((py + t_in * dy - oy) / res))
-                iz = int(math.floor((pz + t_in * dz - oz) / res))
-                # next boundaries ahead; max() guards rays running along a cell boundary,
-                # where rounding can put the recomputed cell behind the ray (an axis the
-                # ray is parallel to keeps its 1e30)
-                tmx = max(dda_axis(ix, px, dx, ox, res)[1], t_in)
-                tmy = max(dda_axis(iy, py, dy, oy, res)[1], t_in)
-                tmz = max(dda_axis(iz, pz, dz, oz, res)[1], t_in)
+                mx, my, mz = _crossings(tmx, ux_, te, k), _crossings(tmy, uy_, te, k), _crossings(tmz, uz_, te, k)
+                ix, iy, iz = ix + sx * mx, iy + sy * my, iz + sz * mz
+                tmx, tmy, tmz = tmx + mx * tdx, tmy + my * tdy, tmz + mz * tdz
         jx, jy, jz, ux, uy, uz, axis, t = dda_step(ix, iy, iz, tmx, tmy, tmz, sx, sy, sz, tdx, tdy, tdz)
         if t > rng:
             return rng, ix, iy, iz, NO_HIT, 0
         ix, iy, iz, tmx, tmy, tmz = jx, jy, jz, ux, uy, uz
         step = sx if axis == 0 else (sy if axis == 1 else sz)
-        t_in = t
         if ix < 0 or iy < 0 or iz < 0 or ix >= nx or iy >= ny or iz >= nz:
             return t, ix, iy, iz, BOUNDARY, 0
         if occ[ix, iy, iz]:
             return t, ix, iy, iz, axis, step
+
+
+@numba.njit(cache=True, inline="always")
+def _crossings(tm: float, per_t: float, te: float, k: int) -> int:
+    """Cell boundaries at tm, tm + 1 / per_t, ... that lie at or before te, at most k."""
+    if tm > te:
+        return 0
+    return min(k, int((te - tm) * per_t) + 1)
 
 
 @numba.njit(cache=True, parallel=True)
