@@ -14,6 +14,7 @@ import numpy as np
 import shapely
 
 from camplace.cameras.models import CameraModel
+from camplace.cameras.mount_rules import allowed_xy, explicit_points
 from camplace.spec.schema import Mount, angle_values
 from camplace.core.errors import InputError
 from camplace.scene.build import Scene
@@ -99,24 +100,15 @@ def wall_positions(scene: Scene, mount: Mount) -> tuple[np.ndarray, np.ndarray]:
     footprint are dropped. The inward side of a given segment is the one whose offset
     midpoint lies inside the footprint."""
     poly = scene.polygon
-    fp = scene.footprint
-    if mount.walls is not None:
-        segs = np.asarray(mount.walls, float).reshape(-1, 2, 2)
-    else:
-        segs = np.stack([fp, np.roll(fp, -1, axis=0)], axis=1)
     s = float(mount.spacing)
     out_p, out_yaw = [], []
-    for a, b in segs:
+    for a, b in wall_segments(scene, mount):
         d = b - a
         length = float(np.hypot(*d))
         if length < 1e-9:
             continue
         u = d / length
-        n = np.array([-u[1], u[0]])  # left normal; flip if it points out of the room
-        mid = (a + b) / 2
-        probe = max(mount.wall_clearance, 0.05)
-        if not shapely.contains_xy(poly, *(mid + n * probe)) and shapely.contains_xy(poly, *(mid - n * probe)):
-            n = -n
+        n = inward_normal(poly, a, b, mount.wall_clearance)
         k = max(int(np.floor(length / s + 1e-9)), 1)
         t = (np.arange(k) + 0.5) * (length / k)
         xy = a + np.outer(t, u) + n * mount.wall_clearance
@@ -129,16 +121,59 @@ def wall_positions(scene: Scene, mount: Mount) -> tuple[np.ndarray, np.ndarray]:
     return p[keep], yaw[keep]
 
 
+def wall_segments(scene: Scene, mount: Mount) -> np.ndarray:
+    """(S, 2, 2) m: the mount's ``walls`` segments, or the footprint's edges."""
+    if mount.walls is not None:
+        return np.asarray(mount.walls, float).reshape(-1, 2, 2)
+    fp = scene.footprint
+    return np.stack([fp, np.roll(fp, -1, axis=0)], axis=1)
+
+
+def inward_normal(poly, a: np.ndarray, b: np.ndarray, clearance: float) -> np.ndarray:
+    """(2,) unit normal of segment a-b pointing into the room (the left one unless its probe
+    point, ``clearance`` (>= 5 cm) from the midpoint, lies outside while the right one's lies inside)."""
+    d = (b - a) / float(np.hypot(*(b - a)))
+    n = np.array([-d[1], d[0]])
+    mid = (a + b) / 2
+    probe = max(clearance, 0.05)
+    if not shapely.contains_xy(poly, *(mid + n * probe)) and shapely.contains_xy(poly, *(mid - n * probe)):
+        n = -n
+    return n
+
+
+def nearest_wall_yaw(scene: Scene, mount: Mount, xy: np.ndarray) -> np.ndarray:
+    """(M,) degrees: the inward-normal yaw of the wall segment nearest each point (M, 2)."""
+    segs = [(a, b) for a, b in wall_segments(scene, mount) if np.hypot(*(b - a)) > 1e-9]
+    dist = np.stack([shapely.distance(shapely.LineString([a, b]), shapely.points(xy)) for a, b in segs], axis=1)
+    normals = np.array([inward_normal(scene.polygon, a, b, mount.wall_clearance) for a, b in segs])
+    n = normals[np.argmin(dist, axis=1)]
+    return np.degrees(np.arctan2(n[:, 1], n[:, 0]))
+
+
+def mount_positions(scene: Scene, mount: Mount, points: np.ndarray | None) -> tuple[np.ndarray, np.ndarray | None]:
+    """(positions (M, 3) m, base yaw (M,) degrees or None): the mount's grid / wall points,
+    or the explicit ``points`` (mount_rules.points) with the nearest wall's yaw for wall mounts."""
+    if points is not None:
+        return points, nearest_wall_yaw(scene, mount, points[:, :2]) if mount.kind == "wall" else None
+    if mount.kind == "wall":  # yaw relative to the inward normal of each wall
+        return wall_positions(scene, mount)
+    return ceiling_grid_positions(scene, mount), None
+
+
 def build_candidates(scene: Scene, cameras: dict[str, CameraModel]) -> Candidates:
     """Every mount of the scene expanded into poses; poses inside an obstacle are dropped."""
     cam_list = tuple(cameras.values())
     cam_index = {c.name: k for k, c in enumerate(cam_list)}
     pos, ang, cid = [], [], []
+    rules = scene.spec.mount_rules
+    points = explicit_points(scene)
+    ruled_out = 0  # mount positions the forbid / allow polygons removed
     for mount in scene.spec.mounts:
-        if mount.kind == "wall":  # yaw relative to the inward normal of each wall
-            p, base_yaw = wall_positions(scene, mount)
-        else:
-            p, base_yaw = ceiling_grid_positions(scene, mount), None
+        p, base_yaw = mount_positions(scene, mount, points)
+        if rules.active:  # forbid / allow polygons (camplace.cameras.mount_rules)
+            keep = allowed_xy(scene, p[:, :2])
+            ruled_out += int((~keep).sum())
+            p, base_yaw = p[keep], None if base_yaw is None else base_yaw[keep]
         yaws, pitches, rolls = (angle_values(a) for a in (mount.yaw_deg, mount.pitch_deg, mount.roll_deg))
         yy, pp, rr = np.meshgrid(yaws, pitches, rolls, indexing="ij")
         a = np.c_[yy.ravel(), pp.ravel(), rr.ravel()]
@@ -160,5 +195,7 @@ def build_candidates(scene: Scene, cameras: dict[str, CameraModel]) -> Candidate
         raise InputError(f"scene '{scene.name}': mounts: no candidate pose lies in free space "
                          f"({n_all} generated, {int(inside_obstacle.sum())} inside obstacles or walls)")
     rot = rotation_from_ypr(angles[:, 0], angles[:, 1], angles[:, 2])
-    return Candidates(positions, rot, angles, camera_ids, location_ids_of(positions), cam_list,
-                      {"generated": n_all, "dropped_inside_obstacle": int(inside_obstacle.sum())})
+    info = {"generated": n_all, "dropped_inside_obstacle": int(inside_obstacle.sum())}
+    if rules.active:
+        info.update(mount_positions_ruled_out=ruled_out, explicit_points=None if points is None else len(points))
+    return Candidates(positions, rot, angles, camera_ids, location_ids_of(positions), cam_list, info)

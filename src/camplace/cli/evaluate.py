@@ -22,14 +22,17 @@ def evaluate_cmd(scene: str = typer.Argument(..., help="Scene YAML file or built
                  frame: str = typer.Option("scene", "--frame", help="Frame of the placement's poses and of the "
                                            "written ones: scene (levelled, z up) or input (the scene's scanned / "
                                            "meshed file's own frame)."),
-                 no_plan: bool = NO_PLAN_OPT, paper: str = PAPER_OPT) -> None:
+                 no_plan: bool = NO_PLAN_OPT, paper: str = PAPER_OPT,
+                 strict: bool = typer.Option(False, "--strict", help="Exit 1 when a camera sees a privacy zone "
+                                             "(the outputs are written and the cameras named either way).")) -> None:
     """Score a given placement on a scene with the same metrics as a run.
 
     The poses are raycast afresh (they need not be grid candidates) and written as a run
     with solver 'file': placement.json, metrics.json, visibility.npz (row i = pose i),
     placement.csv, report.html, figures and exports. With --frame input the placement's
     poses are in the input file's frame (mapped into the scene before raycasting) and the
-    written poses are too."""
+    written poses are too. Cameras that see a privacy zone of the scene are named
+    (metrics.json ``privacy``); with --strict they make the exit code 1."""
     from camplace.workflows.evaluate import evaluate
 
     from camplace.outputs.plan_data import check_paper
@@ -42,3 +45,10 @@ def evaluate_cmd(scene: str = typer.Argument(..., help="Scene YAML file or built
                           max_memory_bytes=memory_bytes(max_memory_gb), frame=frame)
     write_and_summarise(result, out or Path("camplace-out") / f"{result.scene.name}-evaluated", repeatable, frame,
                         not no_plan, paper)
+    privacy = result.metrics.privacy or {}
+    if strict and privacy.get("violations"):
+        from camplace.cli.common import console
+
+        console.print(f"[red]privacy: {privacy['violations']} camera(s) see a privacy zone "
+                      f"({', '.join(privacy['camera_ids'])}); --strict[/red]")
+        raise typer.Exit(1)

@@ -136,6 +136,9 @@ def run_cmd(scene: Optional[str] = typer.Argument(None, help="Scene YAML file, b
             well_triangulated: bool = typer.Option(False, "--well-triangulated",
                                                    help="Greedy that counts a camera toward Γ only where it pairs "
                                                         "with another at a --tri-angle angle."),
+            keep: Optional[Path] = typer.Option(None, "--keep", help="A previous run's placement.json or .csv: its "
+                                                "cameras stay (fixed, counted toward coverage, not budget) and "
+                                                "--budget more are added (extend a plan in phases)."),
             certify: Optional[float] = typer.Option(None, "--certify", help="Spend SECONDS on both sides: tabu search "
                                                     "for the placement, Lagrangian/LP/exact bounds for a proven gap "
                                                     "(solver 'certify')."),
@@ -174,5 +177,6 @@ def run_cmd(scene: Optional[str] = typer.Argument(None, help="Scene YAML file, b
                  **({"threads": threads} if threads else {}),
                  **({"coverage_gap": coverage_gap} if coverage_gap is not None else {}),
                  **beyond_grid_options(refine, refine_time, adaptive, robust, money_budget, tri_angle),
-                 **({"well_triangulated": True} if well_triangulated else {}))
+                 **({"well_triangulated": True} if well_triangulated else {}),
+                 **({"keep": keep} if keep is not None else {}))
 

@@ -20,7 +20,7 @@ from typing import Callable
 import numpy as np
 
 from camplace.problem.model import PlacementProblem
-from camplace.improve.refine import append_candidates, extend_problem, pose_box, _valid_positions
+from camplace.improve.refine import PoseGuard, append_candidates, extend_problem, pose_box, _valid_positions
 from camplace.scene.build import Scene
 from camplace.solvers.base import Placement, deadline
 from camplace.solvers.local_search import NominalObjective, swap_search
@@ -41,10 +41,11 @@ def swap_descent(problem: PlacementProblem, selected: np.ndarray, time_limit_s: 
     return np.array(sorted(sel), np.int64), {k: info[k] for k in ("moves", "passes", "seconds")}
 
 
-def finer_poses(scene: Scene, vis: Visibility, selected: np.ndarray, level: int) -> tuple[np.ndarray, np.ndarray]:
+def finer_poses(scene: Scene, vis: Visibility, selected: np.ndarray, level: int,
+                guard: PoseGuard | None = None) -> tuple[np.ndarray, np.ndarray]:
     """New poses (K, 6) and camera ids (K,) around the selected rows at offsets of
-    spacing / 2^level and angle step / 2^level (duplicates of V rows and invalid
-    positions removed)."""
+    spacing / 2^level and angle step / 2^level (duplicates of V rows, invalid positions
+    and, with ``guard``, the poses it rejects - e.g. those seeing a privacy zone - removed)."""
     cands = vis.candidates
     out, cids = [], []
     for i in np.asarray(selected, np.int64):
@@ -60,6 +61,9 @@ def finer_poses(scene: Scene, vis: Visibility, selected: np.ndarray, level: int)
     poses = np.concatenate(out)
     poses[:, 3] %= 360.0
     camera_ids = np.concatenate(cids)
+    if guard is not None and len(poses):
+        ok = guard(poses, camera_ids)
+        poses, camera_ids = poses[ok], camera_ids[ok]
     ang = cands.angles_deg.copy()
     ang[:, 0] %= 360.0
     have = np.c_[cands.positions, ang, cands.camera_ids]
@@ -87,9 +91,11 @@ class AdaptiveResult:
 
 def adaptive_rounds(scene: Scene, vis: Visibility, problem: PlacementProblem, placement: Placement,
                     rounds: int = 3, time_limit_s: float | None = 120.0, solver: str | None = None,
-                    solver_time_s: float = 10.0, progress: Progress | None = None) -> AdaptiveResult:
+                    solver_time_s: float = 10.0, progress: Progress | None = None,
+                    guard: PoseGuard | None = None) -> AdaptiveResult:
     """Up to ``rounds`` rounds of finer candidates around the current selection, each
-    solved again warm-started; stops early when a round does not lower the cost."""
+    solved again warm-started; stops early when a round does not lower the cost.
+    ``guard``: see camplace.improve.refine.refine_poses."""
     t0 = time.perf_counter()
     sel = np.asarray(placement.selected, np.int64)
     grid_cost = problem.cost(sel)
@@ -101,7 +107,7 @@ def adaptive_rounds(scene: Scene, vis: Visibility, problem: PlacementProblem, pl
         if time_limit_s is not None and time.perf_counter() - t0 > time_limit_s:
             break
         tr = time.perf_counter()
-        poses, cids = finer_poses(scene, cur_vis, cur_sel, r)
+        poses, cids = finer_poses(scene, cur_vis, cur_sel, r, guard)
         if len(poses) == 0:
             break
         new_vis, _ = append_candidates(cur_vis, scene.occupancy, poses, cids)

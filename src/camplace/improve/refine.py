@@ -30,6 +30,7 @@ import scipy.sparse as sp
 import shapely
 
 from camplace.cameras.candidates import Candidates, rotation_from_ypr
+from camplace.cameras.mount_rules import restrict_region
 from camplace.spec.schema import Mount, SceneSpec, angle_values
 from camplace.problem import gains
 from camplace.problem.model import PlacementProblem
@@ -39,6 +40,9 @@ from camplace.targets.build import Targets
 from camplace.visibility.voxel import Visibility, visibility_block
 
 Progress = Callable[[str, int, int], None]
+# A pose guard: (poses (K, 6) x, y, z, yaw, pitch, roll; camera ids (K,)) -> (K,) bool, True = allowed
+# (camplace.visibility.privacy.PrivacyGuard: the pose sees no privacy point)
+PoseGuard = Callable[[np.ndarray, np.ndarray], np.ndarray]
 HALF = 0.499  # stay strictly inside half a step so neighbouring grid points never meet
 
 
@@ -91,6 +95,11 @@ def pose_box(scene: Scene, candidates: Candidates, i: int, fraction: float = HAL
         s = 0.0 if getattr(m, "kind", "ceiling_grid") == "wall" else float(m.spacing)  # wall cameras only turn
         half = np.array([s, s, 0.0, angle_step(m.yaw_deg), angle_step(m.pitch_deg), angle_step(m.roll_deg)]) * fraction
         region = scene.polygon.buffer(-m.wall_clearance) if m.wall_clearance > 0 else scene.polygon
+    rules = scene.spec.mount_rules
+    if rules.active:  # mount rules bound the search (camplace.cameras.mount_rules): explicit points only turn
+        region = restrict_region(scene, region)
+        if rules.points is not None:
+            half[:3] = 0.0
     return PoseBox(centre, half, region)
 
 
@@ -186,12 +195,14 @@ def _valid_positions(box: PoseBox, occupancy: OccupancyGrid, poses: np.ndarray) 
 
 def refine_poses(scene: Scene, vis: Visibility, problem: PlacementProblem, selected: np.ndarray,
                  time_limit_s: float | None = 60.0, levels: int = 4, max_sweeps: int = 50,
-                 progress: Progress | None = None) -> tuple[np.ndarray, np.ndarray, list[sp.csr_matrix], dict]:
+                 progress: Progress | None = None,
+                 guard: PoseGuard | None = None) -> tuple[np.ndarray, np.ndarray, list[sp.csr_matrix], dict]:
     """Compass search over each selected camera's pose (see module doc).
 
     Returns (poses (k, 6) x, y, z, yaw, pitch, roll; moved (k,) bool; rows: the k V rows
     of the final poses; info). Step sizes start at half the box half-range and halve
-    ``levels`` times; a sweep visits every camera once; sweeps repeat while one helps."""
+    ``levels`` times; a sweep visits every camera once; sweeps repeat while one helps.
+    ``guard`` rejects trial poses before they are raycast (e.g. poses that see a privacy zone)."""
     t0 = time.perf_counter()
     deadline = None if time_limit_s is None else t0 + float(time_limit_s)
     sel = np.asarray(selected, np.int64)
@@ -237,6 +248,8 @@ def refine_poses(scene: Scene, vis: Visibility, problem: PlacementProblem, selec
                         break
                     trial = np.array(trial)
                     trial = trial[_valid_positions(box, scene.occupancy, trial)]
+                    if guard is not None and len(trial):
+                        trial = trial[guard(trial, np.full(len(trial), cid, np.int32))]
                     if len(trial) == 0:
                         break
                     R = raycast_poses(scene.occupancy, vis.targets, cands, cid, trial)

@@ -22,6 +22,8 @@ class Metrics:
     regions: dict[str, dict]
     timings_s: dict[str, float] = field(default_factory=dict)
     well_triangulated_pct: float | None = None  # % of targets with a camera pair meeting at a usable angle
+    privacy: dict | None = None  # privacy zones: cameras that see one (camplace.visibility.privacy.privacy_report)
+    existing: dict | None = None  # existing / kept cameras (camplace.workflows.sites)
 
     def to_dict(self) -> dict:
         out = {"cost": self.cost, "coverage_gap": self.coverage_gap,
@@ -30,6 +32,9 @@ class Metrics:
                "timings_s": self.timings_s}
         if self.well_triangulated_pct is not None:
             out["well_triangulated_pct"] = self.well_triangulated_pct
+        for key in ("privacy", "existing"):  # issue 17: only when the scene has privacy zones / existing cameras
+            if getattr(self, key) is not None:
+                out[key] = getattr(self, key)
         return out
 
 

@@ -93,7 +93,24 @@ def placement_dict(scene_name: str, placement: Placement, budget: int, candidate
     if src is not None:  # an evaluated placement (camplace.workflows.evaluate): the ids its file gave the cameras
         for c in out["cameras"]:
             c["source_id"] = str(src[c["candidate_id"]])
+    mark_existing(out, placement.info)
     return out
+
+
+def mark_existing(pdict: dict, info: dict) -> None:
+    """Existing cameras (issue 17; ``info['existing_ids']``: V row -> id as in the scene, from
+    camplace.workflows.sites): every camera gets ``existing`` (bool), existing ones their
+    ``id``; ``n_existing`` is added and ``budget`` is the new cameras' (``info['new_budget']``).
+    Nothing changes without existing cameras."""
+    existing_ids = info.get("existing_ids")
+    if not existing_ids:
+        return
+    pdict["budget"] = int(info.get("new_budget", pdict["budget"] - len(existing_ids)))
+    for c in pdict["cameras"]:
+        c["existing"] = c["candidate_id"] in existing_ids
+        if c["existing"]:
+            c["id"] = str(existing_ids[c["candidate_id"]])
+    pdict["n_existing"] = len(existing_ids)
 
 
 def placement_csv(cameras: list[dict]) -> str:
@@ -102,7 +119,8 @@ def placement_csv(cameras: list[dict]) -> str:
     w = csv.writer(buf, lineterminator="\n")
     w.writerow(["id", "x", "y", "z", "yaw", "pitch", "roll", "lens"])
     for c in cameras:
-        w.writerow([c["candidate_id"], *c["position"], c["yaw_deg"], c["pitch_deg"], c["roll_deg"], c["camera"]])
+        w.writerow([c.get("id", c["candidate_id"]), *c["position"], c["yaw_deg"], c["pitch_deg"], c["roll_deg"],
+                    c["camera"]])
     return buf.getvalue()
 
 

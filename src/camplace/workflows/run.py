@@ -28,6 +28,7 @@ from camplace.targets.build import Targets, build_targets
 from camplace.visibility.executors import make_executor
 from camplace.visibility.engine import Visibility, compute_visibility, drop_blind_candidates
 from camplace.visibility.registry import get_engine
+from camplace.workflows.sites import Site, site_of
 
 Progress = Callable[[str, int, int], None]
 
@@ -48,12 +49,25 @@ def _stage(progress: Progress | None, name: str) -> None:
         progress(name, 0, 1)
 
 
-def prepare(scene: str | Path | SceneSpec, progress: Progress | None = None,
-            timings: dict | None = None, log: list | None = None, *, should_stop: Callable[[], bool] | None = None,
-            max_memory_bytes: int | None = None, require_feasible: bool = False, workers: int = 1,
-            scheduler: str | None = None, cache_dir: str | Path | None = None, visibility_mode: str = "voxel",
-            stride: int | None = None, probe: float | None = None) -> tuple[Scene, Visibility]:
-    """Scene, targets, candidates and visibility (blind candidates dropped).
+def prepare(scene: str | Path | SceneSpec, progress: Progress | None = None, timings: dict | None = None,
+            log: list | None = None, **options) -> tuple[Scene, Visibility]:
+    """Scene, targets, candidates and visibility (blind candidates dropped, privacy zones
+    respected); the options of :func:`prepare_site`."""
+    sc, vis, _ = prepare_site(scene, progress, timings, log, **options)
+    return sc, vis
+
+
+def prepare_site(scene: str | Path | SceneSpec, progress: Progress | None = None,
+                 timings: dict | None = None, log: list | None = None, *,
+                 should_stop: Callable[[], bool] | None = None, max_memory_bytes: int | None = None,
+                 require_feasible: bool = False, workers: int = 1, scheduler: str | None = None,
+                 cache_dir: str | Path | None = None, visibility_mode: str = "voxel", stride: int | None = None,
+                 probe: float | None = None, keep: str | Path | None = None) -> tuple[Scene, Visibility, Site | None]:
+    """Scene, targets, candidates and visibility (blind candidates dropped), and the site
+    rules (camplace.workflows.sites: None without privacy zones, existing cameras or ``keep``,
+    a previous run's placement file whose cameras stay): candidates that see a privacy
+    zone or stand at an existing camera are removed before visibility; the existing
+    cameras are raycast once.
 
     ``visibility_mode``: ``voxel`` (default, centre test per target) or ``pixel`` (the
     paper's per-pixel raycasting, camplace.visibility.pixel, one ray per ``stride`` x
@@ -80,9 +94,14 @@ def prepare(scene: str | Path | SceneSpec, progress: Progress | None = None,
     timings["candidates"] = time.perf_counter() - t
     t = time.perf_counter()
     engine = get_engine(visibility_mode, voxel_size=sc.spec.voxel_size, stride=stride, probe=probe)
+    site = site_of(sc, cameras, engine, keep)
     with make_executor(workers, scheduler) as executor:
+        if site is not None:  # privacy zones, existing cameras (camplace.workflows.sites)
+            cands = site.admit(cands, executor, cache_dir)
         vis = compute_visibility(engine, sc.occupancy, targets, cands, executor=executor, cache_dir=cache_dir,
                                  progress=progress)
+        if site is not None:
+            site.raycast(engine, sc, targets, executor, cache_dir)
     vis = drop_blind_candidates(vis)
     timings["visibility"] = time.perf_counter() - t
     if sc.info.get("obstacle_files"):  # scans, meshes, OctoMaps: what was read and each clean-up step
@@ -93,6 +112,11 @@ def prepare(scene: str | Path | SceneSpec, progress: Progress | None = None,
             from camplace.scene.from_scan import describe_free_space
 
             log.append(describe_free_space(sc.info["free_space"]))
+    if "mount_positions_ruled_out" in cands.info:
+        log.append(f"mount rules: {cands.info['mount_positions_ruled_out']} mount positions outside the allowed area"
+                   + (f"; {cands.info['explicit_points']} explicit mount points" if cands.info['explicit_points']
+                      else ""))
+    log.extend(site.log if site is not None else [])
     log.append(f"candidates: {cands.info['generated']} generated, {cands.info['dropped_inside_obstacle']} inside "
                f"obstacles, {vis.info['dropped_blind']} seeing no target, {len(vis.candidates)} kept")
     log.append(f"targets: {len(targets)} ({', '.join(f'{n}: {int((targets.region_ids == r).sum())}' for r, n in enumerate(targets.region_names))})")
@@ -111,7 +135,7 @@ def prepare(scene: str | Path | SceneSpec, progress: Progress | None = None,
         if require_feasible:
             raise InputError(f"{source}: targets: {msg} (require_feasible)", option="require_feasible")
         log.append(f"warning: {msg}")
-    return sc, vis
+    return sc, vis, site
 
 
 def scene_inputs(scene: str | Path | SceneSpec, progress: Progress | None = None, timings: dict | None = None,
@@ -241,15 +265,16 @@ def problem_from_visibility(vis: Visibility, budget: int, money_budget: float | 
 def improve_placement(sc: Scene, vis: Visibility, problem: PlacementProblem, placement: Placement, *,
                       refine: bool = False, refine_time_s: float = 60.0, adaptive: int = 0, robust: int = 0,
                       time_limit_s: float | None = None, should_stop: Callable[[], bool] | None = None,
-                      progress: Progress | None = None,
-                      log: list | None = None) -> tuple[Visibility, PlacementProblem, Placement]:
+                      progress: Progress | None = None, log: list | None = None,
+                      guard=None) -> tuple[Visibility, PlacementProblem, Placement]:
     """Beyond the grid (issue 10), after the discrete solve: ``robust`` = 1 minimises the
     worst case over single camera failures (camplace.solvers.robust: swap/tabu heuristic, then the
     scenario MIP, exact on small V, as a large-neighbourhood search on large V); ``adaptive`` rounds of
     finer candidates (camplace.improve.adaptive), then ``refine`` moves each camera off the grid
     (camplace.improve.refine). Adaptive and refine append rows to V, so the returned visibility /
     problem replace the grid ones (the placement stays a selection of V rows). time_limit_s
-    caps the robust search (default 60 s) and the adaptive rounds (default 120 s)."""
+    caps the robust search (default 60 s) and the adaptive rounds (default 120 s). ``guard``
+    (camplace.improve.refine.PoseGuard, e.g. the privacy guard) rejects new poses."""
     log = [] if log is None else log
     if robust not in (0, 1):
         raise InputError(f"robust: expected 0 or 1 (single camera failures), got {robust}", option="robust")
@@ -269,14 +294,15 @@ def improve_placement(sc: Scene, vis: Visibility, problem: PlacementProblem, pla
         from camplace.improve.adaptive import adaptive_rounds
 
         ar = adaptive_rounds(sc, vis, problem, placement, rounds=adaptive, time_limit_s=time_limit_s or 120.0,
-                             progress=progress)
+                             progress=progress, guard=guard)
         vis, problem, placement = ar.visibility, ar.problem, ar.placement
         for h in ar.rounds:
             log.append(f"adaptive round {h['round']}: {h['candidates']} candidates, cost {h['cost']:.6g}")
     if refine:
         from camplace.improve.refine import refine_placement
 
-        rf = refine_placement(sc, vis, problem, placement, time_limit_s=refine_time_s, progress=progress)
+        rf = refine_placement(sc, vis, problem, placement, time_limit_s=refine_time_s, progress=progress,
+                              guard=guard)
         vis, problem, placement = rf.visibility, rf.problem, rf.placement
         log.append(f"refine: cost {rf.grid_cost:.6g} -> {rf.refined_cost:.6g} ({rf.info['moved']} cameras moved, "
                    f"{rf.info['trials']} trial poses, {rf.info['seconds']:.1f} s)")
@@ -291,13 +317,15 @@ def run(scene: str | Path | SceneSpec, budget: int | None = None, solver: str | 
         probe: float | None = None, money_budget: float | None = None, refine: bool = False,
         refine_time_s: float = 60.0, adaptive: int = 0, robust: int = 0,
         triangulation_deg: tuple[float, float] = (20.0, 160.0), well_triangulated: bool = False,
-        **solver_options) -> RunResult:
+        keep: str | Path | None = None, **solver_options) -> RunResult:
     """Run every stage on a scene (built-in name, YAML path or spec).
 
     budget / solver / time_limit_s default to the scene's ``placement`` keys. The solver
     name and budget are checked before any heavy stage. ``should_stop()`` is polled
     between visibility chunks (Interrupted) and by the solver, which then returns its
-    best placement with status 'interrupted'. See ``prepare`` for the other options."""
+    best placement with status 'interrupted'. ``keep``: a previous run's placement.json / .csv
+    whose cameras stay as existing ones (camplace.workflows.sites; the budget counts new
+    cameras). See ``prepare_site`` for the other options."""
     timings: dict[str, float] = {}
     log: list[str] = []
     spec, _, source = resolve_scene(scene)
@@ -311,9 +339,10 @@ def run(scene: str | Path | SceneSpec, budget: int | None = None, solver: str | 
         raise InputError(f"budget: expected a non-negative integer, got {budget!r}")
     if time_limit_s is not None and not (time_limit_s > 0 and np.isfinite(time_limit_s)):
         raise InputError(f"time limit: expected a positive number of seconds, got {time_limit_s!r}")
-    sc, vis = prepare(scene, progress, timings, log, should_stop=should_stop, max_memory_bytes=max_memory_bytes,
-                      require_feasible=require_feasible, workers=workers, scheduler=scheduler, cache_dir=cache_dir,
-                      visibility_mode=visibility_mode, stride=stride, probe=probe)
+    sc, vis, site = prepare_site(scene, progress, timings, log, should_stop=should_stop,
+                                 max_memory_bytes=max_memory_bytes, require_feasible=require_feasible, workers=workers,
+                                 scheduler=scheduler, cache_dir=cache_dir, visibility_mode=visibility_mode,
+                                 stride=stride, probe=probe, keep=keep)
     budget = sc.spec.placement.budget if budget is None else budget
     solver = sc.spec.placement.solver if solver is None else solver
     solver_options.setdefault("time_limit_s", sc.spec.placement.time_limit_s if time_limit_s is None else time_limit_s)
@@ -325,6 +354,8 @@ def run(scene: str | Path | SceneSpec, budget: int | None = None, solver: str | 
     if money is not None and not (money >= 0 and np.isfinite(money)):
         raise InputError(f"money budget: expected a non-negative number, got {money!r}")
     problem = problem_from_visibility(vis, budget, money)
+    if site is not None:  # Γ' = max(Γ - existing coverage, 0): the solvers see what remains
+        problem = site.solver_problem(problem)
     t = time.perf_counter()
     _stage(progress, "solve")
     if well_triangulated:  # the greedy with the triangulation requirement (positions come with the problem)
@@ -339,10 +370,15 @@ def run(scene: str | Path | SceneSpec, budget: int | None = None, solver: str | 
         t = time.perf_counter()
         vis, problem, placement = improve_placement(
             sc, vis, problem, placement, refine=refine, refine_time_s=refine_time_s, adaptive=adaptive,
-            robust=robust, should_stop=should_stop, progress=progress, log=log)
+            robust=robust, should_stop=should_stop, progress=progress, log=log,
+            guard=None if site is None else site.guard)
         timings["beyond_grid"] = time.perf_counter() - t
     t = time.perf_counter()
+    if site is not None:  # existing cameras join V and the selection, with the full Γ
+        vis, problem, placement = site.fold(vis, problem, placement)
     metrics = placement_metrics(vis, problem, placement.selected, triangulation_deg)
+    if site is not None:
+        metrics = site.report(vis, placement, metrics)
     timings["metrics"] = time.perf_counter() - t
     return RunResult(sc, vis, problem, placement, metrics, timings, log)
 
