@@ -9,6 +9,8 @@ and camplace.solvers.testing.check_solver is the proof that it keeps the contrac
 
 from __future__ import annotations
 
+import time
+from dataclasses import replace
 from functools import partial
 from typing import Any
 
@@ -91,7 +93,15 @@ def solve(problem: PlacementProblem, solver: str = "greedy", *, reduce: bool = T
     opts, hooks = split_options(s, options, solvers_taking)
     if not reduce or s.tags.needs_positions or s.tags.needs_start:
         return s.solve(problem, opts, hooks)
-    return solve_reduced(problem, lambda red: s.solve(red, opts, hooks))
+    t0 = time.perf_counter()
+
+    def run_reduced(red: PlacementProblem) -> Placement:  # the reduction's time counts against the limit
+        if opts.time_limit_s is None:
+            return s.solve(red, opts, hooks)
+        left = max(0.01, opts.time_limit_s - (time.perf_counter() - t0))
+        return s.solve(red, replace(opts, time_limit_s=left), hooks)
+
+    return solve_reduced(problem, run_reduced)
 
 
 __all__ = ["SOLVERS", "build_options", "get_solver", "solve", "solvers_taking"]
