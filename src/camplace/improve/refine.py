@@ -155,9 +155,10 @@ def append_candidates(vis: Visibility, occupancy: OccupancyGrid, poses: np.ndarr
 
 
 def extend_problem(problem: PlacementProblem, vis: Visibility) -> PlacementProblem:
-    """The same problem over an extended V (new rows: prices from their camera type)."""
+    """The same problem over an extended V (new rows: prices and types from their camera type)."""
     costs = np.array([vis.candidates.cameras[c].cost for c in vis.candidates.camera_ids], np.float64)
-    return replace(problem, V=vis.V, location_ids=vis.candidates.location_ids, camera_costs=costs)
+    types = None if problem.type_ids is None else np.asarray(vis.candidates.camera_ids, np.int64)
+    return replace(problem, V=vis.V, location_ids=vis.candidates.location_ids, camera_costs=costs, type_ids=types)
 
 
 def target_gains(problem: PlacementProblem, cov_other: np.ndarray) -> np.ndarray:

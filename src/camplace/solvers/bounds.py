@@ -9,7 +9,7 @@ The convex model: min Σ_j w_j Σ_{k=1..Γ_j} (2k−1) u_jk  s.t.  Σ_i V_ij x_i
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Callable
 
 import numba
@@ -271,7 +271,7 @@ def tight_model_arrays(problem: PlacementProblem, forced_locations: np.ndarray |
     """Column-major arrays of the convex model: returns (A csc, cost, col_lo, col_hi,
     row_lo, row_hi, n_x). Columns: x (N_g), then u_jk for each target j and k=1..Γ_j.
     Rows: coverage (N_p, ≥ Γ_j), budget (≤ N), one per location (≤ 1; = 1 for the
-    location ids in `forced_locations`)."""
+    location ids in `forced_locations`), one per limited camera type (≤ its limit)."""
     V = problem.V
     n_g, n_p = V.shape
     gamma = problem.gamma.astype(np.int64)
@@ -286,7 +286,8 @@ def tight_model_arrays(problem: PlacementProblem, forced_locations: np.ndarray |
     budget_row = sp.csr_matrix(np.ones((1, n_g)))
     loc_rows = sp.csr_matrix((np.ones(n_g), (dense_loc, np.arange(n_g))), shape=(n_loc, n_g))
     U = sp.csr_matrix((np.ones(n_u), (u_target, np.arange(n_u))), shape=(n_p, n_u))
-    A = sp.bmat([[VT, U], [budget_row, None], [loc_rows, None]], format="csc")
+    T, t_hi = problem.type_rows()
+    A = sp.bmat([[VT, U], [budget_row, None], [loc_rows, None]] + ([[T, None]] if len(t_hi) else []), format="csc")
     cost = np.concatenate([np.zeros(n_g), problem.weights[u_target] * (2 * u_k - 1)])
     col_lo = np.zeros(n_g + n_u)
     col_hi = np.ones(n_g + n_u)
@@ -295,8 +296,8 @@ def tight_model_arrays(problem: PlacementProblem, forced_locations: np.ndarray |
     if forced_locations is not None and len(forced_locations):
         uniq = np.unique(problem.location_ids)
         loc_lo[np.searchsorted(uniq, np.asarray(forced_locations))] = 1.0
-    row_lo = np.concatenate([gamma.astype(np.float64), [-inf], loc_lo])
-    row_hi = np.concatenate([np.full(n_p, inf), [float(problem.budget)], np.ones(n_loc)])
+    row_lo = np.concatenate([gamma.astype(np.float64), [-inf], loc_lo, np.full(len(t_hi), -inf)])
+    row_hi = np.concatenate([np.full(n_p, inf), [float(problem.budget)], np.ones(n_loc), t_hi])
     return A, cost, col_lo, col_hi, row_lo, row_hi, n_g
 
 
@@ -445,23 +446,22 @@ def solve_reduced_mip(problem: PlacementProblem, red: Reduction, incumbent: np.n
     unseen = ~seen
     const = float(np.dot(problem.weights[unseen], problem.gamma[unseen].astype(np.float64) ** 2))
     sub = PlacementProblem(sp.csr_matrix(V[:, cols]), problem.gamma[cols], problem.weights[cols], problem.budget,
-                           problem.location_ids[keep_ids])
+                           problem.location_ids[keep_ids], **problem.type_fields(keep_ids))
     if not np.all(np.isin(red.forced, sub.location_ids)):
         info["status"] = "infeasible-forcing"  # a forced location has no candidate left
         return red.ub, None, info
     rsub = reduce_problem(sub)
     small = rsub.problem
     # a forced location whose kept candidates all see nothing vanishes from `small`: any of
-    # them costs the same, so it just holds one camera of the budget
+    # them costs the same, so it just holds one camera of the budget (type limits kept: a relaxation)
     blind = np.setdiff1d(red.forced, small.location_ids)
     forced = red.forced[np.isin(red.forced, small.location_ids)]
-    small = PlacementProblem(small.V, small.gamma, small.weights, problem.budget - len(blind), small.location_ids)
+    small = replace(small, budget=problem.budget - len(blind))
     info.update(targets_kept=int(small.n_targets), candidates_after_reduction=int(small.n_candidates))
     if not model_fits(end, convex_model_nnz(small)):
         info["status"] = "skipped: no time left to build the reduced model"
         return red.lagrangian, None, info
-    h, n_x = build_highs(small, integer=True, threads=threads, time_limit_s=None, seed=seed,
-                         forced_locations=forced)
+    h, n_x = build_highs(small, integer=True, threads=threads, time_limit_s=None, seed=seed, forced_locations=forced)
     # building counts against the limit
     if end - time.perf_counter() <= 0.05 or not limit_to_deadline(h, end):
         info["status"] = "no time left after building"

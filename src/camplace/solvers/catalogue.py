@@ -23,9 +23,28 @@ from __future__ import annotations
 import numpy as np
 
 from camplace.problem.gains import removal_losses
-from camplace.problem.model import PlacementProblem
+from camplace.problem.model import PlacementProblem, TypeBudget
 from camplace.solvers.greedy import (MIN_PRICE, cost_scaled_greedy, marginal_gains, solve_catalogue_greedy,
                                      swap_local_search)
+
+
+def fill(problem: PlacementProblem, sel: list[int], cov: np.ndarray, price: np.ndarray | None = None) -> None:
+    """Greedy additions to ``sel`` (largest gain, or gain / price) while the budget allows
+    and some candidate every rule allows (free location, type not full, money budget)
+    lowers the cost; ``sel`` and its coverage ``cov`` (N_p,) are updated in place."""
+    V = problem.V
+    used = set(problem.location_ids[sel].tolist())
+    while len(sel) < problem.budget:
+        g = marginal_gains(problem, cov) if price is None else marginal_gains(problem, cov) / price
+        ok = ~np.isin(problem.location_ids, list(used)) & (g > 0) & ~TypeBudget(problem, sel).full()
+        if problem.money_budget is not None:
+            ok &= problem.costs <= problem.money_budget - float(problem.costs[sel].sum()) + 1e-9
+        if not ok.any():
+            break
+        j = int(np.argmax(np.where(ok, g, -np.inf)))
+        sel.append(j)
+        used.add(int(problem.location_ids[j]))
+        cov[V.indices[V.indptr[j]:V.indptr[j + 1]]] += 1
 
 
 def repair_to_money_budget(problem: PlacementProblem, selected: np.ndarray, *, end: float = float("inf"),
@@ -47,17 +66,7 @@ def repair_to_money_budget(problem: PlacementProblem, selected: np.ndarray, *, e
         k = int(np.argmin(loss))
         i = sel.pop(k)
         cov[V.indices[V.indptr[i]:V.indptr[i + 1]]] -= 1
-    used = set(problem.location_ids[sel].tolist())
-    while len(sel) < problem.budget:
-        left = problem.money_budget - float(problem.costs[sel].sum())
-        g = marginal_gains(problem, cov) / price
-        ok = (problem.costs <= left + 1e-9) & ~np.isin(problem.location_ids, list(used)) & (g > 0)
-        if not ok.any():
-            break
-        j = int(np.argmax(np.where(ok, g, -np.inf)))
-        sel.append(j)
-        used.add(int(problem.location_ids[j]))
-        cov[V.indices[V.indptr[j]:V.indptr[j + 1]]] += 1
+    fill(problem, sel, cov, price)
     sel, _, _ = swap_local_search(problem, sel, end=end)
     out = np.array(sorted(int(i) for i in sel), np.int64)
     if compare_greedy:  # never worse than the catalogue greedy + 1-swap
@@ -67,4 +76,28 @@ def repair_to_money_budget(problem: PlacementProblem, selected: np.ndarray, *, e
     return out
 
 
-__all__ = ["cost_scaled_greedy", "repair_to_money_budget", "solve_catalogue_greedy"]
+def repair_to_type_limits(problem: PlacementProblem, selected: np.ndarray, *,
+                          end: float = float("inf")) -> np.ndarray:
+    """Make any selection keep the per-type limits (problem.type_limits; for solvers whose
+    moves ignore them): while a type is over its limit drop its camera whose removal raises
+    the cost least, fill with greedy additions every rule allows (free location, type not
+    full, money budget), then 1-swap descent (which keeps every rule). A selection that
+    already fits is only improved, never made worse. Returns sorted candidate ids."""
+    sel = [int(i) for i in np.asarray(selected, np.int64)]
+    if not problem.has_type_limits:
+        return np.array(sorted(sel), np.int64)
+    V = problem.V
+    cov = problem.coverage(np.array(sel, np.int64))
+    lt = problem.limited_types()
+    for t, limit in problem.type_limits.items():
+        while sum(1 for i in sel if lt[i] == int(t)) > int(limit):
+            mine = [k for k, i in enumerate(sel) if lt[i] == int(t)]
+            loss = removal_losses(problem, np.array([sel[k] for k in mine]), cov)
+            i = sel.pop(mine[int(np.argmin(loss))])
+            cov[V.indices[V.indptr[i]:V.indptr[i + 1]]] -= 1
+    fill(problem, sel, cov)
+    sel, _, _ = swap_local_search(problem, sel, end=end)
+    return np.array(sorted(int(i) for i in sel), np.int64)
+
+
+__all__ = ["cost_scaled_greedy", "repair_to_money_budget", "repair_to_type_limits", "solve_catalogue_greedy"]

@@ -14,7 +14,7 @@ from typing import Callable
 import numpy as np
 
 from camplace.problem.gains import marginal_gains, row_gain  # noqa: F401 (re-exported)
-from camplace.problem.model import PlacementProblem
+from camplace.problem.model import PlacementProblem, TypeBudget
 from camplace.solvers.base import OnIncumbent, Placement, ProgressFn, ShouldStop, deadline, stopped
 from camplace.solvers.local_search import NominalObjective, swap_search
 
@@ -25,8 +25,8 @@ def lazy_greedy(problem: PlacementProblem, all_gains: Callable[[np.ndarray], np.
                 stage: str = "greedy") -> tuple[list[int], np.ndarray, int, bool]:
     """CELF greedy for any gain that only shrinks as coverage grows (submodular).
 
-    Adds the candidate of largest positive gain while the budget, the money budget
-    and the one-camera-per-location rule allow. Returns (selected in order,
+    Adds the candidate of largest positive gain while the budget, the money budget,
+    the per-type limits and the one-camera-per-location rule allow. Returns (selected in order,
     coverage (N_p,) int64, gain evaluations, interrupted)."""
     cov = np.zeros(problem.n_targets, np.int64)
     gains = all_gains(cov)
@@ -35,6 +35,7 @@ def lazy_greedy(problem: PlacementProblem, all_gains: Callable[[np.ndarray], np.
     costs = problem.costs
     money_left = float("inf") if problem.money_budget is None else float(problem.money_budget)
     used_locations: set[int] = set()
+    types = TypeBudget(problem)
     selected: list[int] = []
     evaluations = len(gains)
     step = 0
@@ -42,7 +43,7 @@ def lazy_greedy(problem: PlacementProblem, all_gains: Callable[[np.ndarray], np.
     V = problem.V
     while len(selected) < problem.budget and heap:
         neg, i, stamp = heapq.heappop(heap)
-        if int(problem.location_ids[i]) in used_locations or costs[i] > money_left + 1e-12:
+        if int(problem.location_ids[i]) in used_locations or costs[i] > money_left + 1e-12 or not types.allows(i):
             continue
         if stamp == step:
             if -neg <= 0:
@@ -50,6 +51,7 @@ def lazy_greedy(problem: PlacementProblem, all_gains: Callable[[np.ndarray], np.
             selected.append(i)
             used_locations.add(int(problem.location_ids[i]))
             money_left -= costs[i]
+            types.add(i)
             cov[V.indices[V.indptr[i]:V.indptr[i + 1]]] += 1
             step += 1
             if progress:

@@ -1,7 +1,7 @@
 """``greedy-fast``: the paper's greedy with exact incremental gains, compiled (numba).
 
 Same rule as ``greedy`` (add the candidate of largest cost drop, ties to the lowest id,
-one camera per location, within the budget and money budget, stop when nothing lowers
+one camera per location, within the budget, money budget and per-type limits, stop when nothing lowers
 the cost), but instead of a lazy heap it keeps every candidate's gain exact: when a
 camera is added, each target j it sees loses one unit of deficit, and the gain of every
 candidate seeing j drops by w_j·2 (deficit was > 1) or w_j (deficit was 1), walked
@@ -19,7 +19,7 @@ import time
 import numba
 import numpy as np
 
-from camplace.problem.model import PlacementProblem
+from camplace.problem.model import PlacementProblem, type_arrays
 from camplace.solvers.base import OnIncumbent, Placement, ProgressFn, ShouldStop, deadline, stopped
 
 STEPS_PER_CALL = 32  # steps between should_stop / time-limit polls
@@ -62,8 +62,9 @@ def initial_gains(indptr, indices, deficit, weights):
 
 @numba.njit(cache=True)
 def _steps(indptr, indices, col_ptr, col_rows, weights, deficit, gain, alive, loc, loc_ptr, loc_rows,
-           costs, money, order, n_sel, budget, max_steps):
-    """Up to max_steps greedy steps, in place. Returns (n_sel, money, finished)."""
+           costs, money, order, n_sel, budget, max_steps, ctype, tleft):
+    """Up to max_steps greedy steps, in place (ctype: limited type index or −1, tleft:
+    cameras left per limited type). Returns (n_sel, money, finished)."""
     for _ in range(max_steps):
         if n_sel >= budget:
             return n_sel, money, True
@@ -81,6 +82,13 @@ def _steps(indptr, indices, col_ptr, col_rows, weights, deficit, gain, alive, lo
         L = loc[best]
         for q in range(loc_ptr[L], loc_ptr[L + 1]):  # one camera per location
             alive[loc_rows[q]] = False
+        t = ctype[best]
+        if t >= 0:
+            tleft[t] -= 1
+            if tleft[t] <= 0:  # the type is full
+                for i in range(len(gain)):
+                    if ctype[i] == t:
+                        alive[i] = False
         if money < np.inf:
             for i in range(len(gain)):
                 if alive[i] and costs[i] > money + 1e-12:
@@ -129,11 +137,14 @@ def solve_greedy_fast(problem: PlacementProblem, *, time_limit_s: float | None =
     costs = np.asarray(problem.costs, np.float64)
     money = np.inf if problem.money_budget is None else float(problem.money_budget)
     alive = costs <= money + 1e-12
+    ctype, tleft = type_arrays(problem)
+    alive &= (ctype < 0) | (tleft[np.maximum(ctype, 0)] > 0)
     order = np.empty(max(0, min(problem.budget, n_g)), np.int64)
     n_sel, cut, finished = 0, False, n_g == 0
     while not finished:
         n_sel, money, finished = _steps(indptr, indices, col_ptr, col_rows, weights, deficit, gain, alive, loc,
-                                        loc_ptr, loc_rows, costs, money, order, n_sel, len(order), STEPS_PER_CALL)
+                                        loc_ptr, loc_rows, costs, money, order, n_sel, len(order), STEPS_PER_CALL,
+                                        ctype, tleft)
         if progress:
             progress("greedy", n_sel, problem.budget)
         if not finished and (stopped(should_stop) or time.perf_counter() > end):

@@ -16,7 +16,7 @@ import numpy as np
 
 from camplace.core.errors import InputError
 from camplace.metrics.triangulation import DEFAULT_MAX_DEG, DEFAULT_MIN_DEG, apply_add, check_angle_range, pair_up
-from camplace.problem.model import PlacementProblem, shortfall_cost
+from camplace.problem.model import PlacementProblem, TypeBudget, shortfall_cost
 from camplace.solvers.base import OnIncumbent, Placement, ProgressFn, ShouldStop, deadline, stopped
 from camplace.solvers.greedy import marginal_gains
 
@@ -100,6 +100,7 @@ def solve_greedy_triangulated(problem: PlacementProblem, *, time_limit_s: float 
     costs = problem.costs
     spent = 0.0
     used: set[int] = set()
+    types = TypeBudget(problem) if problem.has_type_limits else None
     selected: list[int] = []
     status = "heuristic"
     while len(selected) < problem.budget:
@@ -111,6 +112,8 @@ def solve_greedy_triangulated(problem: PlacementProblem, *, time_limit_s: float 
             allowed &= ~np.isin(problem.location_ids, list(used))
         if problem.money_budget is not None:
             allowed &= costs + spent <= problem.money_budget + 1e-9
+        if types is not None:
+            allowed &= ~types.full()
         cand = np.flatnonzero(allowed)
         if len(cand) == 0:
             break
@@ -126,6 +129,8 @@ def solve_greedy_triangulated(problem: PlacementProblem, *, time_limit_s: float 
         cov[indices[indptr[best]:indptr[best + 1]]] += 1
         selected.append(best)
         used.add(int(problem.location_ids[best]))
+        if types is not None:
+            types.add(best)
         spent += float(costs[best])
         if progress is not None:
             progress("greedy-triangulated", len(selected), int(problem.budget))

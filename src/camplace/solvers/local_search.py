@@ -2,7 +2,7 @@
 
 A move exchanges a selected camera a for an unselected candidate b (b's location free,
 or a's own: a pose change), or adds b while the selection is below the budget (a = None);
-every move keeps the money budget. What a move is worth comes from an objective
+every move keeps the money budget and the per-type limits. What a move is worth comes from an objective
 (:class:`SwapObjective`): :class:`NominalObjective` scores the squared-shortfall cost
 (greedy's 1-swap and the adaptive rounds' descent), camplace.solvers.robust scores the
 worst single-failure cost. :func:`swap_search` drives either one:
@@ -25,7 +25,7 @@ from typing import Any, Iterable, Protocol
 import numpy as np
 
 from camplace.problem.gains import row, shortfall_cost, target_gains
-from camplace.problem.model import PlacementProblem
+from camplace.problem.model import PlacementProblem, TypeBudget
 from camplace.solvers.base import OnIncumbent, ShouldStop, stopped
 
 Key = Any  # an objective's score of a selection (compared only by the objective's `better`)
@@ -33,7 +33,7 @@ Key = Any  # an objective's score of a selection (compared only by the objective
 
 class SwapState:
     """The selection being searched: sel (list of candidate ids, in move order), cov
-    (N_p,) int64 coverage, and the location / money rules of the moves."""
+    (N_p,) int64 coverage, and the location / money / per-type rules of the moves."""
 
     def __init__(self, problem: PlacementProblem, selected: Iterable[int], money_tol: float = 1e-9) -> None:
         self.problem = problem
@@ -46,6 +46,7 @@ class SwapState:
         self.is_sel[self.sel] = True
         self.costs = problem.costs
         self.money_tol = float(money_tol)
+        self.types = TypeBudget(problem, self.sel) if problem.has_type_limits else None
 
     def row(self, i: int) -> np.ndarray:
         """Target ids seen by candidate i."""
@@ -63,6 +64,11 @@ class SwapState:
             if a is not None:
                 spent -= self.costs[a]
             ok &= spent + self.costs <= money + self.money_tol
+        if self.types is not None:
+            full = self.types.full()
+            if a is not None:  # a going out frees one camera of its own type
+                full &= self.types.of != self.types.of[a]
+            ok &= ~full
         return ok
 
     def apply(self, a: int | None, b: int, in_place: bool) -> None:
@@ -76,8 +82,12 @@ class SwapState:
             self.is_sel[a] = False
             self.loc_used[self.loc[a]] = False
             self.cov[self.row(a)] -= 1
+            if self.types is not None:
+                self.types.remove(a)
         else:
             self.sel.append(b)
+        if self.types is not None:
+            self.types.add(b)
         self.is_sel[b] = True
         self.loc_used[self.loc[b]] = True
         self.cov[self.row(b)] += 1

@@ -3,7 +3,8 @@ camera price) whose coverage cost is at most a target.
 
     min  Σ_i p_i x_i            (p_i = 1: count; p_i = camera_costs: price)
     s.t. Σ_i V_ij x_i + Σ_k u_jk >= Γ_j,   Σ_j w_j Σ_k (2k − 1) u_jk <= target,
-         Σ_{i at l} x_i <= 1,  [Σ_i cost_i x_i <= money_budget],  x binary, u ∈ [0, 1]
+         Σ_{i at l} x_i <= 1,  [Σ_i cost_i x_i <= money_budget],  [Σ_{i of type t} x_i <= limit_t],
+         x binary, u ∈ [0, 1]
 
 (the tight model of camplace.solvers.mip with cost and budget swapped). target
 defaults to 0 (every Γ_j met); coverage_gap=ε sets target = ε · Σ_j w_j Γ_j²
@@ -95,7 +96,7 @@ def _fewest(problem: PlacementProblem, target: float, prices: np.ndarray, end: f
     sel = start
     if out.values is not None:
         cand = np.nonzero(out.values[:n_x] > 0.5)[0].astype(np.int64)
-        ok = len(np.unique(problem.location_ids[cand])) == len(cand)
+        ok = len(np.unique(problem.location_ids[cand])) == len(cand) and problem.type_ok(cand)
         if ok and problem.cost(cand) <= target + 1e-6 and (sel is None or prices[cand].sum() <= prices[sel].sum()):
             sel = cand
     return sel, start, out

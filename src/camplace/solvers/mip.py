@@ -8,6 +8,7 @@ u_jk ∈ [0, 1], k = 1..Γ_j (u_jk = 1: "the k-th missing view"),
     s.t. Σ_i V_ij x_i + Σ_k u_jk >= Γ_j        (one row per target with Γ_j >= 1)
          Σ_i x_i <= N_s                        (budget)
          Σ_i cost_i x_i <= money_budget         (only when the problem has one)
+         Σ_{i of type t} x_i <= limit_t         (one row per limited camera type)
          Σ_{i at location l} x_i <= 1           (one row per location with >= 2 poses)
          x ∈ {0, 1}^{N_g},  u ∈ [0, 1]
 
@@ -45,7 +46,7 @@ class TightLayout:
 
 def tight_model_arrays(problem: PlacementProblem) -> tuple[MilpArrays, TightLayout]:
     """The tight convex MILP of the module docstring as arrays (rows: coverage rows
-    first, then budget, [money budget], location rows)."""
+    first, then budget, [money budget], location rows, [per-type limit rows])."""
     V = problem.V
     n_g = problem.n_candidates
     gamma = np.asarray(problem.gamma, np.int64)
@@ -71,6 +72,11 @@ def tight_model_arrays(problem: PlacementProblem) -> tuple[MilpArrays, TightLayo
         blocks.append([L, None])
         lower.append(np.full(L.shape[0], -INF))
         upper.append(np.ones(L.shape[0]))
+    if problem.has_type_limits:
+        T, limits = problem.type_rows()
+        blocks.append([T, None])
+        lower.append(np.full(len(limits), -INF))
+        upper.append(limits)
     A = sp.bmat(blocks, format="csc") if n_u else sp.vstack([b[0] for b in blocks], format="csc")
     if A.shape[1] != n_g + n_u:  # bmat drops an all-None column block when n_u == 0
         A = sp.hstack([A, sp.csc_matrix((A.shape[0], n_g + n_u - A.shape[1]))], format="csc")

@@ -9,7 +9,8 @@ pl^k_j and an integer f^k_j with
          (k − 0.5) pl^k_j <= f^k_j <= (k + 0.5) pl^k_j    (0 < k < Γ_j)
          (Γ_j − 0.5) pl^Γ_j <= f^Γ_j <= Γ_j pl^Γ_j
          Σ_k pl^k_j = 1
-         Σ_i x_i <= N_s, [Σ_i cost_i x_i <= money_budget], Σ_{i at l} x_i <= 1
+         Σ_i x_i <= N_s, [Σ_i cost_i x_i <= money_budget], Σ_{i at l} x_i <= 1,
+         [Σ_{i of type t} x_i <= limit_t per limited camera type]
 
 (the paper's strict "<" become "<=": f^k is integer, so f^k_j = k · pl^k_j and the
 objective is Σ_j w_j Q_j², as eq. 6–7 intend; lb_j = min(0, Γ_j − #candidates seeing j)).
@@ -124,6 +125,15 @@ def paper_model_arrays(problem: PlacementProblem) -> tuple[MilpArrays, np.ndarra
     lo.append(np.full(L.shape[0], -INF))
     hi.append(np.ones(L.shape[0]))
     r += L.shape[0]
+    if problem.has_type_limits:
+        T, limits = problem.type_rows()
+        T = T.tocoo()
+        rows.append(r + T.row)
+        cols.append(T.col)
+        vals.append(T.data)
+        lo.append(np.full(len(limits), -INF))
+        hi.append(limits)
+        r += len(limits)
     A = sp.csc_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))), shape=(r, n))
     c = np.zeros(n)
     c[f_col] = problem.weights[targets][pt] * pk

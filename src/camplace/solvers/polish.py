@@ -18,7 +18,6 @@ module is unavailable. Status 'optimal' when the bound meets the cost, else 'heu
 
 from __future__ import annotations
 
-import dataclasses
 import time
 
 import numpy as np
@@ -60,9 +59,7 @@ def solve_greedy_polish(problem: PlacementProblem, *, time_limit_s: float | None
         bound = 0.0 if g.objective <= 0 else None
         return Placement(best, best_cost, bound, status, "greedy-polish", time.perf_counter() - t0, info)
     R = restricted_candidates(problem, g.selected, extra_per_camera * len(g.selected))
-    costs = None if problem.camera_costs is None else np.asarray(problem.camera_costs)[R]
-    sub = dataclasses.replace(problem, V=problem.V[R], location_ids=np.asarray(problem.location_ids)[R],
-                              camera_costs=costs)
+    sub = problem.take_candidates(R)
     left = end - time.perf_counter()
     m = solve_reduced(sub, lambda q: solve_mip(q, time_limit_s=max(0.1, min(mip_time_s, 0.8 * left)),
                                                threads=threads, seed=seed, should_stop=should_stop,

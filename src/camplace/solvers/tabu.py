@@ -3,7 +3,8 @@
 State: a selection S (|S| ≤ N, one camera per location), the coverage c_j of every
 target and the add-gain of every candidate g_i = Σ_{j∈V_i, c_j<Γ_j} w_j (2(Γ_j−c_j)−1)
 (the cost drop of adding i). A move swaps r ∈ S for a ∉ S (a's location free or
-r's own: a pose change) or adds a while |S| < N. The exact cost change of a swap is
+r's own: a pose change) or adds a while |S| < N; no move puts more cameras of a
+type than its limit (problem.type_limits: tleft counts what is left). The exact cost change of a swap is
     Δ(r, a) = loss(r) − g_a − corr_r(a),
 loss(r) = Σ_{j∈V_r, c_j≤Γ_j} w_j (2(Γ_j−c_j)+1), corr_r(a) = Σ_{j∈V_r∩V_a} (gain of j
 after removing r − before), computed per r through the columns of V. Every
@@ -22,7 +23,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from camplace.problem.gains import row_loss_nb as _loss, target_gain_nb as _unit_gain, target_gains
-from camplace.problem.model import PlacementProblem
+from camplace.problem.model import PlacementProblem, type_arrays
 from camplace.solvers.base import Placement
 
 # state vector slots (int64)
@@ -66,8 +67,10 @@ def _apply(i, sign, indptr, indices, cptr, cidx, gamma, weights, cov, gain):
 
 
 @numba.njit(cache=True)
-def _reset(indptr, indices, cptr, cidx, gamma, weights, sel, loc, loc_used, cov, gain, base_gain):
-    """Recompute coverage, gains and location use from the selection mask; returns the cost."""
+def _reset(indptr, indices, cptr, cidx, gamma, weights, sel, loc, loc_used, cov, gain, base_gain, ctype, tlim, tleft):
+    """Recompute coverage, gains, location use and cameras left per type from the selection
+    mask; returns the cost."""
+    tleft[:] = tlim
     cov[:] = 0
     gain[:] = base_gain
     loc_used[:] = -1
@@ -78,12 +81,14 @@ def _reset(indptr, indices, cptr, cidx, gamma, weights, sel, loc, loc_used, cov,
         if sel[i]:
             cost += _apply(i, 1, indptr, indices, cptr, cidx, gamma, weights, cov, gain)
             loc_used[loc[i]] = i
+            if ctype[i] >= 0:
+                tleft[ctype[i]] -= 1
     return cost
 
 
 @numba.njit(cache=True)
 def _greedy_fill(st, k_rcl, budget, indptr, indices, cptr, cidx, gamma, weights, sel, loc, loc_used, cov, gain,
-                 cost):
+                 cost, ctype, tleft):
     """Add cameras while |S| < N and some candidate lowers the cost: each step picks
     one of the k_rcl best feasible candidates at random (k_rcl = 1: plain greedy,
     ties to the lowest id)."""
@@ -93,7 +98,7 @@ def _greedy_fill(st, k_rcl, budget, indptr, indices, cptr, cidx, gamma, weights,
     while st[_NSEL] < budget:
         m = 0
         for i in range(n_g):
-            if sel[i] or loc_used[loc[i]] >= 0 or gain[i] <= 1e-12:
+            if sel[i] or loc_used[loc[i]] >= 0 or gain[i] <= 1e-12 or (ctype[i] >= 0 and tleft[ctype[i]] <= 0):
                 continue
             v = gain[i]
             if m < k_rcl:
@@ -115,6 +120,8 @@ def _greedy_fill(st, k_rcl, budget, indptr, indices, cptr, cidx, gamma, weights,
         cost += _apply(pick, 1, indptr, indices, cptr, cidx, gamma, weights, cov, gain)
         sel[pick] = True
         loc_used[loc[pick]] = pick
+        if ctype[pick] >= 0:
+            tleft[ctype[pick]] -= 1
         st[_NSEL] += 1
     return cost
 
@@ -122,7 +129,7 @@ def _greedy_fill(st, k_rcl, budget, indptr, indices, cptr, cidx, gamma, weights,
 @numba.njit(cache=True, nogil=True)
 def _tabu_iterations(n_iter, st, fst, budget, indptr, indices, cptr, cidx, gamma, weights, loc, base_gain,
                      sel, loc_used, cov, gain, corr, tabu_add, tabu_rem, best_sel,
-                     tenure_add, tenure_rem, stall_limit, perturb, k_rcl):
+                     tenure_add, tenure_rem, stall_limit, perturb, k_rcl, ctype, tlim, tleft):
     """Run n_iter tabu iterations in place. fst = [current cost, best cost]."""
     n_g = sel.shape[0]
     sel_list = np.empty(budget, np.int64)
@@ -138,13 +145,15 @@ def _tabu_iterations(n_iter, st, fst, budget, indptr, indices, cptr, cidx, gamma
             bi = -1
             bv = 1e-12
             for i in range(n_g):
-                if not sel[i] and loc_used[loc[i]] < 0 and gain[i] > bv:
+                if not sel[i] and loc_used[loc[i]] < 0 and gain[i] > bv and (ctype[i] < 0 or tleft[ctype[i]] > 0):
                     bv = gain[i]
                     bi = i
             if bi >= 0:
                 cur += _apply(bi, 1, indptr, indices, cptr, cidx, gamma, weights, cov, gain)
                 sel[bi] = True
                 loc_used[loc[bi]] = bi
+                if ctype[bi] >= 0:
+                    tleft[ctype[bi]] -= 1
                 st[_NSEL] += 1
                 fst[0] = cur
                 if cur < best - 1e-9:
@@ -190,6 +199,9 @@ def _tabu_iterations(n_iter, st, fst, budget, indptr, indices, cptr, cidx, gamma
                 la = loc[a]
                 if la != lr and loc_used[la] >= 0:
                     continue
+                ta = ctype[a]
+                if ta >= 0 and ta != ctype[r] and tleft[ta] <= 0:
+                    continue
                 d = loss - gain[a] - corr[a]
                 if d < best_delta + 1e-9:
                     if (r_tabu or tabu_add[a] > it) and not (cur + d < best - 1e-9):
@@ -216,6 +228,10 @@ def _tabu_iterations(n_iter, st, fst, budget, indptr, indices, cptr, cidx, gamma
             cur += _apply(best_a, 1, indptr, indices, cptr, cidx, gamma, weights, cov, gain)
             sel[best_a] = True
             loc_used[loc[best_a]] = best_a
+            if ctype[best_r] >= 0:
+                tleft[ctype[best_r]] += 1
+            if ctype[best_a] >= 0:
+                tleft[ctype[best_a]] -= 1
             tabu_add[best_r] = it + tenure_add + _rand(st) % (tenure_add + 1)
             tabu_rem[best_a] = it + tenure_rem + _rand(st) % (tenure_rem + 1)
             st[_MOVES] += 1
@@ -233,12 +249,14 @@ def _tabu_iterations(n_iter, st, fst, budget, indptr, indices, cptr, cidx, gamma
             if st[_RESTARTS] % 4 == 0:
                 sel[:] = False
                 st[_NSEL] = 0
-                cur = _reset(indptr, indices, cptr, cidx, gamma, weights, sel, loc, loc_used, cov, gain, base_gain)
+                cur = _reset(indptr, indices, cptr, cidx, gamma, weights, sel, loc, loc_used, cov, gain, base_gain, ctype,
+                             tlim, tleft)
                 cur = _greedy_fill(st, k_rcl, budget, indptr, indices, cptr, cidx, gamma, weights, sel, loc,
-                                   loc_used, cov, gain, cur)
+                                   loc_used, cov, gain, cur, ctype, tleft)
             else:
                 sel[:] = best_sel
-                cur = _reset(indptr, indices, cptr, cidx, gamma, weights, sel, loc, loc_used, cov, gain, base_gain)
+                cur = _reset(indptr, indices, cptr, cidx, gamma, weights, sel, loc, loc_used, cov, gain, base_gain, ctype,
+                             tlim, tleft)
                 nsel = 0
                 for i in range(n_g):
                     if sel[i]:
@@ -256,10 +274,12 @@ def _tabu_iterations(n_iter, st, fst, budget, indptr, indices, cptr, cidx, gamma
                     cur += _apply(r, -1, indptr, indices, cptr, cidx, gamma, weights, cov, gain)
                     sel[r] = False
                     loc_used[loc[r]] = -1
+                    if ctype[r] >= 0:
+                        tleft[ctype[r]] += 1
                     tabu_add[r] = it + tenure_add
                     st[_NSEL] -= 1
                 cur = _greedy_fill(st, k_rcl, budget, indptr, indices, cptr, cidx, gamma, weights, sel, loc,
-                                   loc_used, cov, gain, cur)
+                                   loc_used, cov, gain, cur, ctype, tleft)
             fst[0] = cur
             if cur < fst[1] - 1e-9:
                 fst[1] = cur
@@ -304,16 +324,20 @@ class TabuSearch:
         self.tabu_add = np.zeros(n_g, np.int64)
         self.tabu_rem = np.zeros(n_g, np.int64)
         self.fst = np.zeros(2)
+        self.ctype, self.tlim = type_arrays(problem)
+        self.tleft = self.tlim.copy()
         cost = _reset(self.indptr, self.indices, self.cptr, self.cidx, self.gamma, self.weights, self.sel, self.loc,
-                      self.loc_used, self.cov, self.gain, self.base_gain)
+                      self.loc_used, self.cov, self.gain, self.base_gain, self.ctype, self.tlim, self.tleft)
         if initial is not None and len(initial):
             self.sel[np.asarray(initial, np.int64)] = True
             cost = _reset(self.indptr, self.indices, self.cptr, self.cidx, self.gamma, self.weights, self.sel,
-                          self.loc, self.loc_used, self.cov, self.gain, self.base_gain)
+                          self.loc, self.loc_used, self.cov, self.gain, self.base_gain, self.ctype, self.tlim,
+                          self.tleft)
             self.st[_NSEL] = int(self.sel.sum())
         # plain greedy fill (k_rcl = 1) completes the start
         cost = _greedy_fill(self.st, 1, self.budget, self.indptr, self.indices, self.cptr, self.cidx, self.gamma,
-                            self.weights, self.sel, self.loc, self.loc_used, self.cov, self.gain, cost)
+                            self.weights, self.sel, self.loc, self.loc_used, self.cov, self.gain, cost, self.ctype,
+                            self.tleft)
         self.fst[:] = cost
         self.best_sel = self.sel.copy()
 
@@ -339,7 +363,8 @@ class TabuSearch:
         _tabu_iterations(int(n_iter), self.st, self.fst, self.budget, self.indptr, self.indices, self.cptr,
                          self.cidx, self.gamma, self.weights, self.loc, self.base_gain, self.sel, self.loc_used,
                          self.cov, self.gain, self.corr, self.tabu_add, self.tabu_rem, self.best_sel,
-                         self.tenure_add, self.tenure_rem, self.stall_limit, self.perturb, self.k_rcl)
+                         self.tenure_add, self.tenure_rem, self.stall_limit, self.perturb, self.k_rcl, self.ctype,
+                         self.tlim, self.tleft)
 
 
 def solve_tabu(problem: PlacementProblem, *, time_limit_s: float | None = None, threads: int | None = None,
@@ -389,6 +414,10 @@ def solve_tabu(problem: PlacementProblem, *, time_limit_s: float | None = None, 
             else:
                 progress("tabu", int(min(time.perf_counter() - t0, time_limit_s)), int(time_limit_s))
     sel = ts.best_selected
+    if problem.has_type_limits and not problem.type_ok(sel):  # only an `initial` over the limits can do this
+        from camplace.solvers.catalogue import repair_to_type_limits
+
+        sel = repair_to_type_limits(problem, sel)
     if problem.money_budget is not None:  # tabu moves ignore prices (issue 10): repair to the money budget
         from camplace.solvers.catalogue import repair_to_money_budget
 

@@ -12,7 +12,9 @@ random problems (at most 8 candidates, brute force gives the optimum) with short
 feasible selection (budget, one camera per location, money budget when tagged), objective ==
 problem.cost(selected), bound <= the brute-force optimum, exact solvers reach it, a stop
 request gives status 'interrupted', a 0.5 s time limit kept within 2 s on a moderate problem,
-zero budget, same seed -> same result, unknown option refused. Solvers tagged needs_positions get random positions, needs_start a greedy start.
+zero budget, same seed -> same result, unknown option refused, per-type limits kept
+(two camera types, a limit that binds: every selection keeps it, exact solvers reach the
+constrained optimum). Solvers tagged needs_positions get random positions, needs_start a greedy start.
 """
 
 from __future__ import annotations
@@ -74,6 +76,8 @@ def assert_valid(solver: Solver, problem: PlacementProblem, p: Placement) -> Non
         assert len(sel) <= problem.budget, f"{name}: {len(sel)} cameras over the budget {problem.budget}"
     if solver.tags.money_budget and problem.money_budget is not None and len(sel):
         assert problem.costs[sel].sum() <= problem.money_budget + 1e-9, f"{name}: over the money budget"
+    if problem.has_type_limits:
+        assert problem.type_ok(sel), f"{name}: cameras per type {problem.type_counts(sel)} over {problem.type_limits}"
     assert abs(p.objective - problem.cost(sel)) <= 1e-9 * max(1.0, abs(p.objective)), \
         f"{name}: objective {p.objective} != cost {problem.cost(sel)}"
     assert p.seconds >= 0, f"{name}: negative seconds"
@@ -180,10 +184,43 @@ def check_unknown_option_refused(solver: Solver) -> None:
         raise AssertionError(f"{solver.name}: solved with an unknown option")
 
 
+def typed_problem(seed: int) -> PlacementProblem:
+    """A random tiny problem with two camera types (ids 0, 1) and a limit on type 0 that
+    binds: one camera fewer of it than the unconstrained optimum uses, and the optimum
+    with the limit costs more (the first such problem from ``seed`` on)."""
+    for s in range(seed, seed + 200):
+        base = random_problem(s, n_g=8, n_p=12, budget=4, n_loc=6, density=0.45)
+        types = np.random.default_rng(1000 + s).integers(0, 2, base.n_candidates)
+        free = replace(base, type_ids=types)
+        cost, sel = brute_force_optimum(free)
+        n0 = int(np.sum(types[sel] == 0))
+        if n0 == 0:
+            continue
+        limited = replace(free, type_limits={0: n0 - 1})
+        if brute_force_optimum(limited)[0] > cost + 1e-9:
+            return limited
+    raise AssertionError(f"no problem with a binding type limit from seed {seed}")  # pragma: no cover
+
+
+def check_type_limits_kept(solver: Solver) -> None:
+    """Per-type limits (problem.type_limits): every selection keeps them; no cost below the
+    constrained optimum (unless tagged ignores_camera_budget); tag exact: reaches it."""
+    for seed in SEEDS:
+        problem = typed_problem(10 * seed)
+        optimum, _ = brute_force_optimum(problem)
+        p = run_solver(solver, problem, time_limit_s=None if solver.tags.exact else TIME_LIMIT_S)
+        assert_valid(solver, problem, p)
+        if not solver.tags.ignores_camera_budget:
+            assert p.objective >= optimum - 1e-9, f"{solver.name}: cost {p.objective} below the optimum {optimum}"
+        if solver.tags.exact:
+            assert abs(p.objective - optimum) <= 1e-6 * max(1.0, optimum), \
+                f"{solver.name}: cost {p.objective} != constrained optimum {optimum}"
+
+
 def checks_for(solver: Solver) -> list[Check]:
     """The checks that apply to ``solver`` by its tags."""
     out: list[Check] = [check_feasible_and_objective, check_bound_below_optimum, check_zero_budget,
-                        check_unknown_option_refused]
+                        check_unknown_option_refused, check_type_limits_kept]
     if solver.tags.exact:
         out.append(check_exact_reaches_optimum)
     if solver.tags.anytime:
@@ -211,4 +248,4 @@ def parametrize_with_checks(solvers: Mapping[str, Solver] | Iterable[Solver]):
 
 
 __all__ = ["STATUSES", "assert_valid", "check_solver", "checks_for", "parametrize_with_checks", "random_problem",
-           "run_solver"]
+           "run_solver", "typed_problem"]

@@ -4,7 +4,8 @@ A target counts only when fully covered (binary y_j = 1 only if c_j >= Γ_j):
 
     max  Σ_j w_j y_j
     s.t. Γ_j y_j − Σ_i V_ij x_i <= 0          (one row per target with Γ_j >= 1)
-         Σ_i x_i <= N_s,  [Σ_i cost_i x_i <= money_budget],  Σ_{i at l} x_i <= 1
+         Σ_i x_i <= N_s,  [Σ_i cost_i x_i <= money_budget],  Σ_{i at l} x_i <= 1,
+         [Σ_{i of type t} x_i <= limit_t per limited camera type]
          x ∈ {0,1}^{N_g},  y ∈ {0,1}^{N_p}
 
 solved by HiGHS, warm-started from the Hörster greedy. Partially covered targets
@@ -44,6 +45,10 @@ def zhao_arrays(problem: PlacementProblem) -> MilpArrays:
     if L.shape[0]:
         blocks.append([L, sp.csr_matrix((L.shape[0], n_t))])
         upper.append(np.ones(L.shape[0]))
+    if problem.has_type_limits:
+        T, limits = problem.type_rows()
+        blocks.append([T, sp.csr_matrix((T.shape[0], n_t))])
+        upper.append(limits)
     A = sp.bmat(blocks, format="csc")
     ub = np.concatenate([np.asarray(u, np.float64) for u in upper])
     n = n_g + n_t

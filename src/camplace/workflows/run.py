@@ -21,7 +21,7 @@ from camplace.spec.resources import check_resources
 from camplace.spec.schema import SceneSpec
 from camplace.core.errors import InputError, Interrupted
 from camplace.metrics.coverage import Metrics, compute_metrics
-from camplace.problem.model import PlacementProblem
+from camplace.problem.model import PlacementProblem, with_type_limits
 from camplace.scene.build import Scene, build_scene
 from camplace.solvers import Placement, solve
 from camplace.targets.build import Targets, build_targets
@@ -354,6 +354,8 @@ def run(scene: str | Path | SceneSpec, budget: int | None = None, solver: str | 
     if money is not None and not (money >= 0 and np.isfinite(money)):
         raise InputError(f"money budget: expected a non-negative number, got {money!r}")
     problem = problem_from_visibility(vis, budget, money)
+    problem = with_type_limits(problem, vis.candidates.camera_ids, [c.name for c in vis.candidates.cameras],
+                               sc.spec.mount_rules.max_per_type)  # new cameras per type (mount_rules)
     if site is not None:  # Γ' = max(Γ - existing coverage, 0): the solvers see what remains
         problem = site.solver_problem(problem)
     t = time.perf_counter()

@@ -159,10 +159,15 @@ class Site:
         vis2 = Visibility(V, merged, vis.targets, vis.mode, dict(vis.info, existing=self.n_existing))
         costs = np.array([cams[k].cost for k in merged.camera_ids], np.float64)
         money = problem.money_budget
-        prob2 = replace(problem, V=V, gamma=vis.targets.gamma, budget=problem.budget + self.n_existing,
+        extra = {}
+        if getattr(problem, "type_ids", None) is not None:  # per-type limits count new cameras only
+            extra["type_ids"] = np.r_[np.asarray(problem.type_ids, np.int64), np.full(self.n_existing, -1)]
+        prob2 = replace(problem, V=V, gamma=vis.targets.gamma, budget=problem.budget + self.n_existing, **extra,
                         location_ids=merged.location_ids, camera_costs=costs,
                         money_budget=None if money is None else money + float(costs[rows].sum()),
-                        candidate_positions=np.asarray(merged.positions, np.float64))
+                        candidate_positions=np.asarray(merged.positions, np.float64),
+                        type_ids=None if problem.type_ids is None else  # existing cameras count toward no limit
+                        np.r_[problem.type_ids, np.full(self.n_existing, -1)].astype(np.int64))
         sel = np.sort(np.r_[np.asarray(placement.selected, np.int64), rows])
         cost = prob2.cost(sel)
         info = dict(placement.info, existing_ids={int(r): i for r, i in zip(rows, self.ids)}, new_budget=problem.budget,

@@ -167,7 +167,7 @@ class _ScenarioModel:
             rlo.append([Dk]); rhi.append([INF]); nrow += 1
             ucol += n_us
         n_col = ucol
-        # budget, money, locations (pool only)
+        # budget, money, locations, per-type limits (pool only)
         R.append(np.full(n_x, nrow)); C.append(np.arange(n_x)); D.append(np.ones(n_x))
         rlo.append([-INF]); rhi.append([float(prob.budget - len(self.fixed))]); nrow += 1
         if prob.money_budget is not None:
@@ -177,6 +177,12 @@ class _ScenarioModel:
         if L.nnz:
             R.append(nrow + L.row); C.append(L.col); D.append(L.data)
             rlo.append(np.full(L.shape[0], -INF)); rhi.append(np.ones(L.shape[0])); nrow += L.shape[0]
+        if prob.has_type_limits:  # per-type limits on the pool, less what the fixed cameras use
+            A_t, limits = prob.type_rows()
+            T = A_t[:, self.pool].tocoo()
+            used = np.asarray(A_t[:, self.fixed].sum(axis=1)).ravel()
+            R.append(nrow + T.row); C.append(T.col); D.append(T.data)
+            rlo.append(np.full(len(limits), -INF)); rhi.append(limits - used); nrow += len(limits)
         A = sp.csc_matrix((np.concatenate(D), (np.concatenate(R), np.concatenate(C))), shape=(nrow, n_col))
         c = np.zeros(n_col)
         c[col_t] = 1.0
