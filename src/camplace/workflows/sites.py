@@ -165,9 +165,7 @@ class Site:
         prob2 = replace(problem, V=V, gamma=vis.targets.gamma, budget=problem.budget + self.n_existing, **extra,
                         location_ids=merged.location_ids, camera_costs=costs,
                         money_budget=None if money is None else money + float(costs[rows].sum()),
-                        candidate_positions=np.asarray(merged.positions, np.float64),
-                        type_ids=None if problem.type_ids is None else  # existing cameras count toward no limit
-                        np.r_[problem.type_ids, np.full(self.n_existing, -1)].astype(np.int64))
+                        candidate_positions=np.asarray(merged.positions, np.float64))
         sel = np.sort(np.r_[np.asarray(placement.selected, np.int64), rows])
         cost = prob2.cost(sel)
         info = dict(placement.info, existing_ids={int(r): i for r, i in zip(rows, self.ids)}, new_budget=problem.budget,
