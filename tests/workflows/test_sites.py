@@ -203,3 +203,16 @@ def test_existing_camera_that_violates_privacy_is_reported_not_removed(tmp_path)
     p, m = write(r, tmp_path)
     assert [c["id"] for c in p["cameras"] if c["existing"]] == ["PEEK"]
     assert m["privacy"]["camera_ids"] == ["PEEK"]
+
+
+def test_the_report_view_carries_privacy_zones_and_forbidden_mount_areas():
+    from camplace.outputs.figures import SceneView, coverage_slices, slice_figures_png
+    from camplace.scene.build import build_scene
+    from camplace.targets.build import build_targets
+
+    sc = build_scene(site(mount_rules={"forbid": [[[6, 0], [7, 0], [7, 4], [6, 4]]]}))
+    view = SceneView.from_scene(sc)
+    assert [k for k, _ in view.areas] == ["privacy", "forbid"] and view.areas[0][1].shape == (4, 2)
+    t = build_targets(sc)
+    png = slice_figures_png(coverage_slices(view, t.positions, t.is_surface, np.zeros(len(t), np.int64)), view)
+    assert len(png) == 1 and png[0][:4] == b"\x89PNG"

@@ -29,6 +29,10 @@ def coverage_class(coverage: np.ndarray) -> np.ndarray:
     return np.minimum(np.asarray(coverage, np.int64), 3)
 
 
+AREA_STYLES = {"privacy": {"edgecolor": "#7b1fa2", "hatch": "xx", "linewidth": 1.2},
+               "forbid": {"edgecolor": "#d32f2f", "linestyle": "--", "linewidth": 1.2}}
+
+
 @dataclass(frozen=True)
 class SceneView:
     """What the pictures need of a scene. footprint: (K, 2) m; height: m; boxes: name ->
@@ -39,12 +43,15 @@ class SceneView:
     height: float
     voxel_size: float
     boxes: dict = field(default_factory=dict)
+    areas: tuple = ()  # (kind, (K, 2) corners m): 'privacy' zones and 'forbid' mount areas (issue 17)
 
     @classmethod
     def from_scene(cls, scene) -> "SceneView":
-        """From a camplace.scene.build.Scene."""
+        """From a camplace.scene.build.Scene (privacy zones and forbidden mount areas included)."""
+        areas = tuple(("privacy", np.asarray(z.polygon, float)) for z in scene.spec.zones if z.privacy) + tuple(
+            ("forbid", np.asarray(f, float)) for f in scene.spec.mount_rules.forbid)
         return cls(scene.name, np.asarray(scene.footprint, float), float(scene.height),
-                   float(scene.spec.voxel_size), dict(scene.boxes))
+                   float(scene.spec.voxel_size), dict(scene.boxes), areas)
 
     @classmethod
     def from_targets(cls, name: str, positions: np.ndarray, cameras: list[dict] = ()) -> "SceneView":
@@ -130,6 +137,12 @@ def slice_figures_png(slices: list[CoverageSlice], view: SceneView, cameras: lis
                    norm=BoundaryNorm([-0.5, 0.5, 1.5, 2.5, 3.5], 4), interpolation="nearest",
                    extent=(sl0.x[0] - v / 2, sl0.x[-1] + v / 2, sl0.y[0] - v / 2, sl0.y[-1] + v / 2))
     ax.add_patch(Polygon(fp, closed=True, fill=False, edgecolor="black", linewidth=1.2))
+    area_handles = []
+    for kind, corners in view.areas:  # privacy zones (purple, hatched) and forbidden mount areas (red, dashed)
+        style = AREA_STYLES[kind]
+        ax.add_patch(Polygon(corners, closed=True, fill=False, zorder=2.5, **style))
+        if kind not in [h.get_label() for h in area_handles]:
+            area_handles.append(Patch(fill=False, label=kind, **style))
     if cameras:
         pos = np.array([c["position"] for c in cameras], float)
         fwd = np.array([np.asarray(c["rotation"], float)[:2, 2] for c in cameras])
@@ -152,7 +165,8 @@ def slice_figures_png(slices: list[CoverageSlice], view: SceneView, cameras: lis
         boxes = [ax.add_patch(Rectangle((x0, y0), x1 - x0, y1 - y0, facecolor="#bdbdbd", edgecolor="#555555",
                                         hatch="//", linewidth=0.8, zorder=2)) for _, x0, y0, x1, y1 in sl.boxes]
         counts = np.bincount(cls[~np.isnan(cls)].astype(np.int64), minlength=4)
-        ax.legend(handles=[Patch(color=c, label=f"{lab}: {n}") for (lab, c), n in zip(COVERAGE_CLASSES, counts)],
+        ax.legend(handles=[Patch(color=c, label=f"{lab}: {n}") for (lab, c), n in zip(COVERAGE_CLASSES, counts)]
+                  + area_handles,
                   title="cameras seeing", loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8, title_fontsize=8)
         ax.set_title(f"{view.name}: coverage at z = {sl.height:.2f} m")
         out.append(_png(fig))
