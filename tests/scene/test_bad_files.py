@@ -182,6 +182,17 @@ def test_huge_las_count_refused_before_laspy(tmp_path):
         load_point_cloud(tmp_path / "a.las")
 
 
+def test_huge_laz_chunk_size_refused_before_lazrs(tmp_path):
+    # lazrs allocates one chunk of points up front: a flipped chunk size aborted the process
+    write_las(tmp_path / "a.laz", PTS)
+    raw = bytearray((tmp_path / "a.laz").read_bytes())
+    at = raw.index(b"laszip encoded") - 2 + 54 + 12
+    raw[at:at + 4] = np.array([4_076_913_488], "<u4").tobytes()
+    (tmp_path / "a.laz").write_bytes(bytes(raw))
+    with pytest.raises(InputError, match="LAZ chunk size 4,076,913,488"):
+        load_point_cloud(tmp_path / "a.laz")
+
+
 def test_non_finite_points_dropped_and_counted(tmp_path):
     path = tmp_path / "some.xyz"
     path.write_bytes(b"0 0 0\nnan 1 2\n1 1 1\ninf 0 0\n2 2 2\n")

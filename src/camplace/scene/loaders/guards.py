@@ -18,6 +18,7 @@ PLY_SIZES = {"char": 1, "int8": 1, "uchar": 1, "uint8": 1, "short": 2, "int16": 
              "int": 4, "int32": 4, "uint": 4, "uint32": 4, "float": 4, "float32": 4, "double": 8, "float64": 8}
 HEADER_LIMIT = 1 << 16  # bytes: a text header longer than this is not a header
 LAZ_MAX_RATIO = 1000  # promised point bytes per compressed byte beyond which a LAZ count is absurd
+LAZ_CHUNK = 50_000  # points per chunk that LASzip writes by default
 
 
 def promise(path: Path, what: str, count: int, record: int, available: int) -> None:
@@ -74,6 +75,25 @@ def _u(raw: bytes, fmt: str, off: int) -> int:
     return struct.unpack_from("<" + fmt, raw, off)[0]
 
 
+def _laszip_chunk_size(path: Path, h: bytes, offset: int) -> int:
+    """The chunk size (points) in the 'laszip encoded' VLR of a LAZ file (0xFFFFFFFF: variable)."""
+    header_size, n_vlr = _u(h, "H", 94), _u(h, "I", 100)
+    promise(path, "VLRs", n_vlr, 54, offset - header_size)
+    with open(path, "rb") as f:
+        f.seek(header_size)
+        vlrs = f.read(offset - header_size)
+    pos = 0
+    for _ in range(n_vlr):
+        if pos + 54 > len(vlrs):
+            break
+        length = _u(vlrs, "H", pos + 20)
+        if vlrs[pos + 2:pos + 16] == b"laszip encoded" and _u(vlrs, "H", pos + 18) == 22204 and length >= 16 \
+                and pos + 54 + 16 <= len(vlrs):
+            return _u(vlrs, "I", pos + 54 + 12)
+        pos += 54 + length
+    raise InputError(f"{path}: LAZ file without a readable 'laszip encoded' VLR")
+
+
 def check_las(path: Path) -> None:
     """Refuse a LAS/LAZ file whose public header, point count or LAZ chunk table cannot
     fit the file (laspy / lazrs would allocate what they promise)."""
@@ -94,6 +114,9 @@ def check_las(path: Path) -> None:
         promise(path, "points", count, max(reclen, 1), body)
         return
     promise(path, "points", count, max(reclen, 1), body * LAZ_MAX_RATIO)
+    chunk = _laszip_chunk_size(path, h, offset)
+    if chunk != 0xFFFFFFFF and chunk > max(count, LAZ_CHUNK):  # lazrs allocates a whole chunk of points
+        raise InputError(f"{path}: LAZ chunk size {chunk:,} exceeds the {count:,} points of the file")
     with open(path, "rb") as f:
         f.seek(offset)
         table = _u(f.read(8).ljust(8, b"\0"), "q", 0)

@@ -48,8 +48,11 @@ def load_mesh(path: str | Path) -> Mesh:
     except Exception as err:  # trimesh raises many kinds for bad files
         msg = str(err).splitlines()[0] if str(err) else type(err).__name__
         raise InputError(f"{p}: not a readable mesh ({msg[:120]})") from None
-    faces = np.asarray(getattr(m, "faces", np.zeros((0, 3))), dtype=np.int64).reshape(-1, 3)
-    verts = np.asarray(getattr(m, "vertices", np.zeros((0, 3))), dtype=np.float64).reshape(-1, 3)
+    faces = np.asarray(getattr(m, "faces", np.zeros((0, 3))), dtype=np.int64)
+    verts = np.asarray(getattr(m, "vertices", np.zeros((0, 3))), dtype=np.float64)
+    if any(a.size and (a.ndim != 2 or a.shape[1] != 3) for a in (faces, verts)):
+        raise InputError(f"{p}: the mesh's vertex or face lists are not rows of 3 (a broken line?)")
+    faces, verts = faces.reshape(-1, 3), verts.reshape(-1, 3)
     if len(faces) == 0:
         raise InputError(f"{p}: the mesh has no triangles")
     if faces.min() < 0 or faces.max() >= len(verts) or not np.all(np.isfinite(verts)):

@@ -330,7 +330,10 @@ def _read_las(path: Path, r: _Reader, progress: Progress | None) -> dict:
                 done += len(chunk)
                 if progress:
                     progress("load scan", done, max(n, 1))
-    except (laspy.errors.LaspyException, ValueError, RuntimeError, OSError, EOFError) as err:  # lazrs: RuntimeError
+    except BaseException as err:  # lazrs raises RuntimeError, and a Rust panic (a BaseException) on odd data
+        known = (laspy.errors.LaspyException, ValueError, RuntimeError, OSError, EOFError)
+        if not isinstance(err, known) and type(err).__name__ != "PanicException":
+            raise
         msg = str(err).splitlines()[0] if str(err) else type(err).__name__
         raise InputError(f"{path}: not a readable LAS/LAZ file ({msg})") from None
     return {"format": "laz" if path.suffix.lower() == ".laz" else "las"}
