@@ -13,17 +13,28 @@ from camplace.core.errors import InputError
 
 
 def _matrix(value, where: str) -> np.ndarray:
-    """A calibration matrix given as nested lists, a flat list, or {rows, cols, data}."""
-    if isinstance(value, dict):
-        data = value.get("data")
-        if data is None:
-            raise InputError(f"{where}: expected 'data' in the matrix mapping")
-        arr = np.asarray(data, float)
-        rows, cols = value.get("rows"), value.get("cols")
-        if rows is not None and cols is not None:
-            arr = arr.reshape(int(rows), int(cols))
-        return arr
-    return np.asarray(value, float)
+    """A calibration matrix given as nested lists, a flat list, or {rows, cols, data};
+    InputError naming ``where`` unless every entry is a finite number."""
+    try:
+        if isinstance(value, dict):
+            data = value.get("data")
+            if data is None:
+                raise InputError(f"{where}: expected 'data' in the matrix mapping")
+            arr = np.asarray(data, float)
+            rows, cols = value.get("rows"), value.get("cols")
+            if rows is not None and cols is not None:
+                arr = arr.reshape(int(rows), int(cols))
+        else:
+            arr = np.asarray(value, float)
+    except (TypeError, ValueError, OverflowError):
+        raise InputError(f"{where}: expected a matrix of numbers") from None
+    if not np.all(np.isfinite(arr)):
+        raise InputError(f"{where}: expected finite numbers, got {arr.ravel().tolist()[:9]}")
+    return arr
+
+
+def _reject_constant(name: str):
+    raise ValueError(f"{name} is not a number JSON allows here")
 
 
 _K_KEYS = ("camera_matrix", "cameramatrix", "k", "intrinsic_matrix", "intrinsics", "mtx", "matrix")
@@ -40,12 +51,17 @@ def _find(data: dict, keys: tuple[str, ...]):
 
 
 def _read_calibration_mapping(path: Path) -> dict:
-    text = path.read_text()
+    try:
+        text = path.read_text(encoding="utf-8")
+    except UnicodeDecodeError as err:
+        raise InputError(f"{path}: not UTF-8 text (byte 0x{err.object[err.start]:02x} at offset {err.start})") from None
+    except OSError as err:
+        raise InputError(f"{path}: cannot read the calibration file ({err.strerror or err})") from None
     if path.suffix.lower() == ".json":
         try:
-            data = json.loads(text)
-        except json.JSONDecodeError as err:
-            raise InputError(f"{path}: not valid JSON: {err}") from None
+            data = json.loads(text, parse_constant=_reject_constant)
+        except (json.JSONDecodeError, ValueError, RecursionError) as err:
+            raise InputError(f"{path}: not valid JSON: {str(err).splitlines()[0] if str(err) else 'empty'}") from None
     else:
         import yaml
 
@@ -63,7 +79,7 @@ def _read_calibration_mapping(path: Path) -> dict:
         lines = [ln for ln in lines if ln.strip() != "---"]
         try:
             data = yaml.load("\n".join(lines), Loader=_Loader)  # noqa: S506 - SafeLoader subclass
-        except yaml.YAMLError as err:
+        except (yaml.YAMLError, RecursionError, ValueError, TypeError) as err:
             first = str(err).strip().splitlines()[0] if str(err).strip() else type(err).__name__
             raise InputError(f"{path}: not valid YAML: {first}") from None
     if not isinstance(data, dict):
@@ -80,6 +96,14 @@ def load_calibration(path: str | Path) -> dict:
     if not p.is_file():
         raise InputError(f"{p}: calibration file not found")
     data = _read_calibration_mapping(p)
+    try:
+        return _calibration_values(p, data)
+    except (TypeError, ValueError, OverflowError, AttributeError) as err:
+        raise InputError(f"{p}: expected numbers for the intrinsics and image size ({err})") from None
+
+
+def _calibration_values(p: Path, data: dict) -> dict:
+    """fx, fy, cx, cy, distortion, resolution and model from a calibration mapping (finite numbers)."""
     if "fx" in {str(k).lower() for k in data} and _find(data, _K_KEYS) is None:
         low = {str(k).lower(): v for k, v in data.items()}
         try:
@@ -96,13 +120,15 @@ def load_calibration(path: str | Path) -> dict:
         K = K.reshape(3, 3)
     dv = _find(data, _D_KEYS)
     dist = [] if dv is None else [float(v) for v in _matrix(dv, f"{p}: distortion_coefficients").ravel()]
+    K = _matrix(K, f"{p}: camera_matrix")
     out: dict = {"fx": float(K[0, 0]), "fy": float(K[1, 1]), "cx": float(K[0, 2]), "cy": float(K[1, 2]),
                  "distortion": dist}
     w = _find(data, ("image_width", "width", "imagewidth"))
     h = _find(data, ("image_height", "height", "imageheight"))
     size = _find(data, ("image_size", "resolution", "imagesize", "size"))
     if w is not None and h is not None:
-        out["resolution"] = [int(w), int(h)]
+        wh = _matrix([w, h], f"{p}: image_width, image_height")
+        out["resolution"] = [int(wh[0]), int(wh[1])]
     elif size is not None:
         s = _matrix(size, f"{p}: image_size").ravel()
         if len(s) == 2:
