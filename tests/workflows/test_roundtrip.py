@@ -84,7 +84,7 @@ def test_cli_round_trip_scored_with_camplace_evaluate(tmp_path, demo):
     assert r.exit_code == 0, r.output
     rs = roundtrip_spec(spec, "point_cloud", "demo.ply")  # relative to the scene file
     (tmp_path / "scan.yaml").write_text(yaml.safe_dump(rs.model_dump(mode="json", exclude_defaults=True)))
-    r = cli.invoke(app, ["-q", "run", str(tmp_path / "scan.yaml"), "--out", str(tmp_path / "run")])
+    r = cli.invoke(app, ["-q", "run", str(tmp_path / "scan.yaml"), "--grid-only", "--out", str(tmp_path / "run")])
     assert r.exit_code == 0, r.output
     r = cli.invoke(app, ["-q", "evaluate", "demo", str(tmp_path / "run" / "placement.json"),
                          "--out", str(tmp_path / "eval")])

@@ -78,6 +78,21 @@ def scene_from_space_file(path: Path, budget: Optional[int], save_scene: Optiona
     return parse_scene(data, str(path))
 
 
+REFINE_OPT = typer.Option(None, "--refine/--grid-only",
+                          help="Refine the grid solution off the grid, within the mount rules (default; not with "
+                               "--robust, --certify or --well-triangulated), or --grid-only: the paper's pure grid "
+                               "method.")
+
+
+def refine_default(refine: Optional[bool], *, robust: int = 0, certify: Optional[float] = None,
+                   well_triangulated: bool = False) -> bool:
+    """--refine/--grid-only as given, else refine unless the run optimises something the
+    refinement does not keep (robust worst case, a certified grid bound, triangulation)."""
+    if refine is not None:
+        return refine
+    return not (robust or certify is not None or well_triangulated)
+
+
 def beyond_grid_options(refine: bool, refine_time: float, adaptive: int, robust: int,
                         money_budget: Optional[float], tri_angle: str) -> dict:
     """run() keyword arguments of the options beyond the candidate grid (only those given)."""
@@ -125,8 +140,8 @@ def run_cmd(scene: Optional[str] = typer.Argument(None, help="Scene YAML file, b
             coverage_gap: Optional[float] = typer.Option(None, "--coverage-gap", min=0.0,
                                                          help="min-cameras: allowed coverage gap ε (paper eq. 8; "
                                                               "default 0 = every Γ met)."),
-            refine: bool = typer.Option(False, "--refine", help="Move each camera off the grid (continuous pose search)."),
-            refine_time: float = typer.Option(60.0, "--refine-time", help="Seconds for --refine."),
+            refine: Optional[bool] = REFINE_OPT,
+            refine_time: float = typer.Option(60.0, "--refine-time", help="Seconds for the refinement."),
             adaptive: int = typer.Option(0, "--adaptive", help="Rounds of finer candidates around the placement."),
             robust: int = typer.Option(0, "--robust", help="1: best worst case over any single camera failure."),
             money_budget: Optional[float] = typer.Option(None, "--money-budget",
@@ -169,6 +184,7 @@ def run_cmd(scene: Optional[str] = typer.Argument(None, help="Scene YAML file, b
         raise InputError("--save-scene: use camplace scene import FILE --out SCENE.yaml")
     elif space_kind(scene) is not None:
         scene = scene_from_space_file(Path(scene), budget)
+    refine = refine_default(refine, robust=robust, certify=certify, well_triangulated=well_triangulated)
     solver, time_limit = certify_solver(certify, solver, time_limit)
     run_pipeline(scene, budget, solver, out, time_limit, require_feasible, max_memory_gb, repeatable, frame,
                  not no_plan, paper, **scale_options(workers, scheduler, cache, no_cache), visibility_mode=visibility,

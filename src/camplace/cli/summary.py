@@ -52,7 +52,9 @@ def _table(result, out_dir: Path, paths: dict) -> Table:
     t = Table(title=f"camplace - {result.scene.name}", show_header=False)
     t.add_row("solver / status", f"{p.solver} / {p.status}")
     t.add_row("cameras (budget)", f"{len(p.selected)} ({result.problem.budget})")
-    t.add_row("cost", f"{p.objective:.6g}")
+    grid = getattr(m, "grid_cost", None)
+    t.add_row("cost", f"{p.objective:.6g}" + (f"  (grid {grid:.6g}, before refine)" if grid is not None
+                                               and abs(grid - p.objective) > 1e-9 else ""))
     t.add_row("bound", "-" if p.bound is None else f"{p.bound:.6g} (gap {100 * (p.gap or 0):.2f} %)")
     t.add_row("coverage gap (eq. 8)", f"{m.coverage_gap:.4f}")
     t.add_row("non-triangulatable", f"{m.non_triangulatable_pct:.2f} %")

@@ -24,9 +24,11 @@ class Metrics:
     well_triangulated_pct: float | None = None  # % of targets with a camera pair meeting at a usable angle
     privacy: dict | None = None  # privacy zones: cameras that see one (camplace.visibility.privacy.privacy_report)
     existing: dict | None = None  # existing / kept cameras (camplace.workflows.sites)
+    grid_cost: float | None = None  # a refined / adaptive run's cost of its grid placement (issue 17)
 
     def to_dict(self) -> dict:
-        out = {"cost": self.cost, "coverage_gap": self.coverage_gap,
+        out = {"cost": self.cost, **({} if self.grid_cost is None else {"grid_cost": self.grid_cost}),
+               "coverage_gap": self.coverage_gap,
                "non_triangulatable_pct": self.non_triangulatable_pct,
                "coverage_histogram": self.coverage_histogram, "regions": self.regions,
                "timings_s": self.timings_s}

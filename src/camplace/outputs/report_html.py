@@ -137,6 +137,7 @@ def _summary_pairs(placement: dict, metrics: dict, n_targets: int, n_candidates:
         ("scene", placement.get("scene")), ("solver", placement.get("solver")), ("status", placement.get("status")),
         ("cameras placed (budget)", f"{len(placement.get('cameras', []))} ({placement.get('budget')})"),
         ("cost \u03a3 w (\u0393 \u2212 c)\u207a\u00b2", _fmt(metrics.get("cost"))),
+        *([("grid cost (before refine)", _fmt(metrics["grid_cost"]))] if "grid_cost" in metrics else []),
         ("coverage gap (paper eq. 8)", _fmt(metrics.get("coverage_gap"), 4)),
         ("lower bound", _fmt(placement.get("bound"))),
         ("proven gap", "\u2013" if gap is None else f"{100 * gap:.2f} %"),

@@ -191,7 +191,7 @@ def write_outputs(out_dir: str | Path, scene_name: str, vis: Visibility, placeme
         # the report's pictures and mount table are drawn in the scene frame; exports follow ``frame``
         shown = pdict if frame == "scene" else placement_dict(scene_name, placement, budget, vis.candidates, T)
         paths.update(_write_report_set(out, vis, placement, shown, metrics, report_timings, scene, repeatable,
-                                       paper if plan else None))
+                                       paper if plan else None, T if frame == "input" else None))
         if frame != "scene" and "colmap/images.txt" in paths:
             from camplace.outputs.exports import write_exports
 
@@ -219,10 +219,11 @@ def _metrics_dict(metrics: Metrics, timings: dict[str, float], repeatable: bool)
 
 def _write_report_set(out: Path, vis: Visibility, placement: Placement, pdict: dict, metrics: Metrics,
                       timings: dict[str, float], scene, repeatable: bool = False,
-                      paper: str | None = None) -> dict[str, Path]:
+                      paper: str | None = None, input_T: np.ndarray | None = None) -> dict[str, Path]:
     """report.html, PNG figures and exports (camplace.outputs.report_html.write_report); with
     ``repeatable`` every camera view is rendered (no time budget), so the page depends only on
-    the inputs. ``paper`` (with a scene): the hand-over plan set on that paper, first."""
+    the inputs. ``paper`` (with a scene): the hand-over plan set on that paper, first (plan.dxf
+    in the frame of ``input_T``, 4x4, when given)."""
     from camplace.outputs.figures import SceneView
     from camplace.outputs.report_html import write_report
 
@@ -233,7 +234,8 @@ def _write_report_set(out: Path, vis: Visibility, placement: Placement, pdict: d
     if paper is not None and scene is not None:  # the hand-over set renders the camera views once for both
         from camplace.outputs.handover import write_plan_set
 
-        paths, extra, views = write_plan_set(out, scene, vis, pdict, m, sel, paper=paper, repeatable=repeatable)
+        paths, extra, views = write_plan_set(out, scene, vis, pdict, m, sel, paper=paper, repeatable=repeatable,
+                                             input_from_scene=input_T)
     return {**paths, **write_report(out, vis.targets, cov, pdict, m, SceneView.from_scene(scene) if scene else None,
                                     n_candidates=int(vis.V.shape[0]), scene=scene, vis=vis, selected=sel,
                                     repeatable=repeatable, extra_html=extra, rendered_views=views)}

@@ -17,7 +17,7 @@ from camplace.spec.loading import load_scene_file, parse_scene
 from camplace.spec.schema import SceneSpec
 from camplace.spec.wording import did_you_mean
 
-BUILTIN_SCENES = ("demo", "standard-store", "store-a", "warehouse", "catalogue-store")
+BUILTIN_SCENES = ("demo", "standard-store", "store-a", "warehouse", "catalogue-store", "retail-site")
 PROCEDURAL_SCENES = ("warehouse",)  # generated in code; ``warehouse:AREA`` picks the size
 
 # --- procedural warehouse (issue 7: site scale) -------------------------------------

@@ -7,7 +7,7 @@ Progress goes through a callback ``progress(stage, done, total)``; nothing print
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Callable
 
@@ -182,7 +182,6 @@ def solve_stoppable(problem: PlacementProblem, solver: str, *, log: list | None 
     the greedy placement is returned instead, with status 'interrupted' and
     the best lower bound the solver reported through on_incumbent (or None)."""
     import threading
-    from dataclasses import replace
 
     should_stop = options.get("should_stop")
     if should_stop is None:
@@ -381,8 +380,18 @@ def run(scene: str | Path | SceneSpec, budget: int | None = None, solver: str | 
     metrics = placement_metrics(vis, problem, placement.selected, triangulation_deg)
     if site is not None:
         metrics = site.report(vis, placement, metrics)
+    metrics = replace(metrics, grid_cost=grid_cost(placement))
     timings["metrics"] = time.perf_counter() - t
     return RunResult(sc, vis, problem, placement, metrics, timings, log)
+
+
+def grid_cost(placement: Placement) -> float | None:
+    """The cost of a run's placement before it left the candidate grid (before adaptive
+    rounds and refine; existing cameras included); None when it never left it."""
+    for step in ("adaptive", "refine"):
+        if isinstance(placement.info.get(step), dict) and "grid_cost" in placement.info[step]:
+            return float(placement.info[step]["grid_cost"])
+    return None
 
 
 def placement_metrics(vis: Visibility, problem: PlacementProblem, selected: np.ndarray,
