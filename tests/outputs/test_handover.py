@@ -186,3 +186,112 @@ def test_voxel_surface_keeps_only_exposed_faces():
     two = voxel_surface(mask, np.zeros(3), 0.5)
     assert len(two.faces) == 20 and np.isclose(two.area, 10 * 0.25)
     assert voxel_surface(np.zeros((2, 2, 2), bool), np.zeros(3), 1.0) is None
+
+
+PRIVACY = [[0, 0], [4, 0], [4, 4], [0, 4]]
+AISLE = [[6.5, 1.5], [7.5, 1.5], [7.5, 2.5], [6.5, 2.5]]
+FORBID = [[4.5, 0], [5.5, 0], [5.5, 4], [4.5, 4]]
+SITE = {  # tests/workflows/test_sites.py's room: a restroom (privacy) behind a doorway, an aisle zone
+    "name": "site", "voxel_size": 0.5, "occupancy_resolution": 0.1,
+    "room": {"footprint": [[0, 0], [8, 0], [8, 4], [0, 4]], "height": 3.0},
+    "obstacles": [{"name": "wall-s", "box": {"min": [4.0, 0.0, 0.0], "max": [4.2, 1.5, 3.0]}},
+                  {"name": "wall-n", "box": {"min": [4.0, 2.5, 0.0], "max": [4.2, 4.0, 3.0]}}],
+    "targets": [{"name": "walk", "kind": "volume", "heights": [1.0], "coverage": 1}],
+    "cameras": [{"name": "cam", "resolution": [64, 48], "fov_deg": [90, 70], "max_range": 10.0}],
+    "mounts": [{"kind": "ceiling_grid", "camera": "cam", "spacing": 1.0, "yaw_deg": [0, 90, 180, 270],
+                "pitch_deg": [45]}],
+    "zones": [{"name": "restroom", "polygon": PRIVACY, "privacy": True},
+              {"name": "aisle", "polygon": AISLE, "coverage": 2}],
+    "mount_rules": {"forbid": [FORBID]},
+    "existing": [{"id": "E1", "camera": "cam", "position": [7.5, 2.0, 2.9], "yaw_deg": 180, "pitch_deg": 45}],
+}
+
+
+@pytest.fixture(scope="module")
+def site_dir(tmp_path_factory):
+    from camplace.spec.loading import parse_scene
+    from camplace.workflows.run import run
+
+    r = run(parse_scene(SITE), budget=2, solver="greedy")
+    out = tmp_path_factory.mktemp("site")
+    _write(out, r, repeatable=True)
+    return out
+
+
+def _polylines(doc, layer):
+    return [np.asarray(e.get_points("xy")) for e in doc.modelspace().query(f'LWPOLYLINE[layer=="{layer}"]')]
+
+
+def _same_ring(a, b) -> bool:
+    return len(a) == len(b) and any(np.allclose(np.roll(a, k, axis=0), b, atol=1e-9) for k in range(len(a)))
+
+
+def test_zones_privacy_and_forbidden_areas_in_the_dxf_and_pdf(site_dir):
+    doc = ezdxf.readfile(site_dir / "plan.dxf")
+    zones = _polylines(doc, "CAMPLACE-ZONES")
+    assert sum(_same_ring(z, np.asarray(AISLE, float)) for z in zones) == 1
+    assert all(e.closed for e in doc.modelspace().query('LWPOLYLINE[layer=="CAMPLACE-ZONES-PRIVACY"]'))
+    privacy = _polylines(doc, "CAMPLACE-ZONES-PRIVACY")
+    assert len(privacy) == 1 and _same_ring(privacy[0], np.asarray(PRIVACY, float))
+    forbid = _polylines(doc, "CAMPLACE-MOUNT-FORBID")
+    assert len(forbid) == 1 and _same_ring(forbid[0], np.asarray(FORBID, float))
+    assert not any(_same_ring(z, np.asarray(PRIVACY, float)) for z in zones)  # privacy only on its own layer
+    texts = {t.dxf.text: t.dxf.layer for t in doc.modelspace().query("TEXT")}
+    assert texts["restroom"] == "CAMPLACE-ZONES-PRIVACY" and texts["aisle"] == "CAMPLACE-ZONES"
+    existing = doc.modelspace().query('INSERT[layer=="CAMPLACE-CAMERAS-EXISTING"]')
+    assert [(r.get_attrib_text("ID"), r.get_attrib_text("STATUS")) for r in existing] == [("E1", "existing")]
+    assert np.allclose(tuple(existing[0].dxf.insert), SITE["existing"][0]["position"])
+    new = doc.modelspace().query('INSERT[layer=="CAMPLACE-CAMERAS"]')
+    assert new and all(r.get_attrib_text("STATUS") == "new" for r in new)
+    plan = pypdf.PdfReader(site_dir / "plan.pdf").pages[0].extract_text()
+    for word in ("restroom", "aisle", "forbid 1", "privacy zone", "no camera mounted here", "existing camera"):
+        assert word in plan, word
+    svg = (site_dir / "plan.svg").read_text()
+    assert "restroom" in svg and "aisle" in svg
+
+
+def test_dxf_in_the_input_frame(tmp_path, run_result):
+    import dataclasses
+    import json
+
+    a = np.radians(30.0)
+    T = np.eye(4)
+    T[:2, :2] = [[np.cos(a), -np.sin(a)], [np.sin(a), np.cos(a)]]
+    T[:3, 3] = [100.0, -20.0, 0.5]
+    r = run_result
+    scene = dataclasses.replace(r.scene, input_from_scene=T)
+    from camplace.outputs.write import write_outputs
+
+    write_outputs(tmp_path, scene.name, r.visibility, r.placement, r.problem.budget, r.metrics, r.timings_s,
+                  scene=scene, repeatable=True, frame="input")
+    cams = json.loads((tmp_path / "placement.json").read_text())["cameras"]  # input frame
+    doc = ezdxf.readfile(tmp_path / "plan.dxf")
+    refs = {ref.get_attrib_text("ID"): ref for ref in doc.modelspace().query('INSERT[name=="CAMPLACE_CAMERA"]')}
+    assert len(refs) == len(cams)
+    for c in cams:
+        ref = refs[str(c["candidate_id"])]
+        assert np.allclose(tuple(ref.dxf.insert), c["position"], atol=1e-9)
+        assert float(ref.get_attrib_text("YAW")) == pytest.approx(c["yaw_deg"], abs=0.01)
+        assert float(ref.get_attrib_text("HEIGHT")) == pytest.approx(c["position"][2], abs=1e-3)
+        assert (ref.dxf.rotation - c["yaw_deg"] + 180.0) % 360.0 == pytest.approx(180.0)
+    fp = np.asarray(r.scene.footprint, float)
+    walls = _polylines(doc, "CAMPLACE-WALLS")
+    assert any(_same_ring(w, fp @ T[:2, :2].T + T[:2, 3]) for w in walls)
+
+
+def test_viewshed_budget_leaves_markers_and_a_note(tmp_path, run_result):
+    from camplace.outputs.plan_data import plan_data
+    from camplace.outputs.plan_pdf import write_plan_pdf
+    from camplace.outputs.write import placement_dict
+
+    r = run_result
+    pd = placement_dict(r.scene.name, r.placement, r.problem.budget, r.visibility.candidates)
+    data = plan_data(r.scene, r.visibility, pd, r.metrics.to_dict(), r.placement.selected, budget_s=0.0)
+    assert data.skipped == len(data.cameras) and all(v.polygon.is_empty for v in data.shed)
+    write_plan_pdf(tmp_path / "plan.pdf", data)
+    text = pypdf.PdfReader(tmp_path / "plan.pdf").pages[0].extract_text()
+    assert f"{len(data.cameras)} viewsheds not computed within the time budget" in text
+    assert all(m in text for m in data.marks)  # the cameras are still drawn
+    full = plan_data(r.scene, r.visibility, pd, r.metrics.to_dict(), r.placement.selected, budget_s=0.0,
+                     repeatable=True)  # repeatable: no budget
+    assert full.skipped == 0

@@ -94,3 +94,17 @@ def test_out_of_reach_height_gives_an_empty_viewshed(empty_room):
     short = CameraModel.pinhole_from_fov("s", (640, 480), (60, 45), max_range=1.0)
     vs = viewshed(empty_room.occupancy, short, np.array([2.0, 3.0, 2.9]), _pose(0, 60), height=0.5)
     assert vs.polygon.is_empty and vs.area == 0.0 and all(b.is_empty for b in vs.bands.values())
+
+
+def test_time_budget_leaves_empty_stand_ins(empty_room):
+    from types import SimpleNamespace
+
+    from camplace.visibility.viewshed import viewsheds
+
+    c = SimpleNamespace(cameras=[CAM], camera_ids=np.zeros(3, int), positions=np.array([[1.0, 3.0, 2.5]] * 3),
+                        rotations=np.array([_pose(0, 30)] * 3))
+    full = viewsheds(empty_room.occupancy, c, [0, 1, 2])
+    assert [v.computed for v in full] == [True] * 3 and all(v.area > 1.0 for v in full)
+    none = viewsheds(empty_room.occupancy, c, [0, 1, 2], budget_s=0.0)
+    assert [v.computed for v in none] == [False] * 3
+    assert all(v.polygon.is_empty and set(v.bands) == {n for n, _ in DORI_LEVELS} for v in none)

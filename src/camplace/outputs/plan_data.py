@@ -18,6 +18,8 @@ import shapely
 from camplace.core.errors import InputError
 from camplace.visibility.viewshed import DORI_LEVELS, STEP, WORKING_HEIGHT, Viewshed, dori_distances, viewsheds
 
+VIEWSHED_BUDGET_S = 1.5  # viewsheds stop after this many seconds (the rest: camera symbols only)
+
 PAPERS_MM: dict[str, tuple[float, float]] = {"A4": (297.0, 210.0), "A3": (420.0, 297.0), "letter": (279.4, 215.9)}
 DORI_COLOURS = {"detect": "#fef0d9", "observe": "#fdcc8a", "recognise": "#fc8d59", "identify": "#d7301f"}
 SCHEDULE_HEAD = ("mark", "id", "x (m)", "y (m)", "height (m)", "yaw (\u00b0)", "pitch (\u00b0)", "roll (\u00b0)",
@@ -54,6 +56,17 @@ class PlanData:
     paper: str = "A3"
     dated: str | None = None
     views: list[dict] = field(default_factory=list)  # report_html.camera_views cards (may be fewer than cameras)
+    input_from_scene: np.ndarray | None = None  # 4x4: plan.dxf drawn in the input file's frame; None: scene frame
+
+    @property
+    def skipped(self) -> int:
+        """How many viewsheds the time budget left uncomputed."""
+        return sum(not v.computed for v in self.shed)
+
+    @property
+    def areas(self) -> list[tuple[str, str, np.ndarray]]:
+        """site_areas of the scene."""
+        return site_areas(self.scene)
 
     @property
     def title_pairs(self) -> list[tuple[str, str]]:
@@ -79,10 +92,30 @@ class PlanData:
             lens = f"{k.get('model', '')} {k.get('width', '')}x{k.get('height', '')} f {float(k.get('fx', 0)):.0f}"
             dori = "/".join(f"{d[n]:.1f}" for n, _ in reversed(DORI_LEVELS))
             serves = ", ".join(f"{r} ({n})" for r, n in served.items()) or "\u2013"
-            rows.append((mark, str(c.get("source_id", c["candidate_id"])), f"{x:.2f}", f"{y:.2f}", f"{z:.2f}",
+            rows.append((mark, camera_id(c), f"{x:.2f}", f"{y:.2f}", f"{z:.2f}",
                          f"{c['yaw_deg']:.1f}", f"{c['pitch_deg']:.1f}", f"{c['roll_deg']:.1f}", str(c["camera"]),
                          lens, f"{price:g}", dori, serves, "existing" if c.get("existing") else "new"))
         return rows
+
+
+def camera_id(camera: dict) -> str:
+    """The id a placement.json camera object is known by: an existing camera's own ``id``,
+    the file's id (``source_id``, evaluate) or the ``candidate_id``."""
+    return str(camera.get("id", camera.get("source_id", camera["candidate_id"])))
+
+
+def site_areas(scene) -> list[tuple[str, str, np.ndarray]]:
+    """(kind, name, (K, 2) corners m, scene frame) of the scene's areas (camplace.spec.sites):
+    kind 'zone' (a volume zone), 'privacy' (a privacy zone), 'forbid' / 'allow' (mount_rules;
+    named 'forbid 1'.., 'allow 1'..)."""
+    spec = scene.spec
+    out = [("privacy" if z.privacy else "zone", z.name, np.asarray(z.polygon, float))
+           for z in getattr(spec, "zones", []) if z.polygon is not None]
+    rules = getattr(spec, "mount_rules", None)
+    for kind in ("forbid", "allow"):
+        polys = getattr(rules, kind, None) or []
+        out += [(kind, f"{kind} {k + 1}", np.asarray(p, float)) for k, p in enumerate(polys)]
+    return out
 
 
 def free_floor(scene, height: float):
@@ -97,9 +130,12 @@ def free_floor(scene, height: float):
 
 def plan_data(scene, vis, placement: dict, metrics: dict, selected: np.ndarray, *, height: float = WORKING_HEIGHT,
               paper: str = "A3", repeatable: bool = False, views: list[dict] | None = None,
-              step: float = STEP) -> PlanData:
+              step: float = STEP, budget_s: float = VIEWSHED_BUDGET_S,
+              input_from_scene: np.ndarray | None = None) -> PlanData:
     """PlanData of a placement: ``vis`` (camplace.visibility.engine.Visibility) and
-    ``selected`` (rows of vis.V, the cameras of placement['cameras'] in the same order)."""
+    ``selected`` (rows of vis.V, the cameras of placement['cameras'] in the same order).
+    Viewsheds are computed for ``budget_s`` seconds (no limit when ``repeatable``);
+    ``input_from_scene`` (4x4) draws plan.dxf in that frame."""
     if not (np.isfinite(height) and 0.0 <= height <= scene.height):
         raise InputError(f"working height: expected 0..{scene.height:g} m (the room's height), got {height!r}",
                          option="height")
@@ -114,6 +150,8 @@ def plan_data(scene, vis, placement: dict, metrics: dict, selected: np.ndarray, 
         served.append({str(t.region_names[r]): int(n[r]) for r in np.nonzero(n)[0]})
     cov = np.bincount(V[sel].indices, minlength=V.shape[1]).astype(np.int64) if len(sel) else np.zeros(V.shape[1], int)
     return PlanData(scene, placement, metrics, list(placement.get("cameras", [])), [f"C{k + 1}" for k in range(len(sel))],
-                    viewsheds(scene.occupancy, c, sel, height, step, free_floor(scene, height)), [per_type[cam.name] for cam in cams],
-                    [float(cam.cost) for cam in cams], served, t, cov, float(height), check_paper(paper),
-                    None if repeatable else time.strftime("%Y-%m-%d %H:%M"), list(views or []))
+                    viewsheds(scene.occupancy, c, sel, height, step, free_floor(scene, height),
+                              budget_s=float("inf") if repeatable else budget_s),
+                    [per_type[cam.name] for cam in cams], [float(cam.cost) for cam in cams], served, t, cov,
+                    float(height), check_paper(paper), None if repeatable else time.strftime("%Y-%m-%d %H:%M"),
+                    list(views or []), None if input_from_scene is None else np.asarray(input_from_scene, float))

@@ -1,12 +1,20 @@
-"""plan.dxf (ezdxf): the floor plan for CAD, in the scene frame's metres (1 drawing unit = 1 m).
+"""plan.dxf (ezdxf): the floor plan for CAD, in metres (1 drawing unit = 1 m).
 
 Layers: CAMPLACE-WALLS (footprint and obstacle outlines, obstacle names), CAMPLACE-ZONES
-(target regions: the outline of each volume region's targets at the working height,
-with its name), CAMPLACE-FOV (each camera's viewshed at the working height),
-CAMPLACE-DORI-<LEVEL> (each camera's DORI bands, hatched), CAMPLACE-CAMERAS (one
-INSERT of the block CAMPLACE_CAMERA per camera at its plan position, rotated to its yaw,
-with attributes ID, TYPE, HEIGHT, YAW, PITCH). Where the scene came from a file with
-another frame, the poses are the scene frame's (placement.json's input_from_scene maps them).
+(the scene's volume zones: their polygons, closed, with their names; target regions of
+``targets:`` as the outline of their targets at the working height), CAMPLACE-ZONES-PRIVACY
+(privacy zones), CAMPLACE-MOUNT-FORBID / CAMPLACE-MOUNT-ALLOW (mount_rules polygons),
+CAMPLACE-FOV (each camera's viewshed at the working height), CAMPLACE-DORI-<LEVEL> (each
+camera's DORI bands, hatched), CAMPLACE-CAMERAS / CAMPLACE-CAMERAS-EXISTING (one INSERT of
+the block CAMPLACE_CAMERA per new / existing camera at its position, rotated to its yaw,
+with attributes ID, TYPE, HEIGHT, YAW, PITCH, STATUS).
+
+Frame: the scene frame, or with ``PlanData.input_from_scene`` (write_outputs(frame='input'))
+the input file's: every plan point (x, y) is mapped as (x, y, working height) through the
+4x4 transform and its z dropped (for a transform about the vertical axis that is exactly
+its xy part); camera insertion points are the cameras' 3D positions in that frame, YAW /
+PITCH / HEIGHT that frame's (as placement.json's with frame 'input'). A transform that
+scales (a file in mm) makes the drawing unitless in the file's units.
 """
 
 from __future__ import annotations
@@ -17,13 +25,52 @@ from pathlib import Path
 import numpy as np
 
 from camplace.core.files import atomic_write_bytes
-from camplace.outputs.plan_data import PlanData
+from camplace.outputs.plan_data import PlanData, camera_id
 from camplace.visibility.viewshed import DORI_LEVELS
 
 BLOCK = "CAMPLACE_CAMERA"
-LAYERS = {"CAMPLACE-WALLS": 7, "CAMPLACE-ZONES": 3, "CAMPLACE-FOV": 5, "CAMPLACE-CAMERAS": 1,
+LAYERS = {"CAMPLACE-WALLS": 7, "CAMPLACE-ZONES": 3, "CAMPLACE-ZONES-PRIVACY": 6, "CAMPLACE-MOUNT-FORBID": 1,
+          "CAMPLACE-MOUNT-ALLOW": 3, "CAMPLACE-FOV": 5, "CAMPLACE-CAMERAS": 1, "CAMPLACE-CAMERAS-EXISTING": 6,
           **{f"CAMPLACE-DORI-{name.upper()}": c for (name, _), c in zip(DORI_LEVELS, (51, 40, 30, 10))}}
-ATTRIBS = ("ID", "TYPE", "HEIGHT", "YAW", "PITCH")
+AREA_LAYERS = {"zone": "CAMPLACE-ZONES", "privacy": "CAMPLACE-ZONES-PRIVACY", "forbid": "CAMPLACE-MOUNT-FORBID",
+               "allow": "CAMPLACE-MOUNT-ALLOW"}
+ATTRIBS = ("ID", "TYPE", "HEIGHT", "YAW", "PITCH", "STATUS")
+
+
+class PlanFrame:
+    """Scene-frame plan points to the drawing's: T (4x4, p_out = T @ [p, 1]; identity when
+    None); plan points are taken at height h (m) and their z dropped."""
+
+    def __init__(self, T: np.ndarray | None, h: float):
+        self.T = np.eye(4) if T is None else np.asarray(T, np.float64)
+        self.h = float(h)
+        self.k = float(np.cbrt(np.linalg.det(self.T[:3, :3])))  # drawing units per metre
+
+    def xy(self, pts) -> list[tuple[float, float]]:
+        """(K, 2) scene plan points (m) -> K drawing points."""
+        p = np.asarray(pts, np.float64).reshape(-1, 2)
+        q = np.column_stack([p, np.full(len(p), self.h)]) @ self.T[:3, :3].T + self.T[:3, 3]
+        return [(float(a), float(b)) for a, b in q[:, :2]]
+
+    def cameras(self, cameras: list[dict]) -> list[tuple[tuple, float, tuple[float, float, float]]]:
+        """Per camera: (insertion point (3,), symbol rotation deg, (height, yaw, pitch) of its frame)."""
+        from camplace.cameras.candidates import ypr_from_rotation
+        from camplace.scene.frames import map_poses
+
+        if np.array_equal(self.T, np.eye(4)):  # the scene frame: placement.json's own numbers
+            return [(tuple(float(v) for v in c["position"]), float(c["yaw_deg"]),
+                     (float(c["position"][2]), float(c["yaw_deg"]), float(c["pitch_deg"]))) for c in cameras]
+        if not cameras:
+            return []
+        pos, rot = map_poses(self.T, [c["position"] for c in cameras], [c["rotation"] for c in cameras])
+        ang = ypr_from_rotation(rot)
+        out = []
+        for c, p, a in zip(cameras, pos, ang):
+            y = np.radians(c["yaw_deg"])
+            fwd = self.xy([c["position"][:2], np.asarray(c["position"][:2]) + [np.cos(y), np.sin(y)]])
+            turn = float(np.degrees(np.arctan2(fwd[1][1] - fwd[0][1], fwd[1][0] - fwd[0][0])))
+            out.append((tuple(float(v) for v in p), turn, (float(p[2]), float(a[0]), float(a[1]))))
+        return out
 
 
 def _rings(geom):
@@ -62,48 +109,69 @@ def _plan_doc(data: PlanData):
     import ezdxf
 
     doc = ezdxf.new("R2010", setup=False)
-    doc.units = ezdxf.units.M
+    f = PlanFrame(data.input_from_scene, data.height)
+    doc.units = ezdxf.units.M if abs(f.k - 1.0) < 1e-9 else 0
     for name, colour in LAYERS.items():
         doc.layers.add(name, color=colour)
     _camera_block(doc)
     msp = doc.modelspace()
     walls = {"layer": "CAMPLACE-WALLS"}
-    msp.add_lwpolyline(np.asarray(data.scene.footprint, float).tolist(), close=True, dxfattribs=walls)
+    msp.add_lwpolyline(f.xy(data.scene.footprint), close=True, dxfattribs=walls)
     for name, (b0, b1) in data.scene.boxes.items():
-        msp.add_lwpolyline([(b0[0], b0[1]), (b1[0], b0[1]), (b1[0], b1[1]), (b0[0], b1[1])], close=True,
+        msp.add_lwpolyline(f.xy([(b0[0], b0[1]), (b1[0], b0[1]), (b1[0], b1[1]), (b0[0], b1[1])]), close=True,
                            dxfattribs=walls)
-        msp.add_text(f"{name} ({b1[2]:.2f} m)", height=0.15, dxfattribs=walls).set_placement(
-            ((b0[0] + b1[0]) / 2, (b0[1] + b1[1]) / 2), align=ezdxf.enums.TextEntityAlignment.MIDDLE_CENTER)
-    _zones(msp, data)
-    for c, mark, vs in zip(data.cameras, data.marks, data.shed):
+        _text(msp, f, f"{name} ({b1[2]:.2f} m)", ((b0[0] + b1[0]) / 2, (b0[1] + b1[1]) / 2), 0.15, walls, True)
+    _zones(msp, f, data)
+    for vs in data.shed:
         for ext, holes in _rings(vs.polygon):
-            msp.add_lwpolyline(ext.tolist(), close=True, dxfattribs={"layer": "CAMPLACE-FOV"})
+            msp.add_lwpolyline(f.xy(ext), close=True, dxfattribs={"layer": "CAMPLACE-FOV"})
         for name, _ in DORI_LEVELS:
             layer = f"CAMPLACE-DORI-{name.upper()}"
             for ext, holes in _rings(vs.bands.get(name)):
                 hatch = msp.add_hatch(color=LAYERS[layer], dxfattribs={"layer": layer})
-                hatch.paths.add_polyline_path(ext.tolist(), is_closed=True, flags=1)
+                hatch.paths.add_polyline_path(f.xy(ext), is_closed=True, flags=1)
                 for h in holes:
-                    hatch.paths.add_polyline_path(h.tolist(), is_closed=True, flags=0)
-        x, y, z = c["position"]
-        ref = msp.add_blockref(BLOCK, (x, y, z), dxfattribs={"layer": "CAMPLACE-CAMERAS",
-                                                            "rotation": float(c["yaw_deg"])})
-        ref.add_auto_attribs({"ID": str(c.get("source_id", c["candidate_id"])), "TYPE": str(c["camera"]),
-                              "HEIGHT": f"{z:.3f}", "YAW": f"{c['yaw_deg']:.2f}", "PITCH": f"{c['pitch_deg']:.2f}"})
-        msp.add_text(mark, height=0.2, dxfattribs={"layer": "CAMPLACE-CAMERAS"}).set_placement((x - 0.45, y + 0.2))
+                    hatch.paths.add_polyline_path(f.xy(h), is_closed=True, flags=0)
+    for c, mark, (at, turn, (z, yaw, pitch)) in zip(data.cameras, data.marks, f.cameras(data.cameras)):
+        layer = "CAMPLACE-CAMERAS-EXISTING" if c.get("existing") else "CAMPLACE-CAMERAS"
+        ref = msp.add_blockref(BLOCK, at, dxfattribs={"layer": layer, "rotation": turn, "xscale": f.k,
+                                                      "yscale": f.k, "zscale": f.k})
+        ref.add_auto_attribs({"ID": camera_id(c), "TYPE": str(c["camera"]), "HEIGHT": f"{z:.3f}",
+                              "YAW": f"{yaw:.2f}", "PITCH": f"{pitch:.2f}",
+                              "STATUS": "existing" if c.get("existing") else "new"})
+        _text(msp, f, mark, (c["position"][0] - 0.45, c["position"][1] + 0.2), 0.2, {"layer": layer})
     return doc
 
 
-def _zones(msp, data: PlanData) -> None:
-    """Each volume region's targets at the working height (or its nearest layer) as outlines."""
+def _text(msp, f: PlanFrame, text: str, xy, height: float, attribs: dict, centred: bool = False) -> None:
+    """A TEXT of ``height`` m at scene plan point xy (mapped by f)."""
+    import ezdxf
+
+    t = msp.add_text(text, height=height * f.k, dxfattribs=attribs)
+    if centred:
+        t.set_placement(f.xy([xy])[0], align=ezdxf.enums.TextEntityAlignment.MIDDLE_CENTER)
+    else:
+        t.set_placement(f.xy([xy])[0])
+
+
+def _zones(msp, f: PlanFrame, data: PlanData) -> None:
+    """The scene's areas (PlanData.areas: zones, privacy zones, mount rules) as closed polylines
+    with their names; regions of ``targets:`` as the outline of their targets at the working
+    height (or their nearest layer)."""
     import shapely
 
+    drawn = set()
+    for kind, name, corners in data.areas:
+        layer = {"layer": AREA_LAYERS[kind]}
+        msp.add_lwpolyline(f.xy(corners), close=True, dxfattribs=layer)
+        _text(msp, f, name, shapely.Polygon(corners).representative_point().coords[0], 0.2, layer)
+        drawn.add(name)
     t = data.targets
     vol = ~np.asarray(t.is_surface, bool)
     half = float(data.scene.spec.voxel_size) / 2
     for r, name in enumerate(t.region_names):
         m = vol & (t.region_ids == r)
-        if not m.any():
+        if not m.any() or str(name) in drawn:
             continue
         zs = np.unique(np.round(t.positions[m, 2], 6))
         z = zs[np.argmin(np.abs(zs - data.height))]
@@ -111,9 +179,8 @@ def _zones(msp, data: PlanData) -> None:
         geom = shapely.union_all(shapely.box(p[:, 0] - half, p[:, 1] - half, p[:, 0] + half, p[:, 1] + half))
         for ext, holes in _rings(geom.simplify(1e-6)):
             for ring in [ext, *holes]:
-                msp.add_lwpolyline(ring.tolist(), close=True, dxfattribs={"layer": "CAMPLACE-ZONES"})
-        c = np.asarray(geom.representative_point().coords)[0]
-        msp.add_text(str(name), height=0.2, dxfattribs={"layer": "CAMPLACE-ZONES"}).set_placement(tuple(c))
+                msp.add_lwpolyline(f.xy(ring), close=True, dxfattribs={"layer": "CAMPLACE-ZONES"})
+        _text(msp, f, str(name), geom.representative_point().coords[0], 0.2, {"layer": "CAMPLACE-ZONES"})
 
 
 def write_plan_dxf(path: str | Path, data: PlanData) -> Path:

@@ -21,7 +21,7 @@ from pathlib import Path
 import numpy as np
 
 from camplace.core.files import atomic_write_bytes
-from camplace.outputs.figures import COVERAGE_CLASSES, SceneView, coverage_slices
+from camplace.outputs.figures import AREA_STYLES, COVERAGE_CLASSES, SceneView, coverage_slices
 from camplace.outputs.plan_data import DORI_COLOURS, PAPERS_MM, SCHEDULE_HEAD, PlanData
 from camplace.visibility.viewshed import DORI_LEVELS
 
@@ -32,6 +32,12 @@ SCALES = (20, 25, 50, 75, 100, 125, 150, 200, 250, 300, 400, 500, 750, 1000, 125
 SIDE_MM = 100.0  # right-hand column of page 1: title block and legend
 MARGIN_MM = 12.0
 OUTLINE = "#1f4fd1"  # viewshed outlines and new cameras
+EXISTING = "#7b3294"  # existing cameras
+# zones (outline + name), privacy zones (hatched), forbidden / allowed mount areas (dashed / dash-dot)
+PLAN_AREAS = {"zone": {"edgecolor": "#1b7837", "linewidth": 1.0}, **AREA_STYLES,
+              "allow": {"edgecolor": "#1b7837", "linestyle": "-.", "linewidth": 1.2}}
+AREA_LABELS = {"zone": "zone (name)", "privacy": "privacy zone (never seen)", "forbid": "no camera mounted here",
+               "allow": "cameras mounted only here"}
 # text stays text; fixed SVG ids (hash salt) so repeatable runs give identical files
 RC = {"pdf.fonttype": 3, "svg.fonttype": "none", "svg.hashsalt": "camplace", "font.size": 7.0, "hatch.linewidth": 0.4}
 
@@ -192,19 +198,36 @@ def _draw_cameras(ax, data: PlanData, n: int) -> None:
         d, s = np.array([math.cos(a), math.sin(a)]), np.array([-math.sin(a), math.cos(a)])
         tip = np.array([x, y]) + 2.4 * r * d
         wedge = np.array([np.array([x, y]) + 0.6 * r * s, tip, np.array([x, y]) - 0.6 * r * s])
-        colour = "#7b3294" if c.get("existing") else "#1f4fd1"
+        colour = EXISTING if c.get("existing") else OUTLINE
         for part, art in (("wedge", MPolygon(wedge, closed=True, facecolor=colour, edgecolor="white", linewidth=0.3,
                                               zorder=7)),
                           ("symbol", Circle((x, y), r, facecolor="white", edgecolor=colour, linewidth=0.9, zorder=8))):
             art.set_gid(f"camera-{mark}-{part}")  # plan.svg: <g id="camera-C1-symbol"> (report.html's hover rows)
             ax.add_patch(art)
-        t = ax.text(x, y, mark[1:], fontsize=5, ha="center", va="center", weight="bold", color=colour, zorder=9)
+        # the mark once, inside the circle (as the schedule spells it)
+        t = ax.text(x, y, mark, fontsize=4.2 if len(mark) < 4 else 3.4, ha="center", va="center", weight="bold",
+                    color=colour, zorder=9)
         t.set_gid(f"camera-{mark}-label")
-        ax.text(x - 1.4 * r * d[0], y - 1.4 * r * d[1], mark, fontsize=5.5, ha="center", va="center", zorder=9,
-                color="black")
 
 
-def _legend(fig, data: PlanData) -> None:
+def _draw_areas(ax, data: PlanData) -> list[str]:
+    """The scene's zones, privacy zones and mount-rule areas (PlanData.areas) with their
+    names; returns the kinds drawn (for the legend)."""
+    from matplotlib.patches import Polygon as MPolygon
+    from shapely.geometry import Polygon
+
+    kinds = []
+    for kind, name, corners in data.areas:
+        style = PLAN_AREAS[kind]
+        ax.add_patch(MPolygon(corners, closed=True, fill=False, zorder=3, **style))
+        x, y = Polygon(corners).representative_point().coords[0]
+        ax.text(x, y, name, fontsize=5.5, ha="center", va="center", color=style["edgecolor"], style="italic",
+                zorder=6, bbox={"facecolor": "white", "edgecolor": "none", "alpha": 0.7, "pad": 0.5})
+        kinds += [kind] if kind not in kinds else []
+    return kinds
+
+
+def _legend(fig, data: PlanData, kinds: list[str]) -> None:
     from matplotlib.patches import Patch
 
     w, h = page_size_mm(data.paper)
@@ -212,7 +235,10 @@ def _legend(fig, data: PlanData) -> None:
                *[Patch(facecolor=DORI_COLOURS[nm], alpha=0.75, label=f"{nm} \u2265 {v:g} px/m") for nm, v in DORI_LEVELS],
                Patch(facecolor="none", edgecolor=OUTLINE, label="one camera's viewshed (outline)"),
                Patch(facecolor="#c8c8c8", hatch="///", edgecolor="#444444", label="obstacle (top height)"),
-               Patch(facecolor="white", edgecolor="#1f4fd1", label="new camera (mark, facing yaw)")]
+               Patch(facecolor="white", edgecolor=OUTLINE, label="new camera (mark, facing yaw)"),
+               *([Patch(facecolor="white", edgecolor=EXISTING, label="existing camera")]
+                 if any(c.get("existing") for c in data.cameras) else []),
+               *[Patch(fill=False, label=AREA_LABELS[k], **PLAN_AREAS[k]) for k in kinds]]
     fig.legend(handles=handles, loc="upper left", bbox_to_anchor=((w - MARGIN_MM - SIDE_MM + 6) / w,
                                                                   (h - MARGIN_MM - 40.0) / h),
                fontsize=6.5, frameon=False, title=f"viewsheds at {data.height:.2f} m: best DORI level\nof any camera (EN/IEC 62676-4)",
@@ -226,10 +252,15 @@ def plan_figure(data: PlanData):
     ax, n, (lo, hi) = _plan_axes(fig, data)
     _draw_room(ax, data, n)
     _draw_viewsheds(ax, data)
+    kinds = _draw_areas(ax, data)
     _draw_cameras(ax, data, n)
     _scale_bar(ax, n, lo)
     _north_arrow(fig, data)
-    _legend(fig, data)
+    _legend(fig, data, kinds)
+    w, h = page_size_mm(data.paper)
+    if data.skipped:
+        fig.text((w - MARGIN_MM - SIDE_MM + 6) / w, (MARGIN_MM + 80.0) / h, f"{data.skipped} viewsheds not computed "
+                 "within the time budget\n(their cameras are drawn without one).", fontsize=7, color="#b2182b")
     fig.text(MARGIN_MM / page_size_mm(data.paper)[0], 1 - 8.0 / page_size_mm(data.paper)[1],
              f"{data.placement.get('scene', data.scene.name)}: floor plan, {len(data.cameras)} cameras",
              fontsize=11, weight="bold", va="top")

@@ -13,6 +13,7 @@ of it where the pixel density across the view ray (``px_per_m_nb``) reaches each
 from __future__ import annotations
 
 import math
+import time
 from dataclasses import dataclass, field
 
 import numba
@@ -37,11 +38,12 @@ class Viewshed:
     """What one camera sees at ``height`` m. polygon: shapely (Multi)Polygon in plan
     coordinates (m), empty when nothing is seen; bands: DORI level -> the part of
     polygon where the pixel density is at least that level's px/m (nested, coarsest
-    first); area: m²."""
+    first); area: m²; computed: False for a stand-in left empty by a time budget."""
 
     height: float
     polygon: Polygon | MultiPolygon
     bands: dict[str, Polygon | MultiPolygon] = field(default_factory=dict)
+    computed: bool = True
 
     @property
     def area(self) -> float:
@@ -135,12 +137,19 @@ def viewshed(occupancy: OccupancyGrid, camera: CameraModel, position: np.ndarray
 
 
 def viewsheds(occupancy: OccupancyGrid, candidates, selected: np.ndarray, height: float = WORKING_HEIGHT,
-              step: float = STEP, clip=None) -> list[Viewshed]:
+              step: float = STEP, clip=None, budget_s: float = float("inf")) -> list[Viewshed]:
     """One Viewshed per selected candidate row (camplace.cameras.candidates.Candidates), in
-    the order given."""
-    c = candidates
-    return [viewshed(occupancy, c.cameras[int(c.camera_ids[i])], c.positions[i], c.rotations[i], height, step, clip)
-            for i in np.asarray(selected, np.int64)]
+    the order given. Once ``budget_s`` seconds are spent the rest are empty stand-ins
+    (``computed`` False)."""
+    c, out = candidates, []
+    t0 = time.perf_counter()
+    for i in np.asarray(selected, np.int64):
+        if time.perf_counter() - t0 > budget_s:
+            out.append(Viewshed(float(height), Polygon(), {n: Polygon() for n, _ in DORI_LEVELS}, computed=False))
+            continue
+        out.append(viewshed(occupancy, c.cameras[int(c.camera_ids[i])], c.positions[i], c.rotations[i], height,
+                            step, clip))
+    return out
 
 
 def dori_distances(camera: CameraModel, samples: int = 400) -> dict[str, float]:
