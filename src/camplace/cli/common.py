@@ -37,6 +37,8 @@ FLAGS = {
     "heights": "--heights", "coverage": "--coverage", "wall_mount_height": "--wall-mounts",
     "viewpoints": "--viewpoint", "out": "--out", "frame": "--frame", "paper": "--paper",
     "cloud": "",  # the space file: the message names it already
+    "units": "--units", "wall_height": "--wall-height", "ceiling_height": "--ceiling-height", "scale": "--scale",
+    "ref": "--ref", "storey": "--storey",
 }
 
 

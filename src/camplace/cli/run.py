@@ -15,7 +15,9 @@ from camplace.cli.common import (CACHE_OPT, FRAME_OPT, MAX_MEMORY_OPT, NO_CACHE_
                                  REPEATABLE_OPT, SCHEDULER_OPT,
                                  TIME_LIMIT_OPT, WORKERS_OPT, RichProgress, StopFlag, certify_solver, check_options,
                                  console, memory_bytes, progress_bars, repeatable_requested, scale_options, state)
-from camplace.cli.space import ImportOptions, describe_import, scene_data_from_file, scene_yaml, space_kind
+from camplace.cli.space import (CEILING_OPT, REF_OPT, SCALE_OPT, STOREY_OPT, UNITS_OPT, WALL_HEIGHT_OPT,
+                                 ImportOptions, describe_import, plan_import_options, scene_data_from_file, scene_yaml,
+                                 space_kind)
 from camplace.cli.summary import write_and_summarise
 from camplace.core.errors import InputError
 
@@ -116,8 +118,8 @@ def beyond_grid_options(refine: bool, refine_time: float, adaptive: int, robust:
 
 def run_cmd(scene: Optional[str] = typer.Argument(None, help="Scene YAML file, built-in name (demo, standard-store, "
                                                   "store-a, warehouse[:AREA_M2]) or a space file: a scan (PLY, PCD, "
-                                                  "XYZ/CSV, LAS/LAZ), a mesh (OBJ, PLY with faces, STL, GLB) or an "
-                                                  "OctoMap (.bt/.ot)."),
+                                                  "XYZ/CSV, LAS/LAZ), a mesh (OBJ, PLY with faces, STL, GLB), an "
+                                                  "OctoMap (.bt/.ot) or a plan (DXF, PNG/JPG/TIFF image, IFC)."),
             budget: Optional[int] = typer.Option(None, "--budget", help="Number of cameras N_s (default: the scene's)."),
             solver: Optional[str] = typer.Option(None, "--solver", help="Solver (default: the scene's)."),
             out: Optional[Path] = typer.Option(None, "--out", help="Output folder (default camplace-out/<scene>)."),
@@ -157,6 +159,9 @@ def run_cmd(scene: Optional[str] = typer.Argument(None, help="Scene YAML file, b
             certify: Optional[float] = typer.Option(None, "--certify", help="Spend SECONDS on both sides: tabu search "
                                                     "for the placement, Lagrangian/LP/exact bounds for a proven gap "
                                                     "(solver 'certify')."),
+            units: Optional[str] = UNITS_OPT, wall_height: Optional[float] = WALL_HEIGHT_OPT,
+            ceiling_height: Optional[float] = CEILING_OPT, scale: Optional[float] = SCALE_OPT,
+            ref: Optional[str] = REF_OPT, storey: Optional[str] = STOREY_OPT,
             cloud: Optional[Path] = typer.Option(None, "--cloud", hidden=True,
                                                  help="Deprecated: give the scan as SCENE (camplace run SCAN)."),
             save_scene: Optional[Path] = typer.Option(None, "--save-scene", hidden=True,
@@ -171,7 +176,8 @@ def run_cmd(scene: Optional[str] = typer.Argument(None, help="Scene YAML file, b
     camplace scene import: floor levelled to z = 0, ceiling and footprint detected,
     walkable volume targets, a 1 m ceiling grid, the default camera
     (docs/scan-to-mount-list.md). To adjust those, write the scene with
-    camplace scene import FILE --out scene.yaml, edit it and run that."""
+    camplace scene import FILE --out scene.yaml, edit it and run that. A plan (DXF,
+    plan image, IFC) gives walls as obstacles and rooms as zones (docs/plans.md)."""
     if cloud is not None:
         if scene is not None:
             raise InputError("run: give either a scene or --cloud, not both")
@@ -182,8 +188,11 @@ def run_cmd(scene: Optional[str] = typer.Argument(None, help="Scene YAML file, b
         raise InputError("run: give a scene (YAML file, built-in name or space file)")
     elif save_scene is not None:
         raise InputError("--save-scene: use camplace scene import FILE --out SCENE.yaml")
-    elif space_kind(scene) is not None:
-        scene = scene_from_space_file(Path(scene), budget)
+    plan = plan_import_options(space_kind(scene) if isinstance(scene, str) else None, units=units,
+                               wall_height=wall_height, ceiling_height=ceiling_height, scale=scale, ref=ref,
+                               storey=storey)
+    if isinstance(scene, str) and space_kind(scene) is not None:
+        scene = scene_from_space_file(Path(scene), budget, opts=plan)
     refine = refine_default(refine, robust=robust, certify=certify, well_triangulated=well_triangulated)
     solver, time_limit = certify_solver(certify, solver, time_limit)
     run_pipeline(scene, budget, solver, out, time_limit, require_feasible, max_memory_gb, repeatable, frame,

@@ -10,7 +10,8 @@ import typer
 from rich.markup import escape
 
 from camplace.cli.common import console, state
-from camplace.cli.space import ImportOptions, describe_import, scene_data_from_file, scene_yaml
+from camplace.cli.space import (CEILING_OPT, REF_OPT, SCALE_OPT, STOREY_OPT, UNITS_OPT, WALL_HEIGHT_OPT,
+                                 ImportOptions, describe_import, scene_data_from_file, scene_yaml)
 from camplace.core.errors import InputError
 
 scene_app = typer.Typer(add_completion=False, no_args_is_help=True, help="Scenes from space files.")
@@ -18,7 +19,8 @@ scene_app = typer.Typer(add_completion=False, no_args_is_help=True, help="Scenes
 
 @scene_app.command("import")
 def import_cmd(file: Path = typer.Argument(..., help="A scan (PLY, PCD, XYZ/CSV, LAS/LAZ), a mesh (OBJ, PLY with faces, "
-                                           "STL, GLB) or an OctoMap (.bt/.ot)."),
+                                           "STL, GLB), an OctoMap (.bt/.ot) or a plan (DXF, PNG/JPG/TIFF image, "
+                                           "IFC)."),
                out: Path = typer.Option(..., "--out", help="Scene YAML to write (atomically)."),
                up: str = typer.Option("+z", "--up", help="The file's up axis (+z; phone scans are often +y)."),
                no_level_floor: bool = typer.Option(False, "--no-level-floor",
@@ -35,7 +37,10 @@ def import_cmd(file: Path = typer.Argument(..., help="A scan (PLY, PCD, XYZ/CSV,
                                                              "(file frame) for free-space carving; repeat for "
                                                              "several (PLY/PCD scans may record their own)."),
                budget: Optional[int] = typer.Option(None, "--budget", min=0,
-                                                    help="placement.budget of the scene (default 20).")) -> None:
+                                                    help="placement.budget of the scene (default 20)."),
+               units: Optional[str] = UNITS_OPT, wall_height: Optional[float] = WALL_HEIGHT_OPT,
+               ceiling_height: Optional[float] = CEILING_OPT, scale: Optional[float] = SCALE_OPT,
+               ref: Optional[str] = REF_OPT, storey: Optional[str] = STOREY_OPT) -> None:
     """Write the scene built from a space file as YAML to edit, then camplace run it.
 
     The floor is levelled to z = 0, ceiling and footprint detected, walkable volume
@@ -48,7 +53,8 @@ def import_cmd(file: Path = typer.Argument(..., help="A scan (PLY, PCD, XYZ/CSV,
     if out.suffix.lower() not in (".yaml", ".yml"):
         raise InputError(f"--out: expected a .yaml scene file, got '{out}'")
     opts = ImportOptions(up=up, level_floor=not no_level_floor, crop=crop, downsample=downsample, heights=heights,
-                         coverage=coverage, wall_mounts=wall_mounts, viewpoint=list(viewpoint or []))
+                         coverage=coverage, wall_mounts=wall_mounts, viewpoint=list(viewpoint or []), units=units,
+                         wall_height=wall_height, ceiling_height=ceiling_height, scale=scale, ref=ref, storey=storey)
     data, rep, _ = scene_data_from_file(file, opts, budget)
     if not state["quiet"]:
         console.print(f"[dim]{escape(describe_import(rep))}[/dim]")

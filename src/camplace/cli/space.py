@@ -13,6 +13,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
+import typer
 
 from camplace.cli.common import floats
 from camplace.core.errors import InputError
@@ -21,6 +22,15 @@ from camplace.scene.loaders import MESH_SUFFIXES, OCTOMAP_SUFFIXES, POINT_CLOUD_
 MESH_SAMPLE_SPACING_M = 0.03  # one sample per (3 cm)² of mesh surface
 MESH_SAMPLES = (20_000, 3_000_000)  # at least / at most
 OCTOMAP_LATTICE = 8  # at most this many points per axis in one occupied leaf
+
+
+# the options of plans (DXF, plan images, IFC), shared by camplace run and camplace scene import
+UNITS_OPT = typer.Option(None, "--units", help="Plan units mm|cm|m|in|ft (default: the file's, e.g. DXF $INSUNITS).")
+WALL_HEIGHT_OPT = typer.Option(None, "--wall-height", help="Plan walls: height (m; default the ceiling height).")
+CEILING_OPT = typer.Option(None, "--ceiling-height", help="Plans: ceiling height (m; default 3, IFC: the storey's).")
+SCALE_OPT = typer.Option(None, "--scale", help="Plan images: metres per pixel.")
+REF_OPT = typer.Option(None, "--ref", help="Plan images: two points 'x1,y1,x2,y2,DIST' (pixels, metres) for the scale.")
+STOREY_OPT = typer.Option(None, "--storey", help="IFC: the IfcBuildingStorey name (default: the largest), or 'all'.")
 
 
 @dataclass(frozen=True)
@@ -35,6 +45,23 @@ class ImportOptions:
     coverage: int = 2
     wall_mounts: float | None = None
     viewpoint: list[str] = field(default_factory=list)
+    # plans (DXF, images, IFC: camplace.scene.importers)
+    units: str | None = None
+    wall_height: float | None = None
+    ceiling_height: float | None = None
+    scale: float | None = None
+    ref: str | None = None
+    storey: str | None = None
+
+    def plan_kwargs(self, budget: int | None) -> dict:
+        """camplace.scene.importers.import_plan keyword arguments (None: the importer's default)."""
+        for flag, v in (("--wall-height", self.wall_height), ("--ceiling-height", self.ceiling_height),
+                        ("--scale", self.scale)):
+            if v is not None and not v > 0:
+                raise InputError(f"{flag}: expected a positive number, got {v}")
+        return dict(units=self.units, wall_height=self.wall_height, ceiling_height=self.ceiling_height,
+                    scale=self.scale, ref=floats(self.ref, "--ref", 5) if self.ref else None, storey=self.storey,
+                    heights=floats(self.heights, "--heights"), coverage=self.coverage, budget=budget)
 
     def kwargs(self, budget: int | None) -> dict:
         """scene_from_cloud keyword arguments (InputError naming the flag on bad text)."""
@@ -46,6 +73,18 @@ class ImportOptions:
                     coverage=self.coverage, budget=budget if budget is not None else 20,
                     wall_mount_height=self.wall_mounts,
                     viewpoints=[floats(v, "--viewpoint", 3) for v in self.viewpoint] or None)
+
+
+def plan_import_options(kind: str | None, **given) -> ImportOptions:
+    """ImportOptions of the plan options ``given`` (units, wall_height, ...; None = not
+    given) for a scene of ``kind`` (space_kind); InputError when a plan option is given
+    for anything but a plan."""
+    flags = {"units": "--units", "wall_height": "--wall-height", "ceiling_height": "--ceiling-height",
+             "scale": "--scale", "ref": "--ref", "storey": "--storey"}
+    for k, v in given.items():
+        if v is not None and kind != "plan":
+            raise InputError(f"{flags[k]}: belongs to plans (DXF, plan image, IFC)")
+    return ImportOptions(**given)
 
 
 def _ply_has_faces(path: Path) -> bool:
@@ -62,10 +101,15 @@ def _ply_has_faces(path: Path) -> bool:
 
 
 def space_kind(path: str | Path) -> str | None:
-    """'point_cloud', 'mesh' or 'octomap' by the file's suffix (a .ply with faces is a
-    mesh); None for anything else (a scene file or a built-in name)."""
+    """'point_cloud', 'mesh', 'octomap' or 'plan' (DXF, plan image, IFC) by the file's
+    suffix (a .ply with faces is a mesh); None for anything else (a scene file or a
+    built-in name)."""
+    from camplace.scene.importers import plan_kind
+
     p = Path(path)
     suf = p.suffix.lower()
+    if plan_kind(p) is not None:
+        return "plan"
     if suf == ".ply":
         return "mesh" if p.is_file() and _ply_has_faces(p) else "point_cloud"
     if suf in POINT_CLOUD_SUFFIXES:
@@ -150,9 +194,12 @@ def scene_data_from_file(path: str | Path, opts: ImportOptions, budget: int | No
     kind = space_kind(p)
     if kind is None:
         raise InputError(f"{p}: not a space file; expected a scan ({', '.join(POINT_CLOUD_SUFFIXES)}), a mesh "
-                         f"({', '.join(MESH_SUFFIXES)}) or an OctoMap ({', '.join(OCTOMAP_SUFFIXES)})")
+                         f"({', '.join(MESH_SUFFIXES)}), an OctoMap ({', '.join(OCTOMAP_SUFFIXES)}) or a plan "
+                         "(.dxf, .png/.jpg/.tif, .ifc)")
     if not p.is_file():
         raise InputError(f"{p}: file not found" if not p.exists() else f"{p}: is a folder, expected a file")
+    if kind == "plan":
+        return _plan_data(p, opts, budget)
     kw = opts.kwargs(budget)
     if kind == "point_cloud":
         data, rep = scene_from_cloud(str(p), **kw)
@@ -163,8 +210,24 @@ def scene_data_from_file(path: str | Path, opts: ImportOptions, budget: int | No
     return data, rep, kind
 
 
+def _plan_data(p: Path, opts: ImportOptions, budget: int | None) -> tuple[dict, dict, str]:
+    """(scene mapping, report, 'plan') of a plan file, checked by the scene schema."""
+    from shapely.geometry import Polygon
+
+    from camplace.scene.importers import import_plan, plan_kind, validated
+
+    data = validated(import_plan(p, **opts.plan_kwargs(budget)), str(p))
+    rep = {"source": "plan", "format": plan_kind(p), "walls": sum("prism" in o for o in data["obstacles"]),
+           "obstacles": len(data["obstacles"]), "zones": [z["name"] for z in data.get("zones", [])],
+           "floor_area_m2": round(Polygon(data["room"]["footprint"]).area, 2), "height_m": data["room"]["height"]}
+    return data, rep, "plan"
+
+
 def describe_import(rep: dict) -> str:
     """One line on what was detected in the space file."""
+    if rep.get("source") == "plan":
+        return (f"{rep['format']} plan: footprint {rep['floor_area_m2']} m², ceiling {rep['height_m']} m, "
+                f"{rep['obstacles']} obstacles, {len(rep['zones'])} rooms ({', '.join(rep['zones'])})")
     what = {"point_cloud": "scan", "mesh": "mesh", "octomap": "OctoMap"}[rep.get("source", "point_cloud")]
     pts = (f"{rep['sampled_points']:,} points sampled, {rep['points']:,} after clean-up" if "sampled_points" in rep
            else f"{rep['points']:,} points after clean-up")

@@ -74,6 +74,8 @@ class Scene:
     viewpoints: np.ndarray | None = None  # (K, 3) scanner positions (scene frame)
     # (4, 4) p_input = T @ [p_scene, 1]: back to the input file's frame (camplace.scene.frames)
     input_from_scene: np.ndarray = field(default_factory=lambda: np.eye(4))
+    # prism obstacles: name -> (polygon (K, 2) m, zmin, zmax) (walls imported from plans)
+    prisms: dict[str, tuple[np.ndarray, float, float]] = field(default_factory=dict)
 
     @property
     def polygon(self) -> Polygon:
@@ -126,9 +128,15 @@ def build_scene(spec: SceneSpec, base_dir: Path | None = None, source: str = "<s
     occ[:, :, (zs < 0) | (zs > spec.room.height)] = True  # floor and ceiling slabs
 
     boxes: dict[str, tuple[np.ndarray, np.ndarray]] = {}
+    prisms: dict[str, tuple[np.ndarray, float, float]] = {}
     loaded = []
     for i, ob in enumerate(spec.obstacles):
-        if ob.box is None:
+        if ob.prism is not None:
+            prisms[ob.name] = (np.asarray(ob.prism.polygon, float), float(ob.prism.z[0]), float(ob.prism.z[1]))
+            if ob.occludes:
+                rasterize_prism(grid, Polygon(ob.prism.polygon, ob.prism.holes), *ob.prism.z)
+            continue
+        if ob.is_file:
             from camplace.scene.loaders.obstacles import add_obstacle
 
             loaded.append(add_obstacle(occ, grid.origin, res, ob, i, base_dir, source, progress))
@@ -143,14 +151,14 @@ def build_scene(spec: SceneSpec, base_dir: Path | None = None, source: str = "<s
     if loaded:
         from camplace.scene.freespace import scene_free_space
 
-        info["obstacle_files"] = {ob.name: lo.report for ob, lo in zip([o for o in spec.obstacles if o.box is None],
+        info["obstacle_files"] = {ob.name: lo.report for ob, lo in zip([o for o in spec.obstacles if o.is_file],
                                                                        loaded)}
         free_space, points, viewpoints = scene_free_space(grid, spec, loaded, progress)
         info["free_space"] = free_space.info if free_space is not None else None
     from camplace.scene.frames import input_from_scene
 
     return Scene(spec.name, spec, fp, float(spec.room.height), boxes, grid, base_dir, info,
-                 free_space, points, viewpoints, input_from_scene(spec, info.get("obstacle_files")))
+                 free_space, points, viewpoints, input_from_scene(spec, info.get("obstacle_files")), prisms)
 
 
 def rasterize_box(grid: OccupancyGrid, bmin: np.ndarray, bmax: np.ndarray) -> None:
@@ -163,3 +171,20 @@ def rasterize_box(grid: OccupancyGrid, bmin: np.ndarray, bmax: np.ndarray) -> No
             return
         sl.append(slice(idx[0], idx[-1] + 1))
     grid.occupied[sl[0], sl[1], sl[2]] = True
+
+
+def rasterize_prism(grid: OccupancyGrid, poly: Polygon, zmin: float, zmax: float) -> None:
+    """Mark (in place) every cell whose centre lies inside ``poly`` (plan, m) and in
+    [zmin, zmax] (m) as occupied; only the polygon's bounding box is tested."""
+    x0, y0, x1, y1 = poly.bounds
+    idx = []
+    for a, (lo, hi) in enumerate(((x0, x1), (y0, y1), (zmin, zmax))):
+        c = grid.cell_centres(a)
+        k = np.nonzero((c >= lo) & (c <= hi))[0]
+        if len(k) == 0:
+            return
+        idx.append(slice(k[0], k[-1] + 1))
+    xs, ys = grid.cell_centres(0)[idx[0]], grid.cell_centres(1)[idx[1]]
+    gx, gy = np.meshgrid(xs, ys, indexing="ij")
+    inside = shapely.contains_xy(poly, gx, gy)
+    grid.occupied[idx[0], idx[1], idx[2]][inside] = True  # a view: slices only

@@ -80,7 +80,7 @@ def input_from_scene(spec: SceneSpec, obstacle_reports: Mapping[str, Mapping] | 
     obstacle name -> its load report (Scene.info['obstacle_files']), for the floor
     levelling of ``transform.level_floor: true``."""
     for ob in spec.obstacles:
-        if ob.box is None:
+        if ob.is_file:
             level = level_matrix((obstacle_reports or {}).get(ob.name))
             return invert(scene_from_file(ob.transform, level))
     return np.eye(4)

@@ -14,7 +14,7 @@ from pydantic import BeforeValidator, Discriminator, Field, Tag, model_validator
 
 from camplace.spec.basics import (FACES, Box, Face, Finite, Incidence, Point2, Point3, PositiveFloat,  # noqa: F401
                                   PositiveInt, PxPerM, _no_bool, _Strict, polygon_problem, scene_error)
-from camplace.spec.sites import ExistingCamera, MountRules, Zone, site_references
+from camplace.spec.sites import ExistingCamera, MountRules, Polygon2, Zone, site_references
 from camplace.spec.wording import did_you_mean, name_list
 
 MAX_ANGLES_PER_AXIS = 3600  # an angle list/range longer than this is a typo (e.g. step 0.001)
@@ -106,9 +106,33 @@ class FreeSpaceSpec(_Strict):
     unobserved_occludes: bool = True  # space no scanner saw blocks sight lines (like an obstacle)
 
 
+class Prism(_Strict):
+    """A polygon in plan (m; any orientation, convex or not, optional ``holes``) extruded
+    from ``z[0]`` to ``z[1]`` (m): walls and furniture drawn in plan (camplace.scene.importers)."""
+
+    polygon: Polygon2
+    holes: list[Polygon2] = []
+    z: tuple[Finite, Finite]
+
+    @model_validator(mode="after")
+    def _shape(self) -> "Prism":
+        if not self.z[1] > self.z[0]:
+            raise scene_error("z", f"expected [zmin, zmax] with zmax > zmin, got {list(self.z)}")
+        from shapely.geometry import Polygon
+
+        poly = Polygon(self.polygon, self.holes)
+        why = polygon_problem(self.polygon) or (None if poly.is_valid else
+                                                "the holes must lie inside the polygon without crossing it")
+        if why:
+            raise scene_error("polygon", why)
+        return self
+
+
 class Obstacle(_Strict):
     name: str = Field(min_length=1)
     box: Box | None = None
+    prism: Prism | None = None  # a polygon extruded between two heights (walls in plan)
+    source: dict[str, str] | None = None  # provenance of imported obstacles: file, layer/entity, handle
     mesh: str | None = None
     point_cloud: str | None = None
     octomap: str | None = None  # an OctoMap .bt / .ot file (path relative to the scene file)
@@ -123,19 +147,24 @@ class Obstacle(_Strict):
 
     @model_validator(mode="after")
     def _one_source(self) -> "Obstacle":
-        given = [k for k in ("box", "mesh", "point_cloud", "octomap") if getattr(self, k) is not None]
+        given = [k for k in ("box", "prism", "mesh", "point_cloud", "octomap") if getattr(self, k) is not None]
         if len(given) != 1:
-            raise ValueError("give exactly one of 'box', 'mesh', 'point_cloud', 'octomap'")
+            raise ValueError("give exactly one of 'box', 'prism', 'mesh', 'point_cloud', 'octomap'")
         if self.point_cloud is None:
             for k in ("downsample", "remove_outliers", "viewpoints"):
                 if getattr(self, k) is not None:
                     raise scene_error(k, "belongs to 'point_cloud' obstacles")
-        if self.box is not None and (self.transform is not None or self.crop is not None):
+        if not self.is_file and (self.transform is not None or self.crop is not None):
             raise scene_error("transform" if self.transform is not None else "crop",
                               "belongs to point_cloud, mesh and octomap obstacles")
         if self.solid and self.mesh is None:
             raise scene_error("solid", "belongs to 'mesh' obstacles")
         return self
+
+    @property
+    def is_file(self) -> bool:
+        """True for obstacles read from a file (mesh, point cloud, OctoMap)."""
+        return self.box is None and self.prism is None
 
 
 class TargetRegion(_Strict):
