@@ -131,3 +131,16 @@ def run_cli(args, monkeypatch, capsys) -> tuple[int, str]:
     return code, cap.out + cap.err
 
 
+
+
+def read_or_one_line(read, path):
+    """``read(path)``'s result, or None when it raised InputError with one line naming the
+    file (the bad-file contract); any other exception propagates and fails the test."""
+    from camplace.core.errors import InputError
+
+    try:
+        return read(path)
+    except InputError as err:
+        msg = str(err)
+        assert str(path) in msg and "\n" not in msg, msg
+        return None
