@@ -247,6 +247,13 @@ def _legend(fig, data: PlanData, kinds: list[str]) -> None:
 
 def plan_figure(data: PlanData):
     """Page 1: the floor plan (a matplotlib Figure of the paper's size)."""
+    from matplotlib import rc_context
+
+    with rc_context(RC):
+        return _plan_figure(data)
+
+
+def _plan_figure(data: PlanData):
     fig = _figure(data.paper)
     fig._camplace_paper = data.paper
     ax, n, (lo, hi) = _plan_axes(fig, data)
@@ -363,25 +370,13 @@ def schedule_figures(data: PlanData) -> list:
 
 def views_figure(data: PlanData):
     """Page 4: a grid of the camera views (as report.html renders them)."""
-    from PIL import Image
-
     fig = _figure(data.paper)
     w, h = page_size_mm(data.paper)
     views = data.views
     fig.text(MARGIN_MM / w, 1 - 8.0 / h, "camera views: what each camera sees, dots = the targets it covers "
              "(coloured by coverage class)", fontsize=11, weight="bold", va="top")
     if views:
-        ncol = max(1, math.ceil(math.sqrt(len(views) * 1.6)))
-        nrow = math.ceil(len(views) / ncol)
-        gs = fig.add_gridspec(nrow, ncol, left=MARGIN_MM / w, right=1 - MARGIN_MM / w, top=1 - 18.0 / h,
-                              bottom=(MARGIN_MM + 50.0) / h, wspace=0.05, hspace=0.25)
-        marks = {int(c["candidate_id"]): m for c, m in zip(data.cameras, data.marks)}
-        for k, v in enumerate(views):
-            ax = fig.add_subplot(gs[k // ncol, k % ncol])
-            img = Image.open(io.BytesIO(base64.b64decode(v["uri"].split(",", 1)[1])))
-            ax.imshow(np.asarray(img), interpolation="none")  # embedded as is: no resampling
-            ax.set_axis_off()
-            ax.set_title(f"{marks.get(int(v['id']), '')} (id {v['id']})", fontsize=6, pad=2)
+        _views_mosaic(fig, data, views)
     missing = len(data.cameras) - len(views)
     if missing:
         fig.text(MARGIN_MM / w, (MARGIN_MM + 44.0) / h, f"{missing} views not rendered within the time budget "
@@ -390,8 +385,37 @@ def views_figure(data: PlanData):
     return fig
 
 
-def write_plan_pdf(path: str | Path, data: PlanData) -> Path:
-    """Write plan.pdf (every page above); repeatable runs (data.dated None) carry no creation date."""
+def _views_mosaic(fig, data: PlanData, views: list[dict]) -> None:
+    """The views pasted into one image (one embedded picture, pixels as rendered: no
+    resampling), a grid of ncol columns, each titled with its mark and id."""
+    from PIL import Image
+
+    w, h = page_size_mm(data.paper)
+    imgs = [Image.open(io.BytesIO(base64.b64decode(v["uri"].split(",", 1)[1]))).convert("RGB") for v in views]
+    cw, ch = max(i.width for i in imgs), max(i.height for i in imgs)
+    pad, head = max(4, cw // 30), max(12, ch // 9)  # px between cells, px above each for its title
+    area = (w - 2 * MARGIN_MM, h - 18.0 - MARGIN_MM - 50.0)
+    ncol = min(len(imgs), max(1, round(math.sqrt(len(imgs) * area[0] * (ch + head) / (area[1] * (cw + pad))))))
+    nrow = math.ceil(len(imgs) / ncol)
+    W, H = ncol * (cw + pad), nrow * (ch + head + pad)
+    mosaic = Image.new("RGB", (W, H), "white")
+    for k, im in enumerate(imgs):
+        mosaic.paste(im, ((k % ncol) * (cw + pad) + (cw - im.width) // 2, (k // ncol) * (ch + head + pad) + head))
+    s = min(area[0] / W, area[1] / H)  # mm per pixel
+    ax = fig.add_axes((MARGIN_MM / w, 1 - (18.0 + H * s) / h, W * s / w, H * s / h))
+    ax.imshow(np.asarray(mosaic), interpolation="none", extent=(0, W, H, 0))  # embedded as is: no resampling
+    ax.set_xlim(0, W)
+    ax.set_ylim(H, 0)
+    ax.set_axis_off()
+    marks = {int(c["candidate_id"]): m for c, m in zip(data.cameras, data.marks)}
+    for k, v in enumerate(views):
+        ax.text((k % ncol) * (cw + pad) + cw / 2, (k // ncol) * (ch + head + pad) + head * 0.85,
+                f"{marks.get(int(v['id']), '')} (id {v['id']})", fontsize=6, ha="center", va="bottom")
+
+
+def write_plan_pdf(path: str | Path, data: PlanData, plan_fig=None) -> Path:
+    """Write plan.pdf (every page above; ``plan_fig``: sheet 1 when already drawn by plan_figure);
+    repeatable runs (data.dated None) carry no creation date."""
     from matplotlib import rc_context
     from matplotlib.backends.backend_pdf import PdfPages
 
@@ -401,16 +425,18 @@ def write_plan_pdf(path: str | Path, data: PlanData) -> Path:
         meta["CreationDate"] = None
     with rc_context(RC):
         with PdfPages(buf, metadata=meta) as pdf:
-            for fig in [plan_figure(data), coverage_figure(data), *schedule_figures(data), views_figure(data)]:
+            for fig in [plan_fig or plan_figure(data), coverage_figure(data), *schedule_figures(data),
+                        views_figure(data)]:
                 pdf.savefig(fig)
     return atomic_write_bytes(Path(path), buf.getvalue())
 
 
-def plan_svg(data: PlanData) -> str:
-    """Page 1 as an SVG document (text kept as text; no date in repeatable runs)."""
+def plan_svg(data: PlanData, plan_fig=None) -> str:
+    """Page 1 (``plan_fig`` when already drawn) as an SVG document (text kept as text; no date
+    in repeatable runs)."""
     from matplotlib import rc_context
 
     buf = io.StringIO()
     with rc_context(RC):
-        plan_figure(data).savefig(buf, format="svg", metadata={"Date": None} if data.dated is None else None)
+        (plan_fig or plan_figure(data)).savefig(buf, format="svg", metadata={"Date": None} if data.dated is None else None)
     return buf.getvalue()

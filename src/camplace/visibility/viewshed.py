@@ -6,7 +6,7 @@ clear line of sight (``camplace.visibility.raywalk.segment_clear``, the voxel en
 test). It is sampled on a square grid of ``step`` metres around the camera and turned
 into shapely polygons by contouring the 0/1 mask (contourpy, matplotlib's contouring),
 so it is a filled polygon that stops at walls and has holes behind obstacles, not a
-triangle. DORI bands (EN/IEC 62676-4, camplace.spec.quality.DORI_PX_PER_M) are the parts
+triangle; its vertices are thinned at SIMPLIFY (1 cm: the contour's collinear points). DORI bands (EN/IEC 62676-4, camplace.spec.quality.DORI_PX_PER_M) are the parts
 of it where the pixel density across the view ray (``px_per_m_nb``) reaches each level.
 """
 
@@ -28,6 +28,7 @@ from camplace.visibility.raywalk import segment_clear
 
 WORKING_HEIGHT = 1.5  # m: the height installers draw fields of view at (faces, hands)
 STEP = 0.1  # m between samples of the viewshed grid
+SIMPLIFY = 0.01  # m: contour vertices closer than this to the line of their neighbours are dropped
 # DORI levels, coarsest first: name -> px/m (the spelling alias "recognize" left out)
 DORI_LEVELS: tuple[tuple[str, float], ...] = tuple(
     sorted(((k, v) for k, v in DORI_PX_PER_M.items() if k != "recognize"), key=lambda kv: kv[1]))
@@ -126,12 +127,13 @@ def viewshed(occupancy: OccupancyGrid, camera: CameraModel, position: np.ndarray
     at ``height`` m, with its DORI bands (DORI_LEVELS). ``clip`` (a shapely geometry, e.g.
     the free floor at that height) trims the half sample the contour may reach past a wall."""
     xs, ys, seen, dens = sample_grid(occupancy, camera, position, rotation, height, step)
-    poly = contour_polygons(xs, ys, seen, 0.5)
+    poly = contour_polygons(xs, ys, seen, 0.5).simplify(SIMPLIFY)
     if clip is not None and not poly.is_empty:
         poly = poly.intersection(clip)
     bands = {}
     for name, level in DORI_LEVELS:
-        band = contour_polygons(xs, ys, dens, level) if dens.max() >= level and not poly.is_empty else Polygon()
+        band = (contour_polygons(xs, ys, dens, level).simplify(SIMPLIFY) if dens.max() >= level
+                and not poly.is_empty else Polygon())
         bands[name] = band.intersection(poly) if not band.is_empty else band
     return Viewshed(float(height), poly, bands)
 
