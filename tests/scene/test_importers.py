@@ -68,3 +68,154 @@ def test_prism_obstacles_keep_holes_and_provenance():
     (ob,) = prism_obstacles(ring, 0, 2.5, "wall", {"file": "p.dxf", "layer": "A-WALL"})
     assert ob["name"] == "wall-1" and ob["source"]["layer"] == "A-WALL"
     assert len(ob["prism"]["holes"]) == 1 and ob["prism"]["z"] == [0, 2.5]
+
+
+# ------------------------------------------------------------------ the two-room plan (mm)
+# outer walls 10 m x 5 m, 0.2 m thick; an interior wall x 4.9..5.1 m with a 0.9 m door
+# (y 2.0..2.9 m); room A "Office" (west), room B "Lab" (east); a 1.2 m x 0.6 m desk in A
+WALL_AREA = 50 - 2 * 4.7 * 4.6 - 0.2 * 0.9  # m²
+ROOM_A = [(200, 200), (4900, 200), (4900, 4800), (200, 4800)]
+ROOM_B = [(5100, 200), (9800, 200), (9800, 4800), (5100, 4800)]
+
+
+def draw_dxf(path, insunits=4, door_layer="A-DOOR"):
+    """The two-room plan as an AIA-layered DXF (double-line walls, door, desk, rooms)."""
+    import ezdxf
+
+    doc = ezdxf.new("R2010")
+    doc.header["$INSUNITS"] = insunits
+    msp = doc.modelspace()
+    w = {"layer": "A-WALL"}
+    msp.add_lwpolyline([(0, 0), (10000, 0), (10000, 5000), (0, 5000)], close=True, dxfattribs=w)
+    msp.add_lwpolyline([(4900, 2000), (4900, 200), (200, 200), (200, 4800), (4900, 4800), (4900, 2900)],
+                       dxfattribs=w)
+    msp.add_lwpolyline([(5100, 2900), (5100, 4800), (9800, 4800), (9800, 200), (5100, 200), (5100, 2000)],
+                       dxfattribs=w)
+    msp.add_line((4900, 2000), (5100, 2000), dxfattribs=w)
+    msp.add_line((4900, 2900), (5100, 2900), dxfattribs=w)
+    msp.add_line((5100, 2000), (6000, 2000), dxfattribs={"layer": door_layer})  # the leaf, swung open
+    msp.add_arc((5100, 2000), 900, 0, 90, dxfattribs={"layer": door_layer})
+    desk = doc.blocks.new("DESK")
+    desk.add_lwpolyline([(0, 0), (1200, 0), (1200, 600), (0, 600)], close=True)
+    msp.add_blockref("DESK", (1500, 3500), dxfattribs={"layer": "A-FURN"})
+    for pts, label, at in ((ROOM_A, "Office", (2500, 1000)), (ROOM_B, "Lab", (7500, 2500))):
+        msp.add_lwpolyline(pts, close=True, dxfattribs={"layer": "A-AREA"})
+        msp.add_mtext(label, dxfattribs={"layer": "A-AREA-IDEN", "insert": at})
+    doc.saveas(path)
+    return path
+
+
+def _sees(scene, a, b, n=400) -> bool:
+    """True when no occupied cell lies on the segment a -> b (m), ends excluded."""
+    t = np.linspace(0.02, 0.98, n)[:, None]
+    return not scene.occupancy.is_occupied(np.asarray(a) + t * (np.asarray(b) - np.asarray(a))).any()
+
+
+def _wall_cells_m2(scene, z=1.0) -> float:
+    """Occupied plan area (m²) inside the footprint at height z."""
+    import shapely
+
+    occ = scene.occupancy
+    k = int((z - occ.origin[2]) / occ.resolution)
+    gx, gy = np.meshgrid(occ.cell_centres(0), occ.cell_centres(1), indexing="ij")
+    inside = shapely.contains_xy(scene.polygon, gx, gy)
+    return float((occ.occupied[:, :, k] & inside).sum() * occ.resolution**2)
+
+
+def _scene_of(data):
+    from camplace.spec.loading import parse_scene
+
+    return build_scene(parse_scene(data, "plan"))
+
+
+def test_dxf_two_rooms_known_answers(tmp_path):
+    from shapely.geometry import Polygon
+
+    data = import_plan(draw_dxf(tmp_path / "plan.dxf"))
+    assert Polygon(data["room"]["footprint"]).area == pytest.approx(50.0, rel=0.01)
+    assert {z["name"] for z in data["zones"]} == {"Office", "Lab"}
+    office = next(z for z in data["zones"] if z["name"] == "Office")
+    assert Polygon(office["polygon"]).area == pytest.approx(4.7 * 4.6, rel=0.01)
+    walls = [o for o in data["obstacles"] if o["name"].startswith("wall")]
+    assert walls and all(o["source"]["file"] == "plan.dxf" and "A-WALL" in o["source"]["layer"] for o in walls)
+    (desk,) = [o for o in data["obstacles"] if o["name"].startswith("desk")]
+    assert desk["prism"]["z"] == [0.0, 0.9] and desk["source"]["block"] == "DESK"
+    assert Polygon(desk["prism"]["polygon"]).area == pytest.approx(0.72, rel=0.01)
+    scene = _scene_of(data)
+    assert _wall_cells_m2(scene, 1.0) == pytest.approx(WALL_AREA, rel=0.03)  # above the desk
+    assert _wall_cells_m2(scene, 0.5) == pytest.approx(WALL_AREA + 0.72, rel=0.03)
+    assert _sees(scene, (2.0, 2.45, 1.5), (8.0, 2.45, 1.0))  # through the open door
+    assert not _sees(scene, (2.0, 4.0, 1.5), (8.0, 4.0, 1.0))  # through the interior wall
+
+
+def test_dxf_closed_door_blocks_the_view_and_units_override(tmp_path):
+    data = import_plan(draw_dxf(tmp_path / "plan.dxf"), doors="closed")
+    assert any(o["name"].startswith("door") for o in data["obstacles"])
+    assert not _sees(_scene_of(data), (2.0, 2.45, 1.5), (8.0, 2.45, 1.0))
+    data = import_plan(draw_dxf(tmp_path / "unitless.dxf", insunits=0), units="mm")
+    from shapely.geometry import Polygon
+
+    assert Polygon(data["room"]["footprint"]).area == pytest.approx(50.0, rel=0.01)
+
+
+def test_cli_run_and_import_dxf(tmp_path, monkeypatch, capsys):
+    import json
+
+    import yaml
+    from shapely.geometry import Point, Polygon
+
+    from tests.conftest import run_cli
+
+    plan = draw_dxf(tmp_path / "plan.dxf")
+    code, text = run_cli(["--quiet", "scene", "import", plan, "--out", tmp_path / "site.yaml"], monkeypatch, capsys)
+    assert code == 0, text
+    data = yaml.safe_load((tmp_path / "site.yaml").read_text())
+    assert [z["name"] for z in data["zones"]] == ["Office", "Lab"]
+    scene = _scene_of(data)
+    out = tmp_path / "run"
+    code, text = run_cli(["--quiet", "run", plan, "--out", out, "--budget", "6", "--grid-only"], monkeypatch, capsys)
+    assert code == 0, text
+    cams = np.array([c["position"] for c in json.loads((out / "placement.json").read_text())["cameras"]], float)
+    assert len(cams) > 0 and not scene.occupancy.is_occupied(cams).any()
+    assert all(scene.polygon.contains(Point(*c[:2])) for c in cams)
+    rooms = {z["name"]: Polygon(z["polygon"]) for z in data["zones"]}
+    assert {n for n, r in rooms.items() if any(r.contains(Point(*c[:2])) for c in cams)} == {"Office", "Lab"}
+    metrics = json.loads((out / "metrics.json").read_text())
+    assert metrics["coverage_gap"] < 1.0
+
+
+def _bad_dxf(tmp_path, kind):
+    import ezdxf
+
+    if kind == "not-dxf":
+        p = tmp_path / "plan.dxf"
+        p.write_text("this is not a drawing\n")
+        return p
+    if kind == "no-walls":
+        doc = ezdxf.new()
+        doc.header["$INSUNITS"] = 4
+        doc.modelspace().add_line((0, 0), (1000, 0), dxfattribs={"layer": "A-ANNO"})
+        doc.saveas(tmp_path / "plan.dxf")
+        return tmp_path / "plan.dxf"
+    return draw_dxf(tmp_path / "plan.dxf", insunits=0)
+
+
+@pytest.mark.parametrize("kind, words", [("not-dxf", "not a DXF file"), ("no-walls", "no walls found"),
+                                         ("unitless", "--units")])
+def test_bad_dxf_exits_2_with_one_line_and_writes_nothing(tmp_path, monkeypatch, capsys, kind, words):
+    from tests.conftest import run_cli
+
+    plan = _bad_dxf(tmp_path, kind)
+    for args in (["scene", "import", plan, "--out", tmp_path / "site.yaml"], ["run", plan, "--out", tmp_path / "o"]):
+        code, text = run_cli(args, monkeypatch, capsys)
+        lines = [ln for ln in text.strip().splitlines() if ln.strip()]
+        assert code == 2 and len(lines) == 1 and "plan.dxf" in lines[0] and words in lines[0], text
+        assert not (tmp_path / "site.yaml").exists() and not (tmp_path / "o").exists()
+
+
+def test_bad_units_option_is_refused(tmp_path, monkeypatch, capsys):
+    from tests.conftest import run_cli
+
+    code, text = run_cli(["scene", "import", draw_dxf(tmp_path / "plan.dxf"), "--units", "furlong",
+                          "--out", tmp_path / "s.yaml"], monkeypatch, capsys)
+    assert code == 2 and "--units" in text and "furlong" in text and not (tmp_path / "s.yaml").exists()
