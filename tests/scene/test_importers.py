@@ -219,3 +219,94 @@ def test_bad_units_option_is_refused(tmp_path, monkeypatch, capsys):
     code, text = run_cli(["scene", "import", draw_dxf(tmp_path / "plan.dxf"), "--units", "furlong",
                           "--out", tmp_path / "s.yaml"], monkeypatch, capsys)
     assert code == 2 and "--units" in text and "furlong" in text and not (tmp_path / "s.yaml").exists()
+
+
+# ------------------------------------------------------------------ the same plan as an image
+PX = 0.02  # m per pixel
+MARGIN = 20  # white pixels around the building
+
+
+def draw_png(path, closed=True):
+    """The two-room plan drawn with Pillow: 0.2 m black walls, a 0.9 m door gap, thin
+    text and a door swing (removed as thinner than a wall); ``closed=False`` opens
+    both rooms to the outside (no enclosed room)."""
+    from PIL import Image, ImageDraw
+
+    def px(x, y):  # metres (y up) -> pixel (col, row)
+        return MARGIN + x / PX, MARGIN + (5.0 - y) / PX
+
+    im = Image.new("L", (int(10 / PX) + 2 * MARGIN, int(5 / PX) + 2 * MARGIN), 255)
+    d = ImageDraw.Draw(im)
+
+    def rect(x0, y0, x1, y1, fill=0):
+        (c0, r1), (c1, r0) = px(x0, y0), px(x1, y1)
+        d.rectangle([c0, r0, c1 - 1, r1 - 1], fill=fill)
+
+    for r in ((0, 0, 10, 0.2), (0, 4.8, 10, 5), (0, 0, 0.2, 5), (9.8, 0, 10, 5), (4.9, 0, 5.1, 2.0), (4.9, 2.9, 5.1, 5)):
+        rect(*r)
+    if not closed:  # 2 m gaps in the west and east walls: neither room is enclosed
+        rect(9.8, 1.0, 10, 3.0, fill=255)
+        rect(0, 1.0, 0.2, 3.0, fill=255)
+    d.arc([*px(4.2, 2.9), *px(5.8, 1.3)], 270, 360, fill=0, width=1)
+    d.text(px(2.0, 2.5), "Office", fill=0)
+    im.save(path)
+    return path
+
+
+def test_image_two_rooms_known_answers(tmp_path):
+    from shapely.geometry import Polygon
+
+    data = import_plan(draw_png(tmp_path / "plan.png"), scale=PX)
+    assert Polygon(data["room"]["footprint"]).area == pytest.approx(50.0, rel=0.01)
+    assert [z["name"] for z in data["zones"]] == ["room-1", "room-2"]
+    assert sorted(Polygon(z["polygon"]).area for z in data["zones"]) == pytest.approx([4.7 * 4.6] * 2, rel=0.03)
+    assert all(o["source"]["file"] == "plan.png" for o in data["obstacles"])
+    scene = _scene_of(data)
+    assert _wall_cells_m2(scene, 1.0) == pytest.approx(WALL_AREA, rel=0.05)
+    assert _sees(scene, (2.0, 2.45, 1.5), (8.0, 2.45, 1.0))  # through the door gap
+    assert not _sees(scene, (2.0, 4.0, 1.5), (8.0, 4.0, 1.0))
+
+
+def test_image_scale_from_two_reference_points(tmp_path):
+    from shapely.geometry import Polygon
+
+    # the outer wall's west and east faces: 500 px apart, 10 m
+    data = import_plan(draw_png(tmp_path / "plan.jpg"), ref=(MARGIN, 100, MARGIN + 500, 100, 10.0))
+    assert Polygon(data["room"]["footprint"]).area == pytest.approx(50.0, rel=0.02)
+    assert len(data["zones"]) == 2
+
+
+def test_cli_run_png(tmp_path, monkeypatch, capsys):
+    import json
+
+    from shapely.geometry import Point
+
+    from tests.conftest import run_cli
+
+    plan = draw_png(tmp_path / "plan.png")
+    out = tmp_path / "run"
+    code, text = run_cli(["--quiet", "run", plan, "--scale", PX, "--out", out, "--budget", "6", "--grid-only"],
+                         monkeypatch, capsys)
+    assert code == 0, text
+    scene = _scene_of(import_plan(plan, scale=PX))
+    cams = np.array([c["position"] for c in json.loads((out / "placement.json").read_text())["cameras"]], float)
+    assert len(cams) > 0 and not scene.occupancy.is_occupied(cams).any()
+    assert all(scene.polygon.contains(Point(*c[:2])) for c in cams)
+    assert {c[0] < 5 for c in cams} == {True, False}  # cameras in both rooms
+
+
+@pytest.mark.parametrize("case, words", [("open", "no closed room"), ("noscale", "--scale"),
+                                         ("garbage", "not a readable image")])
+def test_bad_images_exit_2_with_one_line(tmp_path, monkeypatch, capsys, case, words):
+    from tests.conftest import run_cli
+
+    plan = tmp_path / "plan.png"
+    if case == "garbage":
+        plan.write_bytes(b"not a png at all")
+    else:
+        draw_png(plan, closed=case != "open")
+    scale = [] if case == "noscale" else ["--scale", PX]
+    code, text = run_cli(["scene", "import", plan, *scale, "--out", tmp_path / "s.yaml"], monkeypatch, capsys)
+    lines = [ln for ln in text.strip().splitlines() if ln.strip()]
+    assert code == 2 and len(lines) == 1 and "plan.png" in lines[0] and words in lines[0], text
+    assert not (tmp_path / "s.yaml").exists()
