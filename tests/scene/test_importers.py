@@ -73,7 +73,9 @@ def test_prism_obstacles_keep_holes_and_provenance():
 # ------------------------------------------------------------------ the two-room plan (mm)
 # outer walls 10 m x 5 m, 0.2 m thick; an interior wall x 4.9..5.1 m with a 0.9 m door
 # (y 2.0..2.9 m); room A "Office" (west), room B "Lab" (east); a 1.2 m x 0.6 m desk in A
-WALL_AREA = 50 - 2 * 4.7 * 4.6 - 0.2 * 0.9  # m²
+WALL_AREA = 50 - 2 * 4.7 * 4.6 - 0.2 * 0.9  # m², all walls
+INNER_WALL_AREA = 0.2 * (4.6 - 0.9)  # m², the interior wall beside the door (the outer walls ring the footprint)
+FOOTPRINT_AREA = 9.6 * 4.6  # m², inside the outer walls
 ROOM_A = [(200, 200), (4900, 200), (4900, 4800), (200, 4800)]
 ROOM_B = [(5100, 200), (9800, 200), (9800, 4800), (5100, 4800)]
 
@@ -122,6 +124,12 @@ def _wall_cells_m2(scene, z=1.0) -> float:
     return float((occ.occupied[:, :, k] & inside).sum() * occ.resolution**2)
 
 
+def _prism_area(ob) -> float:
+    from shapely.geometry import Polygon
+
+    return Polygon(ob["prism"]["polygon"], ob["prism"].get("holes", [])).area
+
+
 def _scene_of(data):
     from camplace.spec.loading import parse_scene
 
@@ -132,18 +140,19 @@ def test_dxf_two_rooms_known_answers(tmp_path):
     from shapely.geometry import Polygon
 
     data = import_plan(draw_dxf(tmp_path / "plan.dxf"))
-    assert Polygon(data["room"]["footprint"]).area == pytest.approx(50.0, rel=0.01)
+    assert Polygon(data["room"]["footprint"]).area == pytest.approx(FOOTPRINT_AREA, rel=0.01)
     assert {z["name"] for z in data["zones"]} == {"Office", "Lab"}
     office = next(z for z in data["zones"] if z["name"] == "Office")
     assert Polygon(office["polygon"]).area == pytest.approx(4.7 * 4.6, rel=0.01)
     walls = [o for o in data["obstacles"] if o["name"].startswith("wall")]
     assert walls and all(o["source"]["file"] == "plan.dxf" and "A-WALL" in o["source"]["layer"] for o in walls)
+    assert sum(_prism_area(o) for o in walls) == pytest.approx(WALL_AREA, rel=0.01)
     (desk,) = [o for o in data["obstacles"] if o["name"].startswith("desk")]
     assert desk["prism"]["z"] == [0.0, 0.9] and desk["source"]["block"] == "DESK"
     assert Polygon(desk["prism"]["polygon"]).area == pytest.approx(0.72, rel=0.01)
     scene = _scene_of(data)
-    assert _wall_cells_m2(scene, 1.0) == pytest.approx(WALL_AREA, rel=0.03)  # above the desk
-    assert _wall_cells_m2(scene, 0.5) == pytest.approx(WALL_AREA + 0.72, rel=0.03)
+    assert _wall_cells_m2(scene, 1.0) == pytest.approx(INNER_WALL_AREA, rel=0.05)  # above the desk
+    assert _wall_cells_m2(scene, 0.5) == pytest.approx(INNER_WALL_AREA + 0.72, rel=0.05)
     assert _sees(scene, (2.0, 2.45, 1.5), (8.0, 2.45, 1.0))  # through the open door
     assert not _sees(scene, (2.0, 4.0, 1.5), (8.0, 4.0, 1.0))  # through the interior wall
 
@@ -155,7 +164,7 @@ def test_dxf_closed_door_blocks_the_view_and_units_override(tmp_path):
     data = import_plan(draw_dxf(tmp_path / "unitless.dxf", insunits=0), units="mm")
     from shapely.geometry import Polygon
 
-    assert Polygon(data["room"]["footprint"]).area == pytest.approx(50.0, rel=0.01)
+    assert Polygon(data["room"]["footprint"]).area == pytest.approx(FOOTPRINT_AREA, rel=0.01)
 
 
 def test_cli_run_and_import_dxf(tmp_path, monkeypatch, capsys):
@@ -257,12 +266,13 @@ def test_image_two_rooms_known_answers(tmp_path):
     from shapely.geometry import Polygon
 
     data = import_plan(draw_png(tmp_path / "plan.png"), scale=PX)
-    assert Polygon(data["room"]["footprint"]).area == pytest.approx(50.0, rel=0.01)
+    assert Polygon(data["room"]["footprint"]).area == pytest.approx(FOOTPRINT_AREA, rel=0.01)
     assert [z["name"] for z in data["zones"]] == ["room-1", "room-2"]
     assert sorted(Polygon(z["polygon"]).area for z in data["zones"]) == pytest.approx([4.7 * 4.6] * 2, rel=0.03)
     assert all(o["source"]["file"] == "plan.png" for o in data["obstacles"])
     scene = _scene_of(data)
-    assert _wall_cells_m2(scene, 1.0) == pytest.approx(WALL_AREA, rel=0.05)
+    assert sum(_prism_area(o) for o in data["obstacles"]) == pytest.approx(WALL_AREA, rel=0.03)
+    assert _wall_cells_m2(scene, 1.0) == pytest.approx(INNER_WALL_AREA, rel=0.08)
     assert _sees(scene, (2.0, 2.45, 1.5), (8.0, 2.45, 1.0))  # through the door gap
     assert not _sees(scene, (2.0, 4.0, 1.5), (8.0, 4.0, 1.0))
 
@@ -272,7 +282,7 @@ def test_image_scale_from_two_reference_points(tmp_path):
 
     # the outer wall's west and east faces: 500 px apart, 10 m
     data = import_plan(draw_png(tmp_path / "plan.jpg"), ref=(MARGIN, 100, MARGIN + 500, 100, 10.0))
-    assert Polygon(data["room"]["footprint"]).area == pytest.approx(50.0, rel=0.02)
+    assert Polygon(data["room"]["footprint"]).area == pytest.approx(FOOTPRINT_AREA, rel=0.02)
     assert len(data["zones"]) == 2
 
 

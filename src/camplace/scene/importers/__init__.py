@@ -114,6 +114,17 @@ def footprint_of(parts: list, source: str) -> Polygon:
     return shapely.geometry.polygon.orient(Polygon(big.exterior).simplify(0.005))
 
 
+def rooms_footprint(rooms: list, walls, gap: float, source: str) -> Polygon:
+    """The footprint of a plan: the room polygons (m) merged across the walls between them
+    (a closing by ``gap`` m, the thickest wall), outline of the largest piece; the walls'
+    outline when there are no rooms. The outer walls lie outside it (occupied anyway)."""
+    d = gap / 2
+    if not rooms:
+        return footprint_of([walls], source)
+    merged = shapely.unary_union(rooms).buffer(d, join_style="mitre").buffer(-d, join_style="mitre")
+    return footprint_of([shapely.make_valid(merged)], source)
+
+
 def plan_scene(name: str, footprint: Polygon, height: float, obstacles: list[dict], zones: list[dict], *,
                heights: Iterable[float] | None = None, coverage: int | None = None,
                budget: int | None = None) -> dict:

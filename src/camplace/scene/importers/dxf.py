@@ -19,7 +19,7 @@ from shapely.geometry import LineString, MultiPoint, Point, Polygon, box
 
 from camplace.core.errors import InputError
 from camplace.scene.importers import (DEFAULT_CEILING_M, footprint_of, plan_scene, polygons_of, prism_obstacles,
-                                      room_zones, unit_scale)
+                                      room_zones, rooms_footprint, unit_scale)
 
 OPTIONS = ("wall_layers", "door_layers", "window_layers", "furniture_layers", "furniture_heights", "room_layers",
            "doors", "wall_thickness", "max_wall_thickness")
@@ -242,9 +242,9 @@ def import_plan(path: Path, *, name: str | None = None, units: str | None = None
         obstacles += [dict(o, name=f"{what}-{n + k + 1}") for k, o in enumerate(obs)]
     obstacles += _furniture(msp, s, furniture_layers, furniture_heights or {}, ceiling, src)
     rooms = _rooms(msp, s, room_layers)
-    footprint = footprint_of([walls, *(p for _, p in rooms)], str(path))
-    if not rooms:
+    if not rooms:  # the enclosed free pieces inside the walls' outline
         rooms = [(f"room-{k + 1}", q) for k, q in enumerate(
-            q for q in polygons_of(footprint.difference(walls)) if q.area >= 1.0)]
+            q for q in polygons_of(footprint_of([walls], str(path)).difference(walls)) if q.area >= 1.0)]
+    footprint = rooms_footprint([p for _, p in rooms], walls, max_wall_thickness, str(path))
     return plan_scene(name or path.stem, footprint, ceiling, obstacles, room_zones(rooms, coverage or 2),
                       heights=heights, coverage=coverage, budget=budget)

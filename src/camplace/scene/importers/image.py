@@ -20,7 +20,7 @@ from scipy import ndimage
 from shapely.geometry import Polygon
 
 from camplace.core.errors import InputError
-from camplace.scene.importers import DEFAULT_CEILING_M, footprint_of, plan_scene, prism_obstacles, room_zones
+from camplace.scene.importers import DEFAULT_CEILING_M, plan_scene, prism_obstacles, room_zones, rooms_footprint
 
 OPTIONS = ("scale", "ref", "threshold", "min_wall_thickness", "door_width", "min_room_area")
 MAX_PIXELS = 100_000_000
@@ -66,16 +66,17 @@ def metres_per_pixel(path: Path, scale: float | None, ref) -> float:
                      "and their distance (ref)", option="scale")
 
 
-def mask_polygons(mask: np.ndarray, s: float):
-    """Shapely (multi)polygon (m) of the True pixels of ``mask`` (H, W): row 0 at the
-    top, pixel (r, c) centred at x = (c + 0.5) s, y = (H - r - 0.5) s."""
+def mask_polygons(mask: np.ndarray, s: float, at: tuple[int, int] = (0, 0), image_rows: int | None = None):
+    """Shapely (multi)polygon (m) of the True pixels of ``mask`` (h, w), a window at
+    pixel ``at`` (row, col) of an image of ``image_rows`` rows (default: the mask is the
+    image): row 0 at the top, pixel (r, c) centred at x = (c + 0.5) s, y = (H - r - 0.5) s."""
     import contourpy
     import shapely
 
     h, w = mask.shape
     z = np.pad(mask.astype(np.float64), 1)[::-1]  # row 0 = bottom (y up)
-    x = (np.arange(w + 2) - 0.5) * s
-    y = (np.arange(h + 2) - 0.5) * s
+    x = (at[1] + np.arange(w + 2) - 0.5) * s
+    y = ((image_rows or h) - at[0] - h + np.arange(h + 2) - 0.5) * s
     gen = contourpy.contour_generator(x, y, z, fill_type=contourpy.FillType.OuterOffset, corner_mask=False)
     points, offsets = gen.filled(0.5, 1.5)
     polys = []
@@ -86,9 +87,14 @@ def mask_polygons(mask: np.ndarray, s: float):
     return shapely.unary_union(polys) if polys else Polygon()
 
 
-def _square(px: float) -> np.ndarray:
-    k = max(int(round(px)), 1)
-    return np.ones((k, k), bool)
+def square_morphology(mask: np.ndarray, px: float, op: str) -> np.ndarray:
+    """Binary ``op`` ('open' or 'close') of ``mask`` by a square of about ``px`` pixels
+    (odd, centred; separable min / max filters, so fast for large squares)."""
+    k = 2 * int(round(px / 2)) + 1
+    m = mask.astype(np.uint8)
+    first, second = (ndimage.minimum_filter, ndimage.maximum_filter) if op == "open" else \
+        (ndimage.maximum_filter, ndimage.minimum_filter)
+    return second(first(m, size=k, mode="nearest"), size=k, mode="nearest").astype(bool)
 
 
 def import_plan(path: Path, *, name: str | None = None, units: str | None = None, wall_height: float | None = None,
@@ -101,10 +107,10 @@ def import_plan(path: Path, *, name: str | None = None, units: str | None = None
     gray = read_gray(path)
     s = metres_per_pixel(path, scale, ref)
     t = otsu_threshold(gray) if threshold is None else float(threshold)
-    walls = ndimage.binary_opening(gray < t, structure=_square(min_wall_thickness / s))
+    walls = square_morphology(gray < t, min_wall_thickness / s, "open")
     if walls.sum() == 0:
         raise InputError(f"{path}: no walls found (no dark strokes at least {min_wall_thickness} m thick)")
-    shut = ndimage.binary_closing(np.pad(walls, 1), structure=_square(door_width / s))[1:-1, 1:-1] | walls
+    shut = square_morphology(walls, door_width / s, "close") | walls
     labels, n = ndimage.label(~shut)
     border = np.unique(np.r_[labels[0], labels[-1], labels[:, 0], labels[:, -1]])
     sizes = ndimage.sum_labels(np.ones_like(labels), labels, index=np.arange(1, n + 1)) * s * s
@@ -114,10 +120,13 @@ def import_plan(path: Path, *, name: str | None = None, units: str | None = None
                          "enclosed by walls)")
     ceiling = float(ceiling_height or DEFAULT_CEILING_M)
     wall_geom = mask_polygons(walls, s).simplify(s / 2)
-    rooms = [(f"room-{i + 1}", mask_polygons(labels == k, s).simplify(s / 2)) for i, k in enumerate(keep)]
+    boxes = ndimage.find_objects(labels)
+    rooms = [(f"room-{i + 1}", mask_polygons(labels[boxes[k - 1]] == k, s, (boxes[k - 1][0].start,
+                                                                             boxes[k - 1][1].start),
+                                             len(labels)).simplify(s / 2)) for i, k in enumerate(keep)]
     src = {"file": path.name, "entity": "wall pixels", "threshold": f"{t:g}", "m_per_px": f"{s:g}"}
     obstacles = prism_obstacles(wall_geom, 0.0, min(float(wall_height or ceiling), ceiling), "wall", src,
                                 tolerance=0)
-    footprint = footprint_of([wall_geom, *(p for _, p in rooms)], str(path))
+    footprint = rooms_footprint([p for _, p in rooms], wall_geom, door_width, str(path))
     return plan_scene(name or path.stem, footprint, ceiling, obstacles, room_zones(rooms, coverage or 2),
                       heights=heights, coverage=coverage, budget=budget)
