@@ -200,9 +200,9 @@ def test_time_limit_option_reaches_the_solver(monkeypatch):
 
     monkeypatch.setitem(solvers.SOLVERS, "greedy", dataclasses.replace(real, fn=spy))
     run("demo", time_limit_s=7.5)
-    assert got["time_limit_s"] == 7.5
+    assert 7.0 < got["time_limit_s"] <= 7.5  # the limit, less the problem reduction's time
     run("demo")
-    assert got["time_limit_s"] == 600.0  # the scene's placement.time_limit_s default
+    assert 599.0 < got["time_limit_s"] <= 600.0  # the scene's placement.time_limit_s default
 
 
 @pytest.mark.skipif(not Path("/proc/self/status").exists(), reason="needs Linux /proc")

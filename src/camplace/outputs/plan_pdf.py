@@ -424,10 +424,10 @@ def write_plan_pdf(path: str | Path, data: PlanData, plan_fig=None) -> Path:
     if data.dated is None:
         meta["CreationDate"] = None
     with rc_context(RC):
-        with PdfPages(buf, metadata=meta) as pdf:
+        with PdfPages(buf, metadata=meta) as buf_pages:  # pages into the in-memory buffer, written atomically below
             for fig in [plan_fig or plan_figure(data), coverage_figure(data), *schedule_figures(data),
                         views_figure(data)]:
-                pdf.savefig(fig)
+                fig.savefig(buf_pages, format="pdf")
     return atomic_write_bytes(Path(path), buf.getvalue())
 
 

@@ -367,7 +367,10 @@ def run(scene: str | Path | SceneSpec, budget: int | None = None, solver: str | 
     else:
         placement = solve_stoppable(problem, solver, log=log, **solver_options)
     timings["solve"] = time.perf_counter() - t
-    if refine or adaptive or robust:
+    stopped = should_stop is not None and should_stop()
+    if (refine or adaptive or robust) and stopped:  # interrupted: keep the solver's best, do not improve it
+        log.append("beyond the grid: skipped (interrupted)")
+    elif refine or adaptive or robust:
         t = time.perf_counter()
         vis, problem, placement = improve_placement(
             sc, vis, problem, placement, refine=refine, refine_time_s=refine_time_s, adaptive=adaptive,

@@ -15,6 +15,8 @@ from pathlib import Path
 
 import numpy as np
 
+from camplace.core.files import atomic_write_text
+
 UNIT_PREFIX = {"mm": "MILLI", "m": None}
 
 
@@ -168,6 +170,4 @@ def write_grid_building(path: str | Path, b: GridBuilding = GridBuilding(), unit
         roof = wr.storey("Roof", b.height, scale)
         wr.box("IfcSlab", "Roof slab", np.array([-t / 2, -t / 2, b.height]),
                np.array([W + t / 2, D + t / 2, b.height + b.slab]), roof)
-    p = Path(path)
-    wr.m.write(str(p))
-    return p
+    return atomic_write_text(Path(path), wr.m.to_string())
