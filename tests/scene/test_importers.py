@@ -320,3 +320,32 @@ def test_bad_images_exit_2_with_one_line(tmp_path, monkeypatch, capsys, case, wo
     lines = [ln for ln in text.strip().splitlines() if ln.strip()]
     assert code == 2 and len(lines) == 1 and "plan.png" in lines[0] and words in lines[0], text
     assert not (tmp_path / "s.yaml").exists()
+
+
+def test_run_on_the_imported_yaml_reproduces_the_run_on_the_dxf(tmp_path, monkeypatch, capsys):
+    """camplace run site.yaml (written by scene import plan.dxf) = camplace run plan.dxf:
+    the same V (hash of the CSR arrays) and the same placement."""
+    import hashlib
+    import json
+
+    from tests.conftest import run_cli
+
+    plan = draw_dxf(tmp_path / "plan.dxf")
+    site = tmp_path / "site.yaml"
+    assert run_cli(["--quiet", "scene", "import", plan, "--out", site], monkeypatch, capsys)[0] == 0
+    outs = {}
+    for name, src in (("dxf", plan), ("yaml", site)):
+        outs[name] = tmp_path / name
+        code, text = run_cli(["--quiet", "run", src, "--out", outs[name], "--budget", "4", "--grid-only",
+                              "--repeatable"], monkeypatch, capsys)
+        assert code == 0, text
+
+    def v_hash(folder):
+        with np.load(folder / "visibility.npz") as z:
+            return hashlib.sha256(b"".join(np.ascontiguousarray(z[k]).tobytes() for k in sorted(z.files))).hexdigest()
+
+    def cameras(folder):
+        return json.loads((folder / "placement.json").read_text())["cameras"]
+
+    assert v_hash(outs["dxf"]) == v_hash(outs["yaml"])
+    assert cameras(outs["dxf"]) == cameras(outs["yaml"]) and cameras(outs["dxf"])
