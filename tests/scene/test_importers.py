@@ -349,3 +349,24 @@ def test_run_on_the_imported_yaml_reproduces_the_run_on_the_dxf(tmp_path, monkey
 
     assert v_hash(outs["dxf"]) == v_hash(outs["yaml"])
     assert cameras(outs["dxf"]) == cameras(outs["yaml"]) and cameras(outs["dxf"])
+
+
+def test_cli_dxf_wall_layers_and_layer_height(tmp_path, monkeypatch, capsys):
+    """--wall-layers PATTERNS and --layer-height LAYER=M reach dxf.import_plan's options."""
+    import yaml
+
+    from tests.conftest import run_cli
+
+    plan = draw_dxf(tmp_path / "plan.dxf")
+    site = tmp_path / "site.yaml"
+    code, text = run_cli(["--quiet", "scene", "import", plan, "--out", site, "--layer-height", "A-FURN*=0.75"],
+                         monkeypatch, capsys)
+    assert code == 0, text
+    (desk,) = [o for o in yaml.safe_load(site.read_text())["obstacles"] if o["name"].startswith("desk")]
+    assert desk["prism"]["z"] == [0.0, 0.75]
+    code, text = run_cli(["scene", "import", plan, "--out", tmp_path / "none.yaml", "--wall-layers", "X-WALL*,PARTN"],
+                         monkeypatch, capsys)
+    assert code == 2 and "no walls found" in text and "X-WALL*, PARTN" in text, text
+    assert not (tmp_path / "none.yaml").exists()
+    code, text = run_cli(["scene", "import", plan, "--out", site, "--layer-height", "A-FURN"], monkeypatch, capsys)
+    assert code == 2 and "--layer-height" in text and "LAYER=M" in text, text

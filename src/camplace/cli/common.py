@@ -38,7 +38,7 @@ FLAGS = {
     "viewpoints": "--viewpoint", "out": "--out", "frame": "--frame", "paper": "--paper",
     "cloud": "",  # the space file: the message names it already
     "units": "--units", "wall_height": "--wall-height", "ceiling_height": "--ceiling-height", "scale": "--scale",
-    "ref": "--ref", "storey": "--storey",
+    "ref": "--ref", "storey": "--storey", "wall_layers": "--wall-layers", "furniture_heights": "--layer-height",
 }
 
 

@@ -16,6 +16,7 @@ from camplace.cli.common import (CACHE_OPT, FRAME_OPT, MAX_MEMORY_OPT, NO_CACHE_
                                  TIME_LIMIT_OPT, WORKERS_OPT, RichProgress, StopFlag, certify_solver, check_options,
                                  console, memory_bytes, progress_bars, repeatable_requested, scale_options, state)
 from camplace.cli.space import (CEILING_OPT, REF_OPT, SCALE_OPT, STOREY_OPT, UNITS_OPT, WALL_HEIGHT_OPT,
+                                 LAYER_HEIGHT_OPT, WALL_LAYERS_OPT,
                                  ImportOptions, describe_import, plan_import_options, scene_data_from_file, scene_yaml,
                                  space_kind)
 from camplace.cli.summary import write_and_summarise
@@ -162,6 +163,7 @@ def run_cmd(scene: Optional[str] = typer.Argument(None, help="Scene YAML file, b
             units: Optional[str] = UNITS_OPT, wall_height: Optional[float] = WALL_HEIGHT_OPT,
             ceiling_height: Optional[float] = CEILING_OPT, scale: Optional[float] = SCALE_OPT,
             ref: Optional[str] = REF_OPT, storey: Optional[str] = STOREY_OPT,
+            wall_layers: Optional[str] = WALL_LAYERS_OPT, layer_height: Optional[list[str]] = LAYER_HEIGHT_OPT,
             cloud: Optional[Path] = typer.Option(None, "--cloud", hidden=True,
                                                  help="Deprecated: give the scan as SCENE (camplace run SCAN)."),
             save_scene: Optional[Path] = typer.Option(None, "--save-scene", hidden=True,
@@ -190,7 +192,7 @@ def run_cmd(scene: Optional[str] = typer.Argument(None, help="Scene YAML file, b
         raise InputError("--save-scene: use camplace scene import FILE --out SCENE.yaml")
     plan = plan_import_options(space_kind(scene) if isinstance(scene, str) else None, units=units,
                                wall_height=wall_height, ceiling_height=ceiling_height, scale=scale, ref=ref,
-                               storey=storey)
+                               storey=storey, wall_layers=wall_layers, layer_height=layer_height)
     if isinstance(scene, str) and space_kind(scene) is not None:
         scene = scene_from_space_file(Path(scene), budget, opts=plan)
     refine = refine_default(refine, robust=robust, certify=certify, well_triangulated=well_triangulated)

@@ -31,6 +31,13 @@ CEILING_OPT = typer.Option(None, "--ceiling-height", help="Plans: ceiling height
 SCALE_OPT = typer.Option(None, "--scale", help="Plan images: metres per pixel.")
 REF_OPT = typer.Option(None, "--ref", help="Plan images: two points 'x1,y1,x2,y2,DIST' (pixels, metres) for the scale.")
 STOREY_OPT = typer.Option(None, "--storey", help="IFC: the IfcBuildingStorey name (default: the largest), or 'all'.")
+WALL_LAYERS_OPT = typer.Option(None, "--wall-layers", help="DXF: wall layer patterns, comma-separated fnmatch "
+                               "(default A-WALL*,WALL*,WAND*).")
+LAYER_HEIGHT_OPT = typer.Option(None, "--layer-height", help="DXF: LAYER=M, the height (m) of the furniture blocks on "
+                                "layers matching LAYER; repeat for several.")
+PLAN_FLAGS = {"units": "--units", "wall_height": "--wall-height", "ceiling_height": "--ceiling-height",
+              "scale": "--scale", "ref": "--ref", "storey": "--storey", "wall_layers": "--wall-layers",
+              "layer_height": "--layer-height"}
 
 
 @dataclass(frozen=True)
@@ -52,6 +59,8 @@ class ImportOptions:
     scale: float | None = None
     ref: str | None = None
     storey: str | None = None
+    wall_layers: str | None = None
+    layer_height: list[str] | None = None
 
     def plan_kwargs(self, budget: int | None) -> dict:
         """camplace.scene.importers.import_plan keyword arguments (None: the importer's default)."""
@@ -61,7 +70,9 @@ class ImportOptions:
                 raise InputError(f"{flag}: expected a positive number, got {v}")
         return dict(units=self.units, wall_height=self.wall_height, ceiling_height=self.ceiling_height,
                     scale=self.scale, ref=floats(self.ref, "--ref", 5) if self.ref else None, storey=self.storey,
-                    heights=floats(self.heights, "--heights"), coverage=self.coverage, budget=budget)
+                    heights=floats(self.heights, "--heights"), coverage=self.coverage, budget=budget,
+                    wall_layers=tuple(p.strip() for p in self.wall_layers.split(",") if p.strip())
+                    if self.wall_layers else None, furniture_heights=layer_heights(self.layer_height))
 
     def kwargs(self, budget: int | None) -> dict:
         """scene_from_cloud keyword arguments (InputError naming the flag on bad text)."""
@@ -75,15 +86,28 @@ class ImportOptions:
                     viewpoints=[floats(v, "--viewpoint", 3) for v in self.viewpoint] or None)
 
 
+def layer_heights(items: list[str] | None) -> dict[str, float] | None:
+    """{'LAYER': metres} of --layer-height LAYER=M items (None when none given)."""
+    out = {}
+    for item in items or []:
+        layer, _, value = item.partition("=")
+        try:
+            h = float(value)
+        except ValueError:
+            h = -1.0
+        if not layer.strip() or not h > 0:
+            raise InputError(f"--layer-height: expected LAYER=M with a positive height, got '{item}'")
+        out[layer.strip()] = h
+    return out or None
+
+
 def plan_import_options(kind: str | None, **given) -> ImportOptions:
     """ImportOptions of the plan options ``given`` (units, wall_height, ...; None = not
     given) for a scene of ``kind`` (space_kind); InputError when a plan option is given
     for anything but a plan."""
-    flags = {"units": "--units", "wall_height": "--wall-height", "ceiling_height": "--ceiling-height",
-             "scale": "--scale", "ref": "--ref", "storey": "--storey"}
     for k, v in given.items():
-        if v is not None and kind != "plan":
-            raise InputError(f"{flags[k]}: belongs to plans (DXF, plan image, IFC)")
+        if v and kind != "plan":
+            raise InputError(f"{PLAN_FLAGS[k]}: belongs to plans (DXF, plan image, IFC)")
     return ImportOptions(**given)
 
 
