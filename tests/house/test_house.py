@@ -15,7 +15,7 @@ from pathlib import Path
 
 SRC = Path(__file__).resolve().parents[2] / "src"
 LAYERS = ["core", "spec", "scene", "targets", "cameras", "visibility", "problem", "metrics", "solvers", "improve",
-          "outputs", "workflows", "cli"]
+          "outputs", "workflows", "planner", "cli"]
 MAX_LINES = 500
 
 
