@@ -193,11 +193,17 @@ def run_cmd(scene: Optional[str] = typer.Argument(None, help="Scene YAML file, b
     plan = plan_import_options(space_kind(scene) if isinstance(scene, str) else None, units=units,
                                wall_height=wall_height, ceiling_height=ceiling_height, scale=scale, ref=ref,
                                storey=storey, wall_layers=wall_layers, layer_height=layer_height)
-    if isinstance(scene, str) and space_kind(scene) is not None:
+    storeys = None
+    if storey == "all":  # every storey of an IFC file, each into its own folder
+        from camplace.cli.scene_import import storey_scenes
+
+        storeys = (Path(scene), storey_scenes(Path(scene), plan, budget))
+    elif isinstance(scene, str) and space_kind(scene) is not None:
         scene = scene_from_space_file(Path(scene), budget, opts=plan)
     refine = refine_default(refine, robust=robust, certify=certify, well_triangulated=well_triangulated)
     solver, time_limit = certify_solver(certify, solver, time_limit)
-    run_pipeline(scene, budget, solver, out, time_limit, require_feasible, max_memory_gb, repeatable, frame,
+    run = run_pipeline if storeys is None else run_storeys(*storeys)
+    run(scene, budget, solver, out, time_limit, require_feasible, max_memory_gb, repeatable, frame,
                  not no_plan, paper, **scale_options(workers, scheduler, cache, no_cache), visibility_mode=visibility,
                  stride=stride,
                  probe=probe, **({"local_search": True} if local_search else {}),
@@ -207,3 +213,29 @@ def run_cmd(scene: Optional[str] = typer.Argument(None, help="Scene YAML file, b
                  **({"well_triangulated": True} if well_triangulated else {}),
                  **({"keep": keep} if keep is not None else {}))
 
+
+
+def run_storeys(path: Path, scenes: list):
+    """run_pipeline over every storey of ``scenes`` (cli.scene_import.storey_scenes):
+    DIR/<slug>/ each (DIR: --out, default camplace-out/<file stem>), then DIR/storeys.json."""
+    from camplace.spec.loading import parse_scene
+    from camplace.workflows.storeys import storey_row, storeys_summary
+
+    def run(_scene, budget, solver, out, *args, **options) -> None:
+        out_dir = out or Path("camplace-out") / path.stem
+        rows = []
+        for name, slug, data, elev in scenes:
+            if not state["quiet"]:
+                console.print(f"[bold]storey '{escape(name)}'[/bold] (floor at {elev:g} m) -> "
+                              f"{escape(str(out_dir / slug))}")
+            run_pipeline(parse_scene(data, f"{path} (storey '{name}')"), budget, solver, out_dir / slug, *args,
+                         **options)
+            rows.append(storey_row(name, out_dir / slug, elev, data["room"]["height"]))
+        summary = storeys_summary(out_dir, path.name, rows)
+        if state["quiet"]:
+            typer.echo(str(summary))
+        else:
+            console.print(f"wrote {escape(str(summary))}: " + ", ".join(
+                f"{r['storey']} {r['cameras']} cameras, gap {r['coverage_gap']:.4f}" for r in rows))
+
+    return run

@@ -58,6 +58,9 @@ def import_cmd(file: Path = typer.Argument(..., help="A scan (PLY, PCD, XYZ/CSV,
                          coverage=coverage, wall_mounts=wall_mounts, viewpoint=list(viewpoint or []), units=units,
                          wall_height=wall_height, ceiling_height=ceiling_height, scale=scale, ref=ref, storey=storey,
                          wall_layers=wall_layers, layer_height=layer_height)
+    if storey == "all":
+        _write_storeys(file, opts, budget, out)
+        return
     data, rep, _ = scene_data_from_file(file, opts, budget)
     if not state["quiet"]:
         console.print(f"[dim]{escape(describe_import(rep))}[/dim]")
@@ -66,3 +69,39 @@ def import_cmd(file: Path = typer.Argument(..., help="A scan (PLY, PCD, XYZ/CSV,
         typer.echo(str(out))
     else:
         console.print(f"wrote {escape(str(out))}: edit it, then camplace run {escape(str(out))}")
+
+
+def storey_scenes(path: Path, opts: ImportOptions, budget: Optional[int]) -> list[tuple[str, str, dict, float]]:
+    """(storey, slug, scene mapping, floor elevation m) of every storey of an IFC plan
+    (--storey all), each checked by the scene schema; nothing is written."""
+    from camplace.cli.space import space_kind
+    from camplace.scene.importers import import_storey_plans, validated
+    from camplace.workflows.storeys import storey_slugs
+
+    if space_kind(path) != "plan":
+        raise InputError(f"--storey: 'all' belongs to IFC files, not to {path}")
+    if not path.is_file():
+        raise InputError(f"{path}: file not found" if not path.exists() else f"{path}: is a folder, expected a file")
+    found = import_storey_plans(path, **opts.plan_kwargs(budget))
+    slugs = storey_slugs([name for name, _, _ in found])
+    return [(name, slug, validated(data, f"{path} (storey '{name}')"), elev)
+            for (name, data, elev), slug in zip(found, slugs)]
+
+
+def _write_storeys(file: Path, opts: ImportOptions, budget: Optional[int], out: Path) -> None:
+    """scene import --storey all: OUT-<slug>.yaml beside --out, one per storey (all
+    imported before any is written)."""
+    from camplace.core.files import atomic_write_text
+
+    scenes = storey_scenes(file, opts, budget)
+    paths = []
+    for name, slug, data, elev in scenes:
+        path = out.with_name(f"{out.stem}-{slug}{out.suffix}")
+        paths.append(atomic_write_text(path, scene_yaml(data, f"camplace scene import {file.name} --storey all: "
+                                                              f"storey '{name}', floor at {elev:g} m")))
+    for (name, _, data, elev), path in zip(scenes, paths):
+        if state["quiet"]:
+            typer.echo(str(path))
+        else:
+            console.print(f"wrote {escape(str(path))}: storey '{escape(name)}' (floor at {elev:g} m = z 0, "
+                          f"{len(data['zones'])} rooms, {len(data['obstacles'])} obstacles)")

@@ -30,7 +30,9 @@ WALL_HEIGHT_OPT = typer.Option(None, "--wall-height", help="Plan walls: height (
 CEILING_OPT = typer.Option(None, "--ceiling-height", help="Plans: ceiling height (m; default 3, IFC: the storey's).")
 SCALE_OPT = typer.Option(None, "--scale", help="Plan images: metres per pixel.")
 REF_OPT = typer.Option(None, "--ref", help="Plan images: two points 'x1,y1,x2,y2,DIST' (pixels, metres) for the scale.")
-STOREY_OPT = typer.Option(None, "--storey", help="IFC: the IfcBuildingStorey name (default: the largest).")
+STOREY_OPT = typer.Option(None, "--storey", help="IFC: the IfcBuildingStorey name (default: the largest), or 'all': "
+                          "every storey with rooms (run: DIR/<storey>/ each and DIR/storeys.json; scene import: "
+                          "OUT-<storey>.yaml each).")
 WALL_LAYERS_OPT = typer.Option(None, "--wall-layers", help="DXF: wall layer patterns, comma-separated fnmatch "
                                "(default A-WALL*,WALL*,WAND*).")
 LAYER_HEIGHT_OPT = typer.Option(None, "--layer-height", help="DXF: LAYER=M, the height (m) of the furniture blocks on "

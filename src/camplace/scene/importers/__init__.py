@@ -44,6 +44,23 @@ def unit_scale(units: str) -> float:
 def import_plan(path: str | Path, **options: Any) -> dict:
     """The scene mapping of a plan file (``options``: None values are left to the
     importer's defaults; an option the format does not take is an InputError)."""
+    module, p, given = _importer(path, options)
+    return module.import_plan(p, **given)
+
+
+def import_storey_plans(path: str | Path, **options: Any) -> list[tuple[str, dict, float]]:
+    """(storey name, scene mapping, floor elevation m) of every storey of an IFC file
+    (storey 'all'; options as import_plan). Each scene has its floor at z = 0."""
+    if plan_kind(path) not in (None, "ifc"):
+        raise InputError(f"storey: 'all' belongs to IFC files; {Path(path).name} is a {plan_kind(path)} plan "
+                         "with one storey", option="storey")
+    module, p, given = _importer(path, dict(options, storey="all"))
+    levels = module.storey_elevations(p, units=given.get("units"))
+    return [(name, data, levels.get(name, 0.0)) for name, data in module.import_storeys(p, **given)]
+
+
+def _importer(path: str | Path, options: dict):
+    """(importer module, path, the options given) after the checks of import_plan."""
     p = Path(path)
     kind = plan_kind(p)
     if kind is None:
@@ -56,7 +73,7 @@ def import_plan(path: str | Path, **options: Any) -> dict:
         if key not in COMMON_OPTIONS and key not in module.OPTIONS:
             raise InputError(f"{key}: not an option of {kind} plans (it takes "
                              f"{', '.join(COMMON_OPTIONS + tuple(module.OPTIONS))})", option=key)
-    return module.import_plan(p, **given)
+    return module, p, given
 
 
 def polygons_of(geom) -> list[Polygon]:

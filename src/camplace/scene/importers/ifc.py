@@ -106,12 +106,12 @@ def _union(elements: list[Element]):
 
 def choose_storeys(path: Path, all_storeys: list[Storey], spaces: dict, slabs: dict, storey: str | None
                    ) -> list[Storey]:
-    """The storeys to import: the one named ``storey``, every one ('all'), or the one
+    """The storeys to import: the one named ``storey``, every one with spaces ('all'), or the one
     with the largest floor area (its spaces' area, else its slabs')."""
     if not all_storeys:
         raise InputError(f"{path}: the file has no IfcBuildingStorey")
-    if storey == "all":
-        return all_storeys
+    if storey == "all":  # every storey with rooms (a roof or a site level without IfcSpace is no floor to plan)
+        return [s for s in all_storeys if spaces.get(s.entity.id())] or all_storeys
     if storey is not None:
         hit = [s for s in all_storeys if s.name == storey]
         if not hit:
@@ -272,6 +272,14 @@ def import_storeys(path: str | Path, *, storey: str | None = None, doors: str = 
                              _relative(cut, st.elevation, 1.0), opts)
         out.append((st.name, validated(data, f"{p} (storey '{st.name}')")))
     return out
+
+
+def storey_elevations(path: str | Path, units: str | None = None) -> dict[str, float]:
+    """Storey name -> floor elevation (m; ``units`` overrides the file's length unit)."""
+    model = open_model(Path(path))
+    scale = length_scale(model)
+    factor = UNITS_M[units] / scale if units is not None else 1.0
+    return {s.name: s.elevation for s in storeys(model, scale * factor)}
 
 
 def import_plan(path: str | Path, **options) -> dict:

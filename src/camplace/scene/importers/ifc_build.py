@@ -1,4 +1,4 @@
-"""Small IFC buildings written with ifcopenshell.api (a grid of rooms on one storey),
+"""Small IFC buildings written with ifcopenshell.api (a grid of rooms on each storey),
 for tests, examples and benchmarks of the IFC importer (camplace.scene.importers.ifc).
 
 Every solid is an axis-aligned box (an IfcExtrudedAreaSolid of a rectangle). Room
@@ -141,33 +141,46 @@ def _door_box(axis: str, lo: np.ndarray, hi: np.ndarray, b: GridBuilding) -> tup
 
 
 def write_grid_building(path: str | Path, b: GridBuilding = GridBuilding(), unit: str = "m",
-                        roof_storey: bool = True) -> Path:
-    """Write the grid building as IFC4 (lengths in ``unit``: 'mm' or 'm'): storey
-    'Ground Floor' at z = 0 with the rooms (IfcSpace, LongName), walls, doors and the
-    window on a floor slab; with ``roof_storey`` a storey 'Roof' at the slab above."""
+                        roof_storey: bool = True, floors: tuple[str, ...] = ("Ground Floor",)) -> Path:
+    """Write the grid building as IFC4 (lengths in ``unit``: 'mm' or 'm'): one storey per
+    name in ``floors`` (the first at z = 0, each b.height + b.slab above the last), each
+    with the rooms (IfcSpace, LongName), walls, doors and the window on a floor slab;
+    with ``roof_storey`` a storey 'Roof' at the slab above the top floor."""
     wr = _Writer(unit)
     scale = 0.001 if unit == "mm" else 1.0
-    ground = wr.storey("Ground Floor", 0.0, scale)
     W, D = b.nx * b.room[0], b.ny * b.room[1]
     t = b.wall
-    wr.box("IfcSlab", "Floor slab", np.array([-t / 2, -t / 2, -b.slab]), np.array([W + t / 2, D + t / 2, 0.0]), ground)
+    for n, floor in enumerate(floors):
+        _floor(wr, b, wr.storey(floor, n * (b.height + b.slab), scale), n * (b.height + b.slab), n)
+    if roof_storey:
+        top = (len(floors) - 1) * (b.height + b.slab) + b.height
+        roof = wr.storey("Roof", top, scale)
+        wr.box("IfcSlab", "Roof slab", np.array([-t / 2, -t / 2, top]), np.array([W + t / 2, D + t / 2, top + b.slab]),
+               roof)
+    return atomic_write_text(Path(path), wr.m.to_string())
+
+
+def _floor(wr: _Writer, b: GridBuilding, storey, z0: float, n: int) -> None:
+    """One storey's floor slab, spaces, walls, doors and window, lifted by z0 m."""
+    up = np.array([0.0, 0.0, z0])
+    W, D = b.nx * b.room[0], b.ny * b.room[1]
+    t = b.wall
+    tag = "" if n == 0 else f"{n}."
+    wr.box("IfcSlab", f"{tag}Floor slab", np.array([-t / 2, -t / 2, z0 - b.slab]),
+           np.array([W + t / 2, D + t / 2, z0]), storey)
     for k, (lo, hi) in enumerate(b.space_boxes()):
-        sp = wr.box("IfcSpace", f"R{k + 1:02d}", lo, hi, LongName=b.name(k))
-        wr.api.aggregate.assign_object(wr.m, products=[sp], relating_object=ground)
+        sp = wr.box("IfcSpace", f"{tag}R{k + 1:02d}", lo + up, hi + up, LongName=b.name(k))
+        wr.api.aggregate.assign_object(wr.m, products=[sp], relating_object=storey)
     for k, (axis, lo, hi) in enumerate(_walls(b)):
-        wall = wr.box("IfcWall", f"Wall {k + 1}", lo, hi, ground)
+        wall = wr.box("IfcWall", f"{tag}Wall {k + 1}", lo + up, hi + up, storey)
         a = 1 if axis == "x" else 0  # the coordinate across the wall
         c = 0.5 * (lo[a] + hi[a])
         inner = 1e-6 < c < (D if axis == "x" else W) - 1e-6
         if inner:
-            wr.hole(wall, "IfcDoor", f"Door {k + 1}", *_door_box(axis, lo, hi, b), ground)
+            dlo, dhi = _door_box(axis, lo, hi, b)
+            wr.hole(wall, "IfcDoor", f"{tag}Door {k + 1}", dlo + up, dhi + up, storey)
         elif k == 0:  # the first room's -y wall
             wlo, whi = _door_box(axis, lo, hi, b)
             wlo[2], whi[2] = b.window[2], b.window[2] + b.window[1]
             wlo[0], whi[0] = 0.5 * (lo[0] + hi[0]) - b.window[0] / 2, 0.5 * (lo[0] + hi[0]) + b.window[0] / 2
-            wr.hole(wall, "IfcWindow", "Window 1", wlo, whi, ground)
-    if roof_storey:
-        roof = wr.storey("Roof", b.height, scale)
-        wr.box("IfcSlab", "Roof slab", np.array([-t / 2, -t / 2, b.height]),
-               np.array([W + t / 2, D + t / 2, b.height + b.slab]), roof)
-    return atomic_write_text(Path(path), wr.m.to_string())
+            wr.hole(wall, "IfcWindow", f"{tag}Window 1", wlo + up, whi + up, storey)
