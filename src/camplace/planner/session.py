@@ -1,0 +1,406 @@
+"""The planner session: the cameras of a placement being adjusted by hand, with live metrics.
+
+A session holds the prepared scene (camplace.planner.opening.Opened: scene, targets, the
+grid visibility), the run's visibility engine, the cameras (:class:`Cam`: id, pose, type,
+locked; each with its visibility row over the targets and its viewshed) and the
+per-target coverage counts. A change raycasts only the camera it touches (one-row
+``compute_visibility`` on a one-candidate Candidates), updates the coverage by that
+row, and rescores the selection with camplace.workflows.run.placement_metrics, the
+scoring of ``camplace evaluate`` (so a saved placement evaluates to the same metrics).
+Every change is undoable (snapshots of the immutable camera tuple). Positions snap to
+the nearest allowed mount (the grid candidates' positions) unless ``snap`` is false;
+then they must satisfy the mount rules (camplace.cameras.mount_rules) and lie in free
+space. A pose that sees a privacy zone is refused (camplace.visibility.privacy).
+"""
+
+from __future__ import annotations
+
+import threading
+import time
+from dataclasses import dataclass, replace
+
+import numpy as np
+import scipy.sparse as sp
+import shapely
+
+from camplace.cameras.candidates import Candidates, location_ids_of, rotation_from_ypr
+from camplace.cameras.mount_rules import allowed_xy
+from camplace.metrics.coverage import Metrics
+from camplace.planner.errors import ApiError
+from camplace.planner.opening import Opened
+from camplace.visibility.engine import Visibility, compute_visibility
+from camplace.visibility.registry import get_engine
+
+UNDO_DEPTH = 200  # changes kept for undo
+MAX_RASTER_POINTS = 20000  # the coverage raster (targets_xy) is thinned to at most this many points
+
+
+@dataclass(frozen=True)
+class Cam:
+    """One camera of the session. position: (3,) m; angles: (3,) yaw, pitch, roll deg;
+    lens: index into Session.lenses; row: (k,) int32 sorted target ids it sees; shed:
+    its viewshed exterior [[x, y], ...] m at the working height; existing: an existing
+    camera of the site (stays where it is)."""
+
+    id: str
+    position: np.ndarray
+    angles: np.ndarray
+    lens: int
+    locked: bool
+    existing: bool
+    row: np.ndarray
+    shed: list
+
+    @property
+    def rotation(self) -> np.ndarray:
+        return rotation_from_ypr(*self.angles)[0]
+
+
+def _ring(geom) -> list:
+    """The exterior of a viewshed geometry's largest part as [[x, y], ...] (m, 3 decimals)."""
+    if geom is None or geom.is_empty:
+        return []
+    parts = list(getattr(geom, "geoms", [geom]))
+    big = max(parts, key=lambda g: g.area)
+    return np.round(np.asarray(big.exterior.coords), 3).tolist()
+
+
+def floor_layer(targets, height: float) -> np.ndarray:
+    """Indices of the volume targets in the layer nearest ``height`` m (the coverage raster)."""
+    vol = np.flatnonzero(~targets.is_surface)
+    if not len(vol):
+        return vol
+    z = targets.positions[vol, 2]
+    levels = np.unique(np.round(z, 6))
+    best = levels[np.argmin(np.abs(levels - height))]
+    return vol[np.abs(z - best) < 1e-6]
+
+
+class Session:
+    """The state behind ``camplace serve`` (thread-safe: every call holds ``lock``)."""
+
+    def __init__(self, opened: Opened) -> None:
+        from camplace.outputs.plan_data import free_floor
+        from camplace.visibility.viewshed import WORKING_HEIGHT
+        from camplace.workflows.sites import privacy_guard
+
+        self.opened = opened
+        self.scene = opened.scene
+        self.vis = opened.vis
+        self.targets = opened.vis.targets
+        self.lenses = tuple(opened.vis.candidates.cameras)
+        self.lens_index = {c.name: k for k, c in enumerate(self.lenses)}
+        self.engine = get_engine("voxel", voxel_size=self.scene.spec.voxel_size)
+        self.guard = privacy_guard(self.scene, self.lenses, self.engine)
+        self.budget = int(opened.budget)
+        self.height = WORKING_HEIGHT
+        self.clip = free_floor(self.scene, WORKING_HEIGHT)
+        self.mounts = self._mount_positions()
+        layer = floor_layer(self.targets, WORKING_HEIGHT)
+        self.floor_step = max(1, int(np.ceil(len(layer) / MAX_RASTER_POINTS)))
+        self.floor = layer[::self.floor_step]  # the targets of the page's coverage raster
+        self.lock = threading.RLock()
+        self.version = 0
+        self.timing = {"raycast": 0.0, "viewshed": 0.0, "metrics": 0.0, "total": 0.0}
+        self.undo_stack: list[tuple[Cam, ...]] = []  # camera tuples before each change (ids never reused)
+        self.redo_stack: list[tuple[Cam, ...]] = []
+        self.next_id = 1
+        self.busy: str | None = None  # an optimisation job holds the cameras
+        self.job = None  # the last camplace.planner.optimize.Job
+        cams = []
+        given = {str(c["id"]) for c in opened.cameras if c.get("existing") and "id" in c}
+        for c in opened.cameras:
+            lens = self._lens_of(str(c.get("camera")), "camera")
+            pos = np.asarray(c["position"], float)
+            ang = np.array([c["yaw_deg"], c["pitch_deg"], c["roll_deg"]], float)
+            cid = str(c["id"]) if c.get("existing") and "id" in c else self._fresh_id(given)
+            cams.append(self._make(cid, pos, ang, lens, bool(c.get("existing")), bool(c.get("existing"))))
+        self.cams: tuple[Cam, ...] = tuple(cams)
+        self.cov = self._full_coverage()
+        self._score()
+
+    # ------------------------------------------------------------------ helpers
+
+    def _mount_positions(self) -> np.ndarray:
+        """(M, 3) m: the distinct allowed mount positions (every grid pose's position)."""
+        from camplace.cameras.candidates import build_candidates
+
+        cams = {c.name: c for c in self.lenses}
+        pos = build_candidates(self.scene, cams).positions
+        if not len(pos):
+            pos = self.vis.candidates.positions
+        return np.unique(np.round(pos, 6), axis=0)
+
+    def _fresh_id(self, taken: set[str] = frozenset()) -> str:
+        """C1, C2, ...: the next id never given before and not taken by a loaded camera."""
+        taken = set(taken) | {c.id for c in getattr(self, "cams", ())}
+        while f"C{self.next_id}" in taken:
+            self.next_id += 1
+        self.next_id += 1
+        return f"C{self.next_id - 1}"
+
+    def _lens_of(self, name, field: str) -> int:
+        if not isinstance(name, str) or name not in self.lens_index:
+            raise ApiError(f"{field}: unknown camera type {name!r}; expected one of "
+                           f"{', '.join(self.lens_index)}", field)
+        return self.lens_index[name]
+
+    def _candidates(self, positions: np.ndarray, angles: np.ndarray, lenses: np.ndarray) -> Candidates:
+        positions = np.asarray(positions, float).reshape(-1, 3)
+        angles = np.asarray(angles, float).reshape(-1, 3)
+        return Candidates(np.ascontiguousarray(positions), rotation_from_ypr(angles[:, 0], angles[:, 1], angles[:, 2]),
+                          angles.copy(), np.asarray(lenses, np.int32).reshape(-1), location_ids_of(positions),
+                          self.lenses)
+
+    def _raycast(self, position: np.ndarray, angles: np.ndarray, lens: int) -> np.ndarray:
+        """The sorted target ids one pose sees (one row through the run's engine)."""
+        one = self._candidates(position, angles, [lens])
+        V = compute_visibility(self.engine, self.scene.occupancy, self.targets, one).V
+        return np.sort(V.indices[V.indptr[0]:V.indptr[1]]).astype(np.int32)
+
+    def _viewshed(self, position: np.ndarray, angles: np.ndarray, lens: int) -> list:
+        from camplace.visibility.viewshed import viewshed
+
+        vs = viewshed(self.scene.occupancy, self.lenses[lens], position, rotation_from_ypr(*angles)[0], self.height,
+                      clip=self.clip)
+        return _ring(vs.polygon)
+
+    def _make(self, cid: str, pos: np.ndarray, ang: np.ndarray, lens: int, locked: bool, existing: bool) -> Cam:
+        t = time.perf_counter()
+        row = self._raycast(pos, ang, lens)
+        t1 = time.perf_counter()
+        shed = self._viewshed(pos, ang, lens)
+        self.timing["raycast"] = 1000.0 * (t1 - t)
+        self.timing["viewshed"] = 1000.0 * (time.perf_counter() - t1)
+        return Cam(cid, pos, ang, lens, locked, existing, row, shed)
+
+    def _full_coverage(self) -> np.ndarray:
+        cov = np.zeros(len(self.targets), np.int64)
+        for c in self.cams:
+            cov[c.row] += 1
+        return cov
+
+    def visibility(self) -> tuple[Visibility, np.ndarray]:
+        """The session's cameras as a Visibility (row k = camera k) and the selection (all)."""
+        n = len(self.cams)
+        cands = self._candidates(np.array([c.position for c in self.cams]).reshape(-1, 3),
+                                 np.array([c.angles for c in self.cams]).reshape(-1, 3), [c.lens for c in self.cams])
+        rows = [c.row for c in self.cams]
+        indptr = np.r_[0, np.cumsum([len(r) for r in rows])].astype(np.int64)
+        indices = np.concatenate(rows).astype(np.int32) if rows else np.zeros(0, np.int32)
+        V = sp.csr_matrix((np.ones(len(indices), np.uint8), indices, indptr), shape=(n, len(self.targets)))
+        return Visibility(V, cands, self.targets, "voxel"), np.arange(n, dtype=np.int64)
+
+    def _score(self) -> None:
+        """metrics of the current cameras, as camplace.workflows.evaluate scores them."""
+        from camplace.visibility.privacy import privacy_report
+        from camplace.workflows.run import placement_metrics, problem_from_visibility
+
+        t = time.perf_counter()
+        vis, sel = self.visibility()
+        problem = problem_from_visibility(vis, len(sel))
+        m = placement_metrics(vis, problem, sel)
+        if self.guard is not None:
+            m = replace(m, privacy=privacy_report(self.guard, vis.candidates, sel, [c.id for c in self.cams]))
+        self.metrics: Metrics = m
+        self.timing["metrics"] = 1000.0 * (time.perf_counter() - t)
+
+    def _index(self, cid: str) -> int:
+        for k, c in enumerate(self.cams):
+            if c.id == cid:
+                return k
+        raise ApiError(f"id: no camera {cid!r} (cameras: {', '.join(c.id for c in self.cams) or 'none'})", "id", 404)
+
+    def _idle(self) -> None:
+        if self.busy is not None:
+            raise ApiError(f"optimize: job {self.busy} is running; cancel it or wait for it to finish", "optimize",
+                           409)
+
+    # ------------------------------------------------------------------ rules
+
+    def snap(self, position: np.ndarray) -> np.ndarray:
+        """The allowed mount nearest ``position`` in plan (then in height)."""
+        d2 = ((self.mounts[:, :2] - position[:2]) ** 2).sum(1)
+        near = np.flatnonzero(d2 <= d2.min() + 1e-9)
+        best = near[np.argmin(np.abs(self.mounts[near, 2] - position[2]))]
+        return self.mounts[best].astype(float).copy()
+
+    def mount_height(self, xy: np.ndarray) -> float:
+        """The height of the allowed mount nearest ``xy`` (for positions given as [x, y])."""
+        d2 = ((self.mounts[:, :2] - xy[:2]) ** 2).sum(1)
+        return float(self.mounts[int(np.argmin(d2)), 2])
+
+    def check_position(self, position: np.ndarray) -> None:
+        """ApiError('position') unless the point lies inside the room, inside the mount
+        rules' allowed area and in free space."""
+        x, y, z = (float(v) for v in position)
+        if not shapely.intersects_xy(self.scene.polygon, x, y):
+            raise ApiError(f"position: ({x:.3f}, {y:.3f}) is outside the room's footprint", "position")
+        if not 0.0 < z < self.scene.height:
+            raise ApiError(f"position: height {z:.3f} m is outside the room (0..{self.scene.height:g} m)", "position")
+        if not allowed_xy(self.scene, np.array([[x, y]]))[0]:
+            raise ApiError(f"position: ({x:.3f}, {y:.3f}) breaks the scene's mount rules (forbid / allow areas)",
+                           "position")
+        if self.scene.occupancy.is_occupied(np.array([[x, y, z]]))[0]:
+            raise ApiError(f"position: ({x:.3f}, {y:.3f}, {z:.3f}) lies inside an obstacle", "position")
+
+    def check_privacy(self, position: np.ndarray, angles: np.ndarray, lens: int, field: str) -> None:
+        """ApiError(field) when the pose sees a point of a privacy zone."""
+        if self.guard is None:
+            return
+        seen = self.guard.seen_points(self._candidates(position, angles, [lens]))
+        if seen.nnz:
+            pts = self.guard.points
+            names = sorted({pts.region_names[r] for r in pts.region_ids[np.unique(seen.indices)]})
+            raise ApiError(f"{field}: this pose sees the privacy zone(s) {', '.join(names)} (a hard rule); turn or "
+                           f"move the camera", field, 409)
+
+    # ------------------------------------------------------------------ changes
+
+    def _commit(self, cams: tuple[Cam, ...], t0: float, incremental: tuple[Cam | None, Cam | None] | None) -> dict:
+        """Make ``cams`` current (previous state onto the undo stack) and rescore."""
+        self.undo_stack.append(self.cams)
+        del self.undo_stack[:-UNDO_DEPTH]
+        self.redo_stack.clear()
+        self._apply(cams, incremental)
+        self.timing["total"] = 1000.0 * (time.perf_counter() - t0)
+        return self.state()
+
+    def _apply(self, cams: tuple[Cam, ...], incremental=None) -> None:
+        if incremental is None:
+            self.cams = cams
+            self.cov = self._full_coverage()
+        else:
+            old, new = incremental
+            if old is not None:
+                self.cov[old.row] -= 1
+            if new is not None:
+                self.cov[new.row] += 1
+            self.cams = cams
+        self.version += 1
+        self._score()
+
+    def update(self, cid: str, change: dict) -> dict:
+        """PUT /api/cameras/{id}: ``change`` validated by camplace.planner.bodies.camera_change."""
+        with self.lock:
+            self._idle()
+            t0 = time.perf_counter()
+            k = self._index(cid)
+            cam = self.cams[k]
+            locked = change.get("locked", cam.locked)
+            pose_keys = [f for f in ("position", "yaw_deg", "pitch_deg", "roll_deg", "camera") if f in change]
+            if pose_keys and (locked or cam.existing):
+                why = "an existing camera of the site" if cam.existing else "locked; unlock it first"
+                raise ApiError(f"{pose_keys[0]}: camera {cid} is {why}", pose_keys[0], 409)
+            if cam.existing and not locked:
+                raise ApiError(f"locked: camera {cid} is an existing camera of the site; it stays locked", "locked",
+                               409)
+            pos = cam.position
+            if "position" in change:
+                pos = self._place(change["position"], change.get("snap", True))
+            ang = cam.angles.copy()
+            for j, f in enumerate(("yaw_deg", "pitch_deg", "roll_deg")):
+                if f in change:
+                    ang[j] = change[f]
+            ang[0] %= 360.0
+            lens = self._lens_of(change["camera"], "camera") if "camera" in change else cam.lens
+            if not pose_keys:
+                new = replace(cam, locked=bool(locked))
+                self.timing.update(raycast=0.0, viewshed=0.0)
+                return self._commit(self.cams[:k] + (new,) + self.cams[k + 1:], t0, None)
+            self.check_privacy(pos, ang, lens, pose_keys[0])
+            new = self._make(cam.id, pos, ang, lens, bool(locked), cam.existing)
+            return self._commit(self.cams[:k] + (new,) + self.cams[k + 1:], t0, (cam, new))
+
+    def _place(self, position: np.ndarray, snap: bool) -> np.ndarray:
+        pos = np.asarray(position, float)
+        if len(pos) == 2:
+            pos = np.r_[pos, self.mount_height(pos)]
+        if snap:
+            return self.snap(pos)
+        self.check_position(pos)
+        return pos
+
+    def add(self, body: dict) -> dict:
+        """POST /api/cameras: a new camera (fresh id) at ``position`` (snapped by default)."""
+        with self.lock:
+            self._idle()
+            t0 = time.perf_counter()
+            pos = self._place(body["position"], body.get("snap", True))
+            ang = np.array([body.get("yaw_deg", 0.0), body.get("pitch_deg", 45.0), body.get("roll_deg", 0.0)], float)
+            ang[0] %= 360.0
+            lens = self._lens_of(body["camera"], "camera") if "camera" in body else 0
+            self.check_privacy(pos, ang, lens, "position")
+            new = self._make(self._fresh_id(), pos, ang, lens, bool(body.get("locked", False)), False)
+            return self._commit(self.cams + (new,), t0, (None, new))
+
+    def delete(self, cid: str) -> dict:
+        """DELETE /api/cameras/{id} (an existing or locked camera is refused)."""
+        with self.lock:
+            self._idle()
+            t0 = time.perf_counter()
+            k = self._index(cid)
+            cam = self.cams[k]
+            if cam.locked or cam.existing:
+                raise ApiError(f"id: camera {cid} is {'an existing camera' if cam.existing else 'locked'}; unlock "
+                               f"it before deleting it", "id", 409)
+            self.timing.update(raycast=0.0, viewshed=0.0)
+            return self._commit(self.cams[:k] + self.cams[k + 1:], t0, (cam, None))
+
+    def grid_cam(self, position: np.ndarray, angles: np.ndarray, lens: int, row: np.ndarray) -> Cam:
+        """A new unlocked camera at a grid pose whose row is already known (its viewshed computed here)."""
+        return Cam(self._fresh_id(), position, angles, lens, False, False, row, self._viewshed(position, angles, lens))
+
+    def replace_unlocked(self, new_cams: list[Cam], t0: float) -> None:
+        """The result of an optimisation: the locked cameras kept, the others replaced (one undo step)."""
+        with self.lock:
+            self._commit(tuple(c for c in self.cams if c.locked) + tuple(new_cams), t0, None)
+
+    def undo(self) -> dict:
+        return self._step(self.undo_stack, self.redo_stack, "undo")
+
+    def redo(self) -> dict:
+        return self._step(self.redo_stack, self.undo_stack, "redo")
+
+    def _step(self, source: list, target: list, name: str) -> dict:
+        with self.lock:
+            self._idle()
+            t0 = time.perf_counter()
+            if not source:
+                raise ApiError(f"{name}: nothing to {name}", name, 409)
+            cams = source.pop()
+            target.append(self.cams)
+            self.timing.update(raycast=0.0, viewshed=0.0)
+            self._apply(cams)
+            self.timing["total"] = 1000.0 * (time.perf_counter() - t0)
+            return self.state()
+
+    # ------------------------------------------------------------------ views
+
+    def camera_objects(self) -> list[dict]:
+        """placement.json camera objects (camplace.outputs.write.camera_entries) + id, locked, existing, viewshed."""
+        from camplace.outputs.write import camera_entries
+
+        vis, sel = self.visibility()
+        out = []
+        for c, obj in zip(self.cams, camera_entries(vis.candidates, sel)):
+            obj.update(id=c.id, locked=c.locked, existing=c.existing, viewshed=c.shed, targets_seen=int(len(c.row)))
+            out.append(obj)
+        return out
+
+    def state(self) -> dict:
+        """GET /api/state (see /api in docs/planner.md)."""
+        with self.lock:
+            m = self.metrics.to_dict()
+            zones = []
+            for name, fig in m["regions"].items():
+                idx = np.flatnonzero(np.asarray(self.targets.region_ids) ==
+                                     list(self.targets.region_names).index(name))
+                full = float(np.mean(self.cov[idx] >= self.targets.gamma[idx])) if len(idx) else 1.0
+                zones.append({"name": name, "coverage": full, "gap": fig["coverage_gap"], **fig})
+            fl = self.floor
+            return {"version": self.version, "cameras": self.camera_objects(), "metrics": m, "zones": zones,
+                    "coverage_floor": np.minimum(self.cov[fl], self.targets.gamma[fl]).astype(int).tolist(),
+                    "n_cameras": len(self.cams), "budget": self.budget, "busy": self.busy,
+                    "can_undo": bool(self.undo_stack), "can_redo": bool(self.redo_stack),
+                    "timing_ms": {k: round(v, 2) for k, v in self.timing.items()}}
