@@ -1,0 +1,55 @@
+"""``camplace serve``: the planner, a local web page to adjust a placement by hand
+(camplace.planner). Importing this module starts nothing; :func:`serve` does."""
+
+from __future__ import annotations
+
+from typing import Optional
+
+import typer
+
+from camplace.cli.common import console, progress_bars, RichProgress
+
+
+def planner_app(target: str, scene: Optional[str], host: str, port: int, progress=None):
+    """(app, url with the token, session) for ``target`` (a run folder or a scene), nothing started."""
+    from camplace.planner.app import create_app, new_token
+    from camplace.planner.opening import open_start
+    from camplace.planner.session import Session
+
+    session = Session(open_start(target, scene, root=None, progress=progress))
+    token = new_token()
+    hosts = {f"127.0.0.1:{port}", f"localhost:{port}", f"{host}:{port}", f"[::1]:{port}"}
+    url = f"http://{'127.0.0.1' if host in ('0.0.0.0', '127.0.0.1') else host}:{port}/?token={token}"
+    return create_app(session, token, hosts, port), url, session
+
+
+def serve(target: str = typer.Argument(..., help="A run folder (with placement.json) or a scene (YAML file or "
+                                       "built-in name; it is run first, on the grid)."),
+          scene: Optional[str] = typer.Option(None, "--scene", help="The scene of the run folder, when it is not a "
+                                              "built-in scene nor a YAML beside the folder."),
+          port: int = typer.Option(8765, "--port", min=1, max=65535, help="Port to listen on."),
+          host: str = typer.Option("127.0.0.1", "--host", help="Address to bind (default: this machine only)."),
+          no_browser: bool = typer.Option(False, "--no-browser", help="Do not open the page in a browser.")) -> None:
+    """Adjust a placement by hand in the browser: drag, turn, add, delete, lock cameras and
+    watch coverage, cost and gap update; optimise the unlocked rest; save as camplace
+    evaluate would. Prints the page's URL (with its token); Ctrl-C stops the server."""
+    import uvicorn
+
+    with progress_bars() as prog:
+        app, url, session = planner_app(target, scene, host, port, RichProgress(prog))
+    console.print(f"camplace planner: {session.scene.name}, {len(session.cams)} cameras; saves under "
+                  f"{session.opened.root}")
+    typer.echo(url)
+    if not no_browser:
+        import webbrowser
+
+        try:
+            webbrowser.open(url)
+        except Exception:  # noqa: BLE001 - no browser here: the URL is printed
+            pass
+    try:
+        uvicorn.run(app, host=host, port=port, log_level="warning")
+    except KeyboardInterrupt:
+        pass
+    console.print("camplace planner: stopped")
+
