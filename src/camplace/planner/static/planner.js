@@ -85,7 +85,8 @@
     return e;
   };
   const pts = (poly) => poly.map((p) => p[0].toFixed(3) + "," + (-p[1]).toFixed(3)).join(" ");
-  const cam = (id) => (S.state ? S.state.cameras.find((c) => c.id === id) : null);
+  const cam = (id) => (S.state && id !== null && id !== undefined ? S.state.cameras.find((c) => String(c.id) === String(id)) || null : null);
+  const fixed = (c) => !!(c && (c.locked || c.existing));
   const typeOf = (name) => (S.scene.camera_types || []).find((t) => t.name === name);
   const colourOf = (name) => S.colour[name] || "#475569";
   const fmt = (v, d) => (typeof v === "number" && isFinite(v) ? v.toFixed(d) : "–");
@@ -143,6 +144,11 @@
       el("polygon", { points: pts(z.polygon), class: "privacy" }, $("g-zones"));
       const c = centroid(z.polygon);
       el("text", { x: c[0], y: -c[1], class: "zone-label", "text-anchor": "middle", fill: "#6d28d9" }, $("g-zones")).textContent = z.name + " (private)";
+    }
+    for (const r of sc.mount_rules || []) {
+      el("polygon", { points: pts(r.polygon), class: "mount-rule " + (r.kind === "forbid" ? "forbid" : "allow") }, $("g-zones"));
+      const c = centroid(r.polygon);
+      el("text", { x: c[0], y: -c[1] - 0.3, class: "zone-label rule-label", "text-anchor": "middle" }, $("g-zones")).textContent = (r.kind === "forbid" ? "no mounts: " : "mounts: ") + (r.name || "");
     }
     for (const o of sc.obstacles || []) {
       const tall = (o.zmax || 0) >= 1.5;
@@ -235,10 +241,10 @@
   function drawCameras(st) {
     const gv = $("g-viewsheds"), gc = $("g-cameras");
     gv.textContent = ""; gc.textContent = "";
-    const order = st.cameras.slice().sort((a, b) => (a.id === S.sel) - (b.id === S.sel));
+    const order = st.cameras.slice().sort((a, b) => (String(a.id) === String(S.sel)) - (String(b.id) === String(S.sel)));
     for (const c of order) {
       const col = colourOf(c.camera);
-      const isSel = c.id === S.sel;
+      const isSel = String(c.id) === String(S.sel);
       if (c.viewshed && c.viewshed.length > 2) {
         el("polygon", { points: pts(c.viewshed), class: "viewshed" + (isSel ? " sel" : ""), fill: col, stroke: col, "data-id": c.id }, gv);
       }
@@ -247,7 +253,7 @@
       const yaw = c.yaw_deg * Math.PI / 180;
       el("line", { x1: 0, y1: 0, x2: (0.5 * Math.cos(yaw)).toFixed(3), y2: (-0.5 * Math.sin(yaw)).toFixed(3), class: "dir", stroke: col }, g);
       if (isSel) el("circle", { r: 0.3, class: "ring" }, g);
-      if (c.locked) el("rect", { x: -0.16, y: -0.16, width: 0.32, height: 0.32, class: "body", fill: col }, g);
+      if (fixed(c)) el("rect", { x: -0.16, y: -0.16, width: 0.32, height: 0.32, class: "body", fill: col }, g);
       else el("circle", { r: 0.17, class: "body", fill: col }, g);
       const t = el("text", { x: 0.2, y: 0.36, class: "cam-label" }, g);
       t.textContent = String(c.id);
@@ -259,7 +265,7 @@
     const gh = $("g-handle");
     gh.textContent = "";
     const c = cam(S.sel);
-    if (!c || c.locked) return;
+    if (!c || fixed(c)) return;
     const yaw = c.yaw_deg * Math.PI / 180, R = 1.1;
     const x = c.position[0], y = c.position[1];
     const g = el("g", { class: "handle" }, gh);
@@ -275,7 +281,7 @@
     ["non-triangulatable", (m) => m.non_triangulatable_pct, 1, -1, "% of targets seen by fewer than two cameras"],
     ["unseen targets", (m) => (m.coverage_histogram ? m.coverage_histogram["0"] || 0 : undefined), 0, -1, "targets no camera sees"],
     ["equipment cost", (m, st) => st.cameras.reduce((a, c) => a + ((typeOf(c.camera) || {}).cost || 0), 0), 0, -1, "sum of the camera types' cost"],
-    ["locked", (m, st) => st.cameras.filter((c) => c.locked).length, 0, 0, "locked cameras stay when optimising"],
+    ["locked / existing", (m, st) => st.cameras.filter((c) => c.locked || c.existing).length, 0, 0, "locked and existing cameras stay when optimising"],
     ["version", (m, st) => st.version, 0, 0, "state version (one per change)"],
   ];
 
@@ -295,7 +301,7 @@
       const node = box.children[i];
       const v = f(m, st);
       let txt = fmt(v, dig);
-      if (k === "cameras") txt += " / " + (S.scene.budget != null ? S.scene.budget : "–");
+      if (k === "cameras") txt += " / " + (st.budget != null ? st.budget : S.scene.budget != null ? S.scene.budget : "–");
       if (k.endsWith("triangulated") || k === "non-triangulatable") txt += " %";
       node.querySelector(".v").textContent = txt;
       node.dataset.metric = k.replace(/ /g, "-");
@@ -313,7 +319,7 @@
   }
 
   const ZONE_COLS = [
-    ["coverage", "Γ", 0], ["targets", "targets", 0], ["gap", "gap", 4], ["coverage_gap", "gap", 4],
+    ["coverage", "covered %", 1, 100], ["targets", "targets", 0], ["gap", "gap", 4], ["coverage_gap", "gap", 4],
     ["cost", "cost", 0], ["well_triangulated_pct", "well tri. %", 1], ["non_triangulatable_pct", "non-tri. %", 1],
   ];
   function drawZones(st) {
@@ -322,9 +328,9 @@
     const t = $("zones");
     rows = rows || [];
     const cols = [];
-    for (const [key, label, dig] of ZONE_COLS) {
-      if (key === "coverage_gap" && cols.some((c) => c[1] === "gap")) continue;
-      if (rows.some((r) => typeof r[key] === "number")) cols.push([key, label, dig]);
+    for (const col of ZONE_COLS) {
+      if (col[0] === "coverage_gap" && cols.some((c) => c[1] === "gap")) continue;
+      if (rows.some((r) => typeof r[col[0]] === "number")) cols.push(col);
     }
     t.querySelector("thead").innerHTML = "<tr><th>zone / region</th>" + cols.map((c) => '<th class="num">' + c[1] + "</th>").join("") + "</tr>";
     const tb = t.querySelector("tbody");
@@ -332,7 +338,7 @@
     for (const r of rows) {
       const tr = document.createElement("tr");
       const td = document.createElement("td"); td.textContent = r.name; tr.appendChild(td);
-      for (const [key, , dig] of cols) { const c = document.createElement("td"); c.className = "num"; c.textContent = fmt(r[key], dig); tr.appendChild(c); }
+      for (const [key, , dig, mul] of cols) { const c = document.createElement("td"); c.className = "num"; c.textContent = fmt(typeof r[key] === "number" ? r[key] * (mul || 1) : r[key], dig); tr.appendChild(c); }
       tb.appendChild(tr);
     }
   }
@@ -344,16 +350,17 @@
     for (const c of st.cameras) {
       const tr = document.createElement("tr");
       tr.dataset.id = c.id;
-      if (c.id === S.sel) tr.className = "sel";
+      if (String(c.id) === String(S.sel)) tr.className = "sel";
       tr.innerHTML = '<td><span class="swatch"></span></td><td></td><td><input type="checkbox" class="lock"></td>' +
         '<td class="num"></td><td class="num"></td><td class="num"></td>';
       const tds = tr.children;
       tds[0].querySelector(".swatch").style.background = colourOf(c.camera);
       tds[0].appendChild(document.createTextNode(String(c.id)));
-      tds[1].textContent = c.camera;
+      tds[1].textContent = c.camera + (c.existing ? " (site)" : "");
       const lk = tds[2].querySelector("input");
-      lk.checked = !!c.locked;
-      lk.title = c.locked ? "locked: the optimiser keeps it" : "unlocked";
+      lk.checked = !!c.locked || !!c.existing;
+      lk.disabled = !!c.existing || S.optimizing;
+      lk.title = c.existing ? "an existing camera: always kept" : c.locked ? "locked: the optimiser keeps it" : "unlocked";
       lk.addEventListener("click", (e) => { e.stopPropagation(); change("PUT", "/api/cameras/" + c.id, { locked: lk.checked }); });
       tds[3].textContent = fmt(c.yaw_deg, 0);
       tds[4].textContent = fmt(c.pitch_deg, 0);
@@ -366,25 +373,30 @@
   function drawEditor() {
     const c = cam(S.sel);
     $("editor").classList.toggle("disabled", !c || S.optimizing);
-    $("sel-id").textContent = c ? "#" + c.id : "— click a camera";
+    $("sel-id").textContent = c ? String(c.id) : "— click a camera";
     if (!c) { $("ed-pos").textContent = ""; return; }
     $("ed-type").value = c.camera;
-    $("ed-locked").checked = !!c.locked;
+    $("ed-locked").checked = !!c.locked || !!c.existing;
+    $("ed-locked").disabled = !!c.existing;
+    $("btn-delete").disabled = fixed(c);
     for (const [k, key] of [["yaw", "yaw_deg"], ["pitch", "pitch_deg"], ["roll", "roll_deg"]]) {
       const inp = $("ed-" + k);
       if (document.activeElement !== inp || !S.sliding) inp.value = Math.round(k === "yaw" ? wrapDeg(c[key] || 0) : c[key] || 0);
-      inp.disabled = !!c.locked;
+      inp.disabled = fixed(c);
       $("ed-" + k + "-v").textContent = fmt(c[key] || 0, 1) + "°";
     }
-    $("ed-type").disabled = !!c.locked;
+    $("ed-type").disabled = fixed(c);
     $("ed-pos").textContent = "position " + c.position.map((v) => fmt(v, 2)).join(", ") + " m" +
-      (c.candidate_id != null ? " · candidate " + c.candidate_id : " · off the grid") + (c.locked ? " · locked (unlock to edit)" : "");
+      (c.candidate_id != null ? " · candidate " + c.candidate_id : " · off the grid") +
+      (typeof c.targets_seen === "number" ? " · sees " + c.targets_seen + " targets" : "") +
+      (c.existing ? " · existing camera" : c.locked ? " · locked (unlock to edit)" : "");
   }
 
   function select(id) {
-    S.sel = id;
+    const c = cam(id);
+    S.sel = c ? c.id : null;
     render();
-    const row = document.querySelector('#cam-list tr[data-id="' + id + '"]');
+    const row = document.querySelector('#cam-list tr[data-id="' + String(id) + '"]');
     const wrap = document.querySelector("#list-panel .list-wrap");
     if (row && wrap) {
       const top = row.offsetTop - 24, bottom = row.offsetTop + row.offsetHeight;
@@ -411,8 +423,8 @@
     } else {
       const g = e.target.closest ? e.target.closest(".cam") : null;
       if (g) {
-        const id = Number(g.getAttribute("data-id"));
-        S.drag = { kind: "move", id, start: w, sx: e.clientX, sy: e.clientY, moved: false, c: cam(id), g };
+        const c = cam(g.getAttribute("data-id"));
+        if (c) S.drag = { kind: "move", id: c.id, start: w, sx: e.clientX, sy: e.clientY, moved: false, c, g };
       } else {
         S.drag = { kind: "none", start: w, sx: e.clientX, sy: e.clientY };
       }
@@ -427,7 +439,7 @@
     const w = worldFromEvent(e);
     if (d.kind === "move") {
       if (!d.moved && Math.hypot(e.clientX - d.sx, e.clientY - d.sy) < 3) return;
-      if (d.c.locked) { if (!d.moved) message("camera " + d.id + " is locked: unlock it to move it"); d.moved = true; d.blocked = true; return; }
+      if (fixed(d.c)) { if (!d.moved) message("camera " + d.id + (d.c.existing ? " is an existing camera: it stays where it is" : " is locked: unlock it to move it")); d.moved = true; d.blocked = true; return; }
       if (!d.moved && d.id !== S.sel) { S.sel = d.id; render(); d.g = document.querySelector('#g-cameras .cam[data-id="' + d.id + '"]'); }
       d.moved = true;
       const dx = w[0] - d.start[0], dy = w[1] - d.start[1];
@@ -479,8 +491,10 @@
         const t = $("ed-type").value || ((S.scene.camera_types || [])[0] || {}).name;
         const body = { position: [w[0], w[1]], yaw_deg: 0, pitch_deg: 45 };
         if (t) body.camera = t;
+        const before = new Set(S.state.cameras.map((c) => String(c.id)));
         change("POST", "/api/cameras", body).then((st) => {
-          if (st && st.cameras.length) select(st.cameras.reduce((a, c) => (c.id > a.id ? c : a), st.cameras[0]).id);
+          const added = st ? st.cameras.find((c) => !before.has(String(c.id))) : null;
+          if (added) { select(added.id); message("added camera " + added.id + " (snapped to the nearest mount)", "ok"); }
         });
       } else if (S.sel !== null) {
         S.sel = null; render();
@@ -561,6 +575,11 @@
     $("opt-status").textContent = "starting " + body.solver + "…";
     const r = await api("POST", "/api/optimize", body);
     if (!r) { $("opt-status").textContent = "not started"; return; }
+    follow(body.solver);
+  }
+
+  /* Follow the running job's progress stream (it replays the job's events from its start). */
+  function follow(solver) {
     setOptimizing(true);
     const t0 = performance.now();
     const es = new EventSource("/api/optimize/events" + (TOKEN ? "?token=" + encodeURIComponent(TOKEN) : ""));
@@ -582,8 +601,9 @@
       const secs = ((performance.now() - t0) / 1000).toFixed(1);
       if (st && st.cameras) {
         applyState(st);
-        $("opt-status").textContent = "done in " + secs + " s · gap " + fmt(st.metrics.coverage_gap, 4) + " · cost " + fmt(st.metrics.cost, 0);
-        message("optimised with " + body.solver + ": " + st.cameras.length + " cameras (Ctrl-Z undoes it)", "ok");
+        const o = st.optimize || {};
+        $("opt-status").textContent = (o.status || "done") + " in " + (o.seconds != null ? fmt(o.seconds, 1) : secs) + " s · gap " + fmt(st.metrics.coverage_gap, 4) + " · cost " + fmt(st.metrics.cost, 0);
+        message("optimised with " + (o.solver || solver) + ": " + st.cameras.length + " cameras (Ctrl-Z undoes it)", "ok");
       } else { refresh(); $("opt-status").textContent = "done in " + secs + " s"; }
     });
     es.addEventListener("error", (ev) => {
@@ -654,7 +674,7 @@
       const xr = ca * x - sa * y, yr = sa * x + ca * y;     // about z
       const u = xr, v = se * yr + ce * z;                   // viewer above -y', looking down by el
       const dd = D + ce * yr - se * z;
-      return [W / 2 + f * u / dd, H / 2 - f * v / dd, dd, depth];
+      return [W / 2 + f * u / dd, H / 2 - f * v / dd, dd];
     };
   }
 
@@ -739,6 +759,7 @@
     if (!st) return;
     applyState(st);
     showTiming(st, null);
+    if (st.busy) { $("opt-status").textContent = "an optimisation is running…"; follow("the solver"); }
     message("ready: drag a camera, turn it with its handle or the sliders; “Optimise the rest” keeps the locked ones");
     document.body.dataset.ready = "1";
   }
