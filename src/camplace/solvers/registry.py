@@ -31,6 +31,7 @@ from camplace.solvers.reduction import solve_reduced
 from camplace.solvers.robust_solver import solve_robust
 from camplace.solvers.tabu import solve_tabu
 from camplace.solvers.zhao import solve_zhao
+from camplace.solvers.zones import solve_zones
 
 _EXACT = Tags(exact=True, gives_bound=True)
 
@@ -55,6 +56,8 @@ SOLVERS: dict[str, Solver] = {s.name: s for s in [
                 summary="Tabu incumbent and proven bounds (Lagrangian, LP, reduced MIP)"),
     make_solver("robust", solve_robust, Tags(needs_start=True, robust_objective=True),
                 summary="Best worst case over single camera failures, from a nominal start"),
+    make_solver("zones", solve_zones, Tags(gives_bound=True, needs_positions=True),
+                summary="Zone sweeps: tight MIP / tabu per floor tile, budget moves, Lagrangian bound (needs positions)"),
 ]}
 
 

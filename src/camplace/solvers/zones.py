@@ -1,0 +1,300 @@
+"""``zones``: block-coordinate descent over tiles of the floor (docs/scale.md § decomposition,
+option 2), for problems whose monolithic MIP is too large.
+
+1. Start from ``greedy-fast`` (or ``initial``, or a checkpoint of this problem).
+2. The full problem's Lagrangian bound (camplace.solvers.bounds.lagrangian_bound, at most
+   ``bound_time_s``) is computed once on the start: Placement.bound, gap in Placement.gap.
+3. Sweeps: the floor is cut into square tiles of ``tile_m`` metres (default 3 × the
+   camera range estimated from V and the positions); each tile's subproblem is its
+   candidates and the targets they see, with the coverage of the cameras outside the tile
+   as an offset (camplace.problem.offset), and as budget the cameras it has now plus the
+   unused ones (money and per-type limits: the tile's own plus the global slack). It is
+   solved by the tight MIP (``mip``, ``tile_time_s`` per tile) when its model has at most
+   ``max_tile_nnz`` non-zeros, else by tabu from its current selection; a strictly
+   cheaper tile solution replaces the tile's cameras. Tiles of one colour
+   (camplace.solvers.zones_tiles: no shared target) run in parallel on ``workers``
+   processes or a Dask ``scheduler`` and are merged in tile order, each merge checked
+   against the global budget, money budget and type limits, so the result equals the
+   serial one. Odd sweeps shift the tile origin by half a tile.
+4. Budget moves after each sweep: for each tile (cheapest removal first) remove its
+   camera whose removal costs least and add the best candidate of a neighbouring tile
+   (exact gain after the removal, keeping locations, types and money); accepted when the
+   full cost drops.
+5. Stop when two sweeps in a row (both origins) bring nothing, at ``max_sweeps``, the time
+   limit, or should_stop (status 'interrupted', best so far). Each completed sweep's
+   selection is saved atomically to ``checkpoint`` (a folder) under a hash of the
+   problem; a later solve of the same problem resumes from it.
+
+Every accepted change lowers the full cost, so the result is never worse than the start.
+Deterministic for a seed when no per-tile time limit is hit. Status 'optimal' when the
+bound meets the cost, else 'heuristic' / 'time_limit' / 'interrupted'.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import time
+from pathlib import Path
+
+import numpy as np
+
+from camplace.core.errors import InputError
+from camplace.core.files import atomic_write_json
+from camplace.problem.gains import removal_losses, target_gains
+from camplace.problem.model import PlacementProblem
+from camplace.problem.offset import offset_subproblem
+from camplace.solvers.base import (OnIncumbent, Placement, ProgressFn, ShouldStop, deadline, stopped, time_left,
+                                   trivial_placement)
+from camplace.solvers.greedy_triangulated import positions_of
+from camplace.solvers.zones_tiles import TileRunner, TileTask, Tiling, estimate_range, location_xy, make_tiling, \
+    tile_method
+
+TOL = 1e-9
+
+
+def problem_key(problem: PlacementProblem) -> str:
+    """Hex hash of what defines the problem: V, Γ, weights, budget, locations, prices, types."""
+    h = hashlib.blake2b(digest_size=12)
+    for a in (problem.V.indptr, problem.V.indices, problem.gamma, problem.weights, problem.location_ids,
+              problem.costs, np.zeros(0) if problem.type_ids is None else problem.type_ids):
+        h.update(np.ascontiguousarray(a).tobytes())
+        h.update(b"|")
+    h.update(repr((int(problem.budget), problem.money_budget, sorted((problem.type_limits or {}).items()),
+                   problem.V.shape)).encode())
+    return h.hexdigest()
+
+
+def checkpoint_path(folder: str | Path, key: str) -> Path:
+    """The checkpoint file of the problem with hash ``key`` in ``folder``."""
+    return Path(folder) / f"zones-{key}.json"
+
+
+def load_checkpoint(problem: PlacementProblem, folder: str | Path | None, key: str) -> tuple[np.ndarray, int] | None:
+    """(selection, sweeps done) saved for this problem, None when absent, unreadable or infeasible."""
+    if folder is None:
+        return None
+    path = checkpoint_path(folder, key)
+    try:
+        data = json.loads(path.read_text())
+        sel = np.sort(np.asarray(data["selected"], np.int64))
+        if data.get("key") != key:
+            return None
+        problem.check_feasible(sel)
+        return sel, int(data.get("sweeps", 0))
+    except (OSError, ValueError, KeyError, TypeError):
+        return None
+
+
+def save_checkpoint(folder: str | Path, key: str, selected: np.ndarray, cost: float, sweeps: int) -> None:
+    """Write the selection after ``sweeps`` sweeps atomically (camplace.core.files)."""
+    Path(folder).mkdir(parents=True, exist_ok=True)
+    atomic_write_json(checkpoint_path(folder, key), {"key": key, "sweeps": int(sweeps), "cost": float(cost),
+                                                     "selected": [int(i) for i in selected]})
+
+
+class _Globals:
+    """Global limits of a selection: free camera slots, money left, per-type cameras left."""
+
+    def __init__(self, problem: PlacementProblem) -> None:
+        self.p = problem
+        self.lt = problem.limited_types()
+        self.costs = problem.costs
+
+    def ok(self, sel: np.ndarray) -> bool:
+        p = self.p
+        if len(sel) > p.budget:
+            return False
+        if p.money_budget is not None and float(self.costs[sel].sum()) > p.money_budget + 1e-9 * max(1.0, p.money_budget):
+            return False
+        return not p.has_type_limits or p.type_ok(sel)
+
+    def tile_limits(self, sel: np.ndarray, inside: np.ndarray) -> tuple[int, float | None, dict | None]:
+        """(budget, money budget, type limits) of a tile holding ``inside`` of ``sel``."""
+        p = self.p
+        budget = len(inside) + max(0, p.budget - len(sel))
+        money = None
+        if p.money_budget is not None:
+            money = max(0.0, float(p.money_budget) - float(self.costs[sel].sum()) + float(self.costs[inside].sum()))
+        types = None
+        if p.has_type_limits:
+            out_counts = p.type_counts(np.setdiff1d(sel, inside))
+            types = {k: int(v) - out_counts.get(int(k), 0) for k, v in p.type_limits.items()}
+        return budget, money, types
+
+
+def _tile_task(problem: PlacementProblem, g: _Globals, tiling: Tiling, t: int, sel: np.ndarray, cov: np.ndarray,
+               max_tile_nnz: int, tile_time_s: float, seed: int) -> TileTask | None:
+    rows, cols = tiling.rows[t], tiling.cols[t]
+    if len(cols) == 0:
+        return None
+    inside = tiling.in_tile(sel, t)
+    cov_out = cov - problem.coverage(inside)
+    budget, money, types = g.tile_limits(sel, inside)
+    sub = offset_subproblem(problem, rows, cols, cov_out, budget=budget, money_budget=money, type_limits=types)
+    if sub.normalizer <= 0:
+        return None
+    return TileTask(t, sub, np.searchsorted(rows, inside), tile_method(sub, max_tile_nnz), tile_time_s,
+                    seed + 7919 * t)
+
+
+def budget_moves(problem: PlacementProblem, selected: np.ndarray, tiling: Tiling, g: _Globals,
+                 should_stop: ShouldStop | None = None, end: float = float("inf")) -> tuple[np.ndarray, int]:
+    """(selection, moves made): one camera moved from a tile to a neighbouring tile where
+    that lowers the full cost (module doc, step 4)."""
+    sel = np.sort(np.asarray(selected, np.int64))
+    if len(sel) == 0:
+        return sel, 0
+    cov = problem.coverage(sel)
+    losses = removal_losses(problem, sel, cov)
+    tiles = tiling.tile_of[sel]
+    order = np.lexsort((sel, losses))  # cheapest removal first (ties: lowest id)
+    seen: set[int] = set()
+    loc = np.asarray(problem.location_ids)
+    moved = 0
+    for k in order:
+        a = int(tiles[k])
+        if a in seen or stopped(should_stop) or time.perf_counter() >= end:
+            continue
+        seen.add(a)
+        r = int(sel[k])
+        if not np.any(sel == r):  # changed by an earlier move
+            continue
+        nb = tiling.neighbours[a]
+        if len(nb) == 0:
+            continue
+        rest = sel[sel != r]
+        cand = np.concatenate([tiling.rows[b] for b in nb])
+        cand = cand[~np.isin(loc[cand], loc[rest])]
+        if problem.money_budget is not None:
+            cand = cand[problem.costs[cand] + float(problem.costs[rest].sum()) <= problem.money_budget + 1e-9]
+        if problem.has_type_limits:
+            cand = cand[~problem.type_full(rest)[cand]]
+        if len(cand) == 0:
+            continue
+        cov_r = problem.coverage(rest)
+        loss = problem.cost(rest) - problem.cost(sel)
+        gains = np.asarray(problem.V[cand] @ target_gains(problem.gamma, problem.weights, cov_r)).ravel()
+        best = int(np.lexsort((cand, -gains))[0])
+        if gains[best] > loss + TOL * max(1.0, loss):
+            new = np.sort(np.append(rest, cand[best]))
+            if g.ok(new) and problem.cost(new) < problem.cost(sel) - TOL * max(1.0, problem.cost(sel)):
+                sel = new
+                moved += 1
+    return sel, moved
+
+
+def solve_zones(problem: PlacementProblem, *, time_limit_s: float | None = None, threads: int | None = None,
+                seed: int = 0, should_stop: ShouldStop | None = None, progress: ProgressFn | None = None,
+                on_incumbent: OnIncumbent | None = None, tile_m: float | None = None, max_tile_nnz: int = 1_500_000,
+                tile_time_s: float = 20.0, bound_time_s: float = 10.0, max_sweeps: int | None = None,
+                moves: bool = True, workers: int = 1, scheduler: str | None = None,
+                checkpoint: str | None = None, initial: tuple | None = None) -> Placement:
+    """Zone sweeps with boundary coupling (tight MIP or tabu per tile), budget moves
+    between neighbouring tiles and the full-problem Lagrangian bound (module doc).
+    tile_m: tile side (m, default 3 × the camera range); max_tile_nnz: largest tile model
+    solved by the MIP; tile_time_s: per-tile limit (s); workers / scheduler: where the tiles
+    of one colour run; checkpoint: folder for the per-sweep selection (resume); initial:
+    start selection (candidate ids; default greedy-fast)."""
+    from camplace.solvers.bounds import lagrangian_bound
+    from camplace.solvers.greedy_fast import solve_greedy_fast
+
+    t0 = time.perf_counter()
+    if (easy := trivial_placement(problem, "zones", t0)) is not None:
+        return easy
+    positions_of(problem)  # InputError when the positions are missing
+    if tile_m is not None and not tile_m > 0:
+        raise InputError(f"tile_m: expected a positive tile size in metres, got {tile_m!r}", option="tile_m")
+    if tile_time_s <= 0:
+        raise InputError(f"tile_time_s: expected a positive number of seconds, got {tile_time_s!r}",
+                         option="tile_time_s")
+    end = deadline(time_limit_s)
+    info: dict = {}
+    key = problem_key(problem) if checkpoint is not None else ""
+    resumed = load_checkpoint(problem, checkpoint, key)
+    sweeps_done = 0
+    if resumed is not None:
+        sel, sweeps_done = resumed
+        info["resumed_from_sweep"] = sweeps_done
+    elif initial is not None:
+        sel = np.sort(np.asarray(initial, np.int64))
+        try:
+            problem.check_feasible(sel)
+        except ValueError as err:
+            raise InputError(f"initial: not a feasible selection ({err})", option="initial") from None
+    else:
+        left = time_left(end)
+        gf = solve_greedy_fast(problem, time_limit_s=None if left is None else 0.5 * left, should_stop=should_stop)
+        sel = np.sort(np.asarray(gf.selected, np.int64))
+        if gf.status == "interrupted":
+            return Placement(sel, problem.cost(sel), None, "interrupted", "zones", time.perf_counter() - t0,
+                             {"start_objective": gf.objective})
+    cost = problem.cost(sel)
+    info["start_objective"] = cost
+    if on_incumbent:
+        on_incumbent(cost, None)
+    if stopped(should_stop):
+        return Placement(sel, cost, None, "interrupted", "zones", time.perf_counter() - t0, info)
+    left = time_left(end)
+    lb = lagrangian_bound(problem, time_limit_s=bound_time_s if left is None else min(bound_time_s, 0.2 * left),
+                          incumbent_cost=cost, coverage=problem.coverage(sel), should_stop=should_stop)
+    bound = min(float(lb.bound), cost)
+    info["lagrangian_bound"] = float(lb.bound)
+    if on_incumbent:
+        on_incumbent(cost, bound)
+    rng_m = estimate_range(problem)
+    size = float(tile_m) if tile_m is not None else max(3.0 * rng_m, 1.0)
+    info.update(tile_m=size, range_m=rng_m)
+    xy = location_xy(problem)
+    g = _Globals(problem)
+    status, idle, sweep_log = "heuristic", 0, []
+    with TileRunner(workers, scheduler) as runner:
+        info["executor"] = runner.name
+        while idle < 2 and (max_sweeps is None or len(sweep_log) < max_sweeps):
+            if stopped(should_stop) or time.perf_counter() >= end:
+                status = "interrupted" if stopped(should_stop) else "time_limit"
+                break
+            sweep = sweeps_done + len(sweep_log)
+            tiling = make_tiling(problem, size, 0.5 * size * (sweep % 2), xy)
+            before, n_better, n_mip = cost, 0, 0
+            for c in range(int(tiling.colour.max()) + 1 if tiling.n_tiles else 0):
+                left = time_left(end)
+                if stopped(should_stop) or (left is not None and left <= 0.05):
+                    break
+                cov = problem.coverage(sel)
+                t_tile = tile_time_s if left is None else max(0.05, min(tile_time_s, left))
+                tasks = [t for t in (_tile_task(problem, g, tiling, int(k), sel, cov, max_tile_nnz, t_tile, seed)
+                                     for k in np.flatnonzero(tiling.colour == c)) if t is not None]
+                n_mip += sum(t.method == "mip" for t in tasks)
+                for task, (tile, local, _, _) in zip(tasks, runner.map(tasks, should_stop)):
+                    rows = tiling.rows[tile]
+                    new = np.sort(np.concatenate([sel[tiling.tile_of[sel] != tile], rows[local]]))
+                    if not g.ok(new):
+                        continue
+                    new_cost = problem.cost(new)
+                    if new_cost < cost - TOL * max(1.0, cost):
+                        sel, cost, n_better = new, new_cost, n_better + 1
+                        if on_incumbent:
+                            on_incumbent(cost, bound)
+                if progress:
+                    progress("zones", c + 1, int(tiling.colour.max()) + 1)
+            n_moves = 0
+            if moves and not stopped(should_stop) and time.perf_counter() < end:
+                sel, n_moves = budget_moves(problem, sel, tiling, g, should_stop, end)
+                if n_moves:
+                    cost = problem.cost(sel)
+                    if on_incumbent:
+                        on_incumbent(cost, bound)
+            sweep_log.append({"sweep": sweep, "tiles": tiling.n_tiles, "colours": int(tiling.colour.max()) + 1
+                              if tiling.n_tiles else 0, "mip_tiles": n_mip, "improved_tiles": n_better,
+                              "moves": n_moves, "cost": cost, "seconds": time.perf_counter() - t0})
+            if checkpoint is not None:
+                save_checkpoint(checkpoint, key, sel, cost, sweep + 1)
+            idle = idle + 1 if cost >= before - TOL * max(1.0, before) else 0
+    if status == "heuristic" and bound >= cost - 1e-9 * max(1.0, cost):
+        status = "optimal"
+    info.update(sweeps=sweep_log, key=key or None)
+    return Placement(sel, cost, min(bound, cost), status, "zones", time.perf_counter() - t0, info)
+
+
+__all__ = ["budget_moves", "checkpoint_path", "load_checkpoint", "problem_key", "save_checkpoint", "solve_zones"]
