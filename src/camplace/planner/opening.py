@@ -94,15 +94,18 @@ def run_cameras(run_dir: Path, sc: Scene) -> tuple[list[dict], int]:
     return out, max(budget, len(out))
 
 
-def open_start(target: str | Path, scene: str | Path | None = None, root: str | Path | None = None,
+def open_start(target, scene: str | Path | None = None, root: str | Path | None = None,
                progress=None) -> Opened:
-    """Open a run folder (with placement.json) or a scene (run first, grid placement).
+    """Open a run folder (with placement.json) or a scene (built-in name, YAML path or
+    SceneSpec; run first, grid placement).
     ``root``: the folder no path may leave (default: the run folder, or the current folder
     for a scene)."""
     from camplace.workflows.run import prepare_site, run
 
-    p = Path(target)
-    if p.is_dir():
+    from camplace.spec.schema import SceneSpec
+
+    p = None if isinstance(target, SceneSpec) else Path(target)
+    if p is not None and p.is_dir():
         if not (p / "placement.json").is_file():
             raise InputError(f"{p}: not a run folder (no placement.json); give a run folder or a scene",
                              option="target")
@@ -126,4 +129,4 @@ def open_start(target: str | Path, scene: str | Path | None = None, root: str | 
     pdict = placement_dict(result.scene.name, result.placement, int(result.problem.budget), vis.candidates)
     base = Path(root or ".").resolve()
     return Opened(target, result.scene, grid, pdict["cameras"], int(result.problem.budget), base,
-                  base / "camplace-out" / f"{result.scene.name}-planned", str(target))
+                  base / "camplace-out" / f"{result.scene.name}-planned", result.scene.name)
