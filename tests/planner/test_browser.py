@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import json
 import os
+import shutil
 import socket
 import threading
 import time
@@ -37,14 +38,10 @@ def _free_port() -> int:
 
 
 @pytest.fixture(scope="module")
-def run_dir(tmp_path_factory, demo_run) -> Path:
-    """A demo run folder (contract files of the grid placement) made in a tmp folder."""
-    from camplace.outputs.write import write_outputs
-
+def run_dir(tmp_path_factory, demo_out) -> Path:
+    """A copy of the demo run folder (contract files) in a tmp folder: the page saves into it."""
     out = tmp_path_factory.mktemp("planner-browser") / "demo-run"
-    r = demo_run
-    write_outputs(out, r.scene.name, r.visibility, r.placement, r.problem.budget, r.metrics, r.timings_s,
-                  scene=r.scene, report=False)
+    shutil.copytree(demo_out, out)
     return out
 
 
