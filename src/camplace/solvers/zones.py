@@ -140,48 +140,51 @@ def _tile_task(problem: PlacementProblem, g: _Globals, tiling: Tiling, t: int, s
 
 def budget_moves(problem: PlacementProblem, selected: np.ndarray, tiling: Tiling, g: _Globals,
                  should_stop: ShouldStop | None = None, end: float = float("inf")) -> tuple[np.ndarray, int]:
-    """(selection, moves made): one camera moved from a tile to a neighbouring tile where
-    that lowers the full cost (module doc, step 4)."""
+    """(selection, moves made): for each tile (cheapest removal first), its camera whose
+    removal costs least moves to the best candidate of another tile, when that lowers the
+    full cost (module doc, step 4). Gains in the neighbouring tiles (shared targets) are
+    recomputed after the removal; elsewhere the removal changes no gain (O(nnz) per move made)."""
     sel = np.sort(np.asarray(selected, np.int64))
-    if len(sel) == 0:
+    if len(sel) == 0 or tiling.n_tiles < 2:
         return sel, 0
-    cov = problem.coverage(sel)
-    losses = removal_losses(problem, sel, cov)
-    tiles = tiling.tile_of[sel]
-    order = np.lexsort((sel, losses))  # cheapest removal first (ties: lowest id)
-    seen: set[int] = set()
     loc = np.asarray(problem.location_ids)
-    moved = 0
-    for k in order:
-        a = int(tiles[k])
-        if a in seen or stopped(should_stop) or time.perf_counter() >= end:
-            continue
-        seen.add(a)
-        r = int(sel[k])
-        if not np.any(sel == r):  # changed by an earlier move
-            continue
-        nb = tiling.neighbours[a]
-        if len(nb) == 0:
-            continue
-        rest = sel[sel != r]
-        cand = np.concatenate([tiling.rows[b] for b in nb])
-        cand = cand[~np.isin(loc[cand], loc[rest])]
-        if problem.money_budget is not None:
-            cand = cand[problem.costs[cand] + float(problem.costs[rest].sum()) <= problem.money_budget + 1e-9]
-        if problem.has_type_limits:
-            cand = cand[~problem.type_full(rest)[cand]]
-        if len(cand) == 0:
-            continue
-        cov_r = problem.coverage(rest)
-        loss = problem.cost(rest) - problem.cost(sel)
-        gains = np.asarray(problem.V[cand] @ target_gains(problem.gamma, problem.weights, cov_r)).ravel()
-        best = int(np.lexsort((cand, -gains))[0])
-        if gains[best] > loss + TOL * max(1.0, loss):
-            new = np.sort(np.append(rest, cand[best]))
-            if g.ok(new) and problem.cost(new) < problem.cost(sel) - TOL * max(1.0, problem.cost(sel)):
-                sel = new
-                moved += 1
-    return sel, moved
+    moved, done = 0, set()
+    while True:
+        cov = problem.coverage(sel)
+        cost = problem.cost(sel)
+        gain0 = np.asarray(problem.V @ target_gains(problem.gamma, problem.weights, cov)).ravel()
+        losses = removal_losses(problem, sel, cov)
+        order = np.lexsort((sel, losses))  # cheapest removal first (ties: lowest id)
+        found = None
+        for k in order:
+            a = int(tiling.tile_of[sel[k]])
+            if a in done:
+                continue
+            if stopped(should_stop) or time.perf_counter() >= end:
+                return sel, moved
+            done.add(a)
+            r = int(sel[k])
+            rest = sel[sel != r]
+            ok = ~np.isin(loc, loc[rest]) & (tiling.tile_of != a)
+            if problem.money_budget is not None:
+                ok &= problem.costs + float(problem.costs[rest].sum()) <= problem.money_budget + 1e-9
+            if problem.has_type_limits:
+                ok &= ~problem.type_full(rest)
+            near = np.concatenate([tiling.rows[b] for b in tiling.neighbours[a]] or [np.zeros(0, np.int64)])
+            gains = np.where(ok, gain0, -np.inf)
+            if len(near):
+                cov_r = cov - problem.coverage(np.array([r]))
+                g_near = np.asarray(problem.V[near] @ target_gains(problem.gamma, problem.weights, cov_r)).ravel()
+                gains[near] = np.where(ok[near], g_near, -np.inf)
+            best = int(np.argmax(gains))  # ties: lowest id
+            if gains[best] > losses[k] + TOL * max(1.0, float(losses[k])):
+                new = np.sort(np.append(rest, best))
+                if g.ok(new) and problem.cost(new) < cost - TOL * max(1.0, cost):
+                    found = new
+                    break
+        if found is None:
+            return sel, moved
+        sel, moved = found, moved + 1
 
 
 def solve_zones(problem: PlacementProblem, *, time_limit_s: float | None = None, threads: int | None = None,
