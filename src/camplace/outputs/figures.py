@@ -18,6 +18,7 @@ from pathlib import Path
 import numpy as np
 
 from camplace.core.files import atomic_write_bytes
+from camplace.outputs.walls import label_colours, mpl_path, plan_cut, scene_walls
 
 COVERAGE_CLASSES: tuple[tuple[str, str], ...] = (
     ("0 (not seen)", "#d62728"), ("1", "#1f4fd1"), ("2", "#17becf"), ("\u2265 3", "#2ca02c"))
@@ -44,14 +45,19 @@ class SceneView:
     voxel_size: float
     boxes: dict = field(default_factory=dict)
     areas: tuple = ()  # (kind, (K, 2) corners m): 'privacy' zones and 'forbid' mount areas (issue 17)
+    walls: tuple = ()  # camplace.outputs.walls.Wall: prism obstacles (imported walls, issue 18)
+    zones: tuple = ()  # (name, (K, 2) corners m): the volume zones (rooms of an imported plan)
 
     @classmethod
     def from_scene(cls, scene) -> "SceneView":
-        """From a camplace.scene.build.Scene (privacy zones and forbidden mount areas included)."""
+        """From a camplace.scene.build.Scene (privacy zones and forbidden mount areas, the
+        prism obstacles and the named zones included)."""
         areas = tuple(("privacy", np.asarray(z.polygon, float)) for z in scene.spec.zones if z.privacy) + tuple(
             ("forbid", np.asarray(f, float)) for f in scene.spec.mount_rules.forbid)
+        zones = tuple((z.name, np.asarray(z.polygon, float)) for z in scene.spec.zones
+                      if z.polygon is not None and not z.privacy)
         return cls(scene.name, np.asarray(scene.footprint, float), float(scene.height),
-                   float(scene.spec.voxel_size), dict(scene.boxes), areas)
+                   float(scene.spec.voxel_size), dict(scene.boxes), areas, scene_walls(scene), zones)
 
     @classmethod
     def from_targets(cls, name: str, positions: np.ndarray, cameras: list[dict] = ()) -> "SceneView":
@@ -70,13 +76,23 @@ class SceneView:
 class CoverageSlice:
     """Coverage of the volume targets at one height. x: (nx,), y: (ny,) voxel centres
     (m); coverage: (ny, nx) float, NaN where there is no target; boxes: (name, xmin,
-    ymin, xmax, ymax) of the obstacles that cross this height."""
+    ymin, xmax, ymax) of the obstacles that cross this height; walls: label -> union of
+    the prism obstacles that cross it (shapely, camplace.outputs.walls.plan_cut)."""
 
     height: float
     x: np.ndarray
     y: np.ndarray
     coverage: np.ndarray
     boxes: list
+    walls: dict = field(default_factory=dict)
+
+
+def label_point(corners: np.ndarray) -> tuple[float, float]:
+    """A point inside a polygon (K, 2) m where its name goes (shapely's representative point)."""
+    from shapely.geometry import Polygon as SPolygon
+
+    p = SPolygon(np.asarray(corners, float)).representative_point()
+    return float(p.x), float(p.y)
 
 
 def coverage_slices(view: SceneView, positions: np.ndarray, is_surface: np.ndarray,
@@ -101,7 +117,7 @@ def coverage_slices(view: SceneView, positions: np.ndarray, is_surface: np.ndarr
         grid[iy[m], ix[m]] = c[m]
         boxes = [(name, float(b[0][0]), float(b[0][1]), float(b[1][0]), float(b[1][1]))
                  for name, b in view.boxes.items() if b[0][2] <= h <= b[1][2]]
-        out.append(CoverageSlice(float(h), xs, ys, grid, boxes))
+        out.append(CoverageSlice(float(h), xs, ys, grid, boxes, plan_cut(view.walls, float(h))[0]))
     return out
 
 
@@ -122,7 +138,7 @@ def slice_figures_png(slices: list[CoverageSlice], view: SceneView, cameras: lis
     change between slices: several times faster than a figure per slice."""
     from matplotlib.colors import BoundaryNorm, ListedColormap
     from matplotlib.figure import Figure
-    from matplotlib.patches import Patch, Polygon, Rectangle
+    from matplotlib.patches import Patch, PathPatch, Polygon, Rectangle
 
     if not slices:
         return []
@@ -143,6 +159,11 @@ def slice_figures_png(slices: list[CoverageSlice], view: SceneView, cameras: lis
         ax.add_patch(Polygon(corners, closed=True, fill=False, zorder=2.5, **style))
         if kind not in [h.get_label() for h in area_handles]:
             area_handles.append(Patch(fill=False, label=kind, **style))
+    for name, corners in view.zones:  # rooms: thin green outline, name in italics
+        ax.add_patch(Polygon(corners, closed=True, fill=False, edgecolor="#1b7837", linewidth=0.7, zorder=2.4))
+        ax.text(*label_point(corners), name, fontsize=7, color="#1b7837", style="italic", ha="center", va="center",
+                zorder=3.5, bbox={"facecolor": "white", "edgecolor": "none", "alpha": 0.6, "pad": 0.4})
+    wall_colours = label_colours([k for sl in slices for k in sl.walls])
     if cameras:
         pos = np.array([c["position"] for c in cameras], float)
         fwd = np.array([np.asarray(c["rotation"], float)[:2, 2] for c in cameras])
@@ -164,9 +185,12 @@ def slice_figures_png(slices: list[CoverageSlice], view: SceneView, cameras: lis
         im.set_data(np.ma.masked_invalid(cls))
         boxes = [ax.add_patch(Rectangle((x0, y0), x1 - x0, y1 - y0, facecolor="#bdbdbd", edgecolor="#555555",
                                         hatch="//", linewidth=0.8, zorder=2)) for _, x0, y0, x1, y1 in sl.boxes]
+        paths = [(k, mpl_path(g)) for k, g in sl.walls.items()]
+        boxes += [ax.add_patch(PathPatch(p, facecolor=wall_colours[k], edgecolor="black", linewidth=0.3, zorder=2.2))
+                  for k, p in paths if p is not None]
         counts = np.bincount(cls[~np.isnan(cls)].astype(np.int64), minlength=4)
         ax.legend(handles=[Patch(color=c, label=f"{lab}: {n}") for (lab, c), n in zip(COVERAGE_CLASSES, counts)]
-                  + area_handles,
+                  + area_handles + [Patch(facecolor=wall_colours[k], edgecolor="black", label=k) for k in sl.walls],
                   title="cameras seeing", loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8, title_fontsize=8)
         ax.set_title(f"{view.name}: coverage at z = {sl.height:.2f} m")
         out.append(_png(fig))

@@ -119,12 +119,16 @@ def site_areas(scene) -> list[tuple[str, str, np.ndarray]]:
 
 
 def free_floor(scene, height: float):
-    """The footprint less the box obstacles that cross ``height`` m (a shapely geometry)."""
+    """The footprint less the box and prism obstacles (imported walls) that cross
+    ``height`` m (a shapely geometry)."""
     from shapely.geometry import box
+
+    from camplace.outputs.walls import plan_cut, scene_walls
 
     occluding = {o.name for o in scene.spec.obstacles if o.occludes}
     cut = [box(b0[0], b0[1], b1[0], b1[1]) for name, (b0, b1) in scene.boxes.items()
            if name in occluding and b0[2] <= height <= b1[2]]
+    cut += list(plan_cut(scene_walls(scene), height)[0].values())
     return scene.polygon.difference(shapely.union_all(cut)) if cut else scene.polygon
 
 

@@ -1,6 +1,8 @@
 """plan.dxf (ezdxf): the floor plan for CAD, in metres (1 drawing unit = 1 m).
 
-Layers: CAMPLACE-WALLS (footprint and obstacle outlines, obstacle names), CAMPLACE-ZONES
+Layers: CAMPLACE-WALLS (footprint and box obstacle outlines, obstacle names; prism
+obstacles such as imported walls as the outlines of their plan cut at the working
+height, camplace.outputs.walls), CAMPLACE-ZONES
 (the scene's volume zones: their polygons, closed, with their names; target regions of
 ``targets:`` as the outline of their targets at the working height), CAMPLACE-ZONES-PRIVACY
 (privacy zones), CAMPLACE-MOUNT-FORBID / CAMPLACE-MOUNT-ALLOW (mount_rules polygons),
@@ -26,6 +28,7 @@ import numpy as np
 
 from camplace.core.files import atomic_write_bytes
 from camplace.outputs.plan_data import PlanData, camera_id
+from camplace.outputs.walls import plan_cut, rings, scene_walls
 from camplace.visibility.viewshed import DORI_LEVELS
 
 BLOCK = "CAMPLACE_CAMERA"
@@ -75,10 +78,7 @@ class PlanFrame:
 
 def _rings(geom):
     """Exterior and interior rings ((K, 2) arrays) of every polygon of a shapely geometry."""
-    for poly in getattr(geom, "geoms", [geom]):
-        if poly.is_empty or poly.geom_type != "Polygon":
-            continue
-        yield np.asarray(poly.exterior.coords)[:, :2], [np.asarray(r.coords)[:, :2] for r in poly.interiors]
+    return rings(geom)
 
 
 def _camera_block(doc) -> None:
@@ -121,6 +121,7 @@ def _plan_doc(data: PlanData):
         msp.add_lwpolyline(f.xy([(b0[0], b0[1]), (b1[0], b0[1]), (b1[0], b1[1]), (b0[0], b1[1])]), close=True,
                            dxfattribs=walls)
         _text(msp, f, f"{name} ({b1[2]:.2f} m)", ((b0[0] + b1[0]) / 2, (b0[1] + b1[1]) / 2), 0.15, walls, True)
+    _walls(msp, f, data)
     _zones(msp, f, data)
     for vs in data.shed:
         for ext, holes in _rings(vs.polygon):
@@ -141,6 +142,16 @@ def _plan_doc(data: PlanData):
                               "STATUS": "existing" if c.get("existing") else "new"})
         _text(msp, f, mark, (c["position"][0] - 0.45, c["position"][1] + 0.2), 0.2, {"layer": layer})
     return doc
+
+
+def _walls(msp, f: PlanFrame, data: PlanData) -> None:
+    """The prism obstacles (imported walls, ...) on CAMPLACE-WALLS: per provenance label,
+    the outline (rings, holes too) of those crossing the working height or below it."""
+    cut, below = plan_cut(scene_walls(data.scene), data.height)
+    for geom in [*cut.values(), *below.values()]:
+        for ext, holes in _rings(geom):
+            for ring in [ext, *holes]:
+                msp.add_lwpolyline(f.xy(ring[:-1]), close=True, dxfattribs={"layer": "CAMPLACE-WALLS"})
 
 
 def _text(msp, f: PlanFrame, text: str, xy, height: float, attribs: dict, centred: bool = False) -> None:

@@ -23,6 +23,7 @@ import numpy as np
 from camplace.core.files import atomic_write_bytes
 from camplace.outputs.figures import AREA_STYLES, COVERAGE_CLASSES, SceneView, coverage_slices
 from camplace.outputs.plan_data import DORI_COLOURS, PAPERS_MM, SCHEDULE_HEAD, PlanData
+from camplace.outputs.walls import label_colours, mpl_path, plan_cut, scene_walls
 from camplace.visibility.viewshed import DORI_LEVELS
 
 MM = 1.0 / 25.4  # inches per millimetre
@@ -55,17 +56,7 @@ def plan_scale(extent_m: tuple[float, float], area_mm: tuple[float, float]) -> i
 
 def geom_path(geom):
     """A matplotlib Path of a shapely (Multi)Polygon, holes kept (exteriors counter-clockwise)."""
-    from matplotlib.path import Path as MPath
-    from shapely.geometry.polygon import orient
-
-    paths = []
-    for poly in getattr(geom, "geoms", [geom]):
-        if poly.is_empty or poly.geom_type != "Polygon":
-            continue
-        poly = orient(poly, 1.0)
-        for ring in [poly.exterior, *poly.interiors]:
-            paths.append(MPath(np.asarray(ring.coords), closed=True))
-    return MPath.make_compound_path(*paths) if paths else None
+    return mpl_path(geom)
 
 
 def _figure(paper: str):
@@ -140,6 +131,24 @@ def _arrow_patch(fig, x: float, y: float, length: float):
 
     return FancyArrow(x, y, 0, length, width=0.004, head_width=0.018, head_length=length * 0.35,
                       transform=fig.transFigure, color="black", length_includes_head=True)
+
+
+def _draw_walls(ax, data: PlanData) -> dict[str, str]:
+    """The prism obstacles (imported walls, ...) cut at the working height: crossing it
+    filled by label, wholly below it in outline; returns label -> colour (legend)."""
+    from matplotlib.patches import PathPatch
+
+    cut, below = plan_cut(scene_walls(data.scene), data.height)
+    colours = label_colours([*cut, *below])
+    for label, geom in below.items():
+        path = mpl_path(geom)
+        if path is not None:
+            ax.add_patch(PathPatch(path, facecolor="none", edgecolor=colours[label], linewidth=0.6, zorder=3.6))
+    for label, geom in cut.items():
+        path = mpl_path(geom)
+        if path is not None:
+            ax.add_patch(PathPatch(path, facecolor=colours[label], edgecolor="black", linewidth=0.4, zorder=4.5))
+    return {k: colours[k] for k in [*cut, *below]}
 
 
 def _draw_room(ax, data: PlanData, n: int) -> None:
@@ -221,20 +230,23 @@ def _draw_areas(ax, data: PlanData) -> list[str]:
         style = PLAN_AREAS[kind]
         ax.add_patch(MPolygon(corners, closed=True, fill=False, zorder=3, **style))
         x, y = Polygon(corners).representative_point().coords[0]
-        ax.text(x, y, name, fontsize=5.5, ha="center", va="center", color=style["edgecolor"], style="italic",
+        ax.text(x, y, name, fontsize=7, ha="center", va="center", color=style["edgecolor"], style="italic",
                 zorder=6, bbox={"facecolor": "white", "edgecolor": "none", "alpha": 0.7, "pad": 0.5})
         kinds += [kind] if kind not in kinds else []
     return kinds
 
 
-def _legend(fig, data: PlanData, kinds: list[str]) -> None:
+def _legend(fig, data: PlanData, kinds: list[str], walls: dict[str, str] | None = None) -> None:
     from matplotlib.patches import Patch
 
     w, h = page_size_mm(data.paper)
     handles = [Patch(facecolor="#e3e3e3", label="seen, below detect"),
                *[Patch(facecolor=DORI_COLOURS[nm], alpha=0.75, label=f"{nm} \u2265 {v:g} px/m") for nm, v in DORI_LEVELS],
                Patch(facecolor="none", edgecolor=OUTLINE, label="one camera's viewshed (outline)"),
-               Patch(facecolor="#c8c8c8", hatch="///", edgecolor="#444444", label="obstacle (top height)"),
+               *([Patch(facecolor="#c8c8c8", hatch="///", edgecolor="#444444", label="obstacle (top height)")]
+                 if data.scene.boxes or not walls else []),
+               *[Patch(facecolor=c, edgecolor="black", label=f"{k} (cut at {data.height:.2f} m)")
+                 for k, c in (walls or {}).items()],
                Patch(facecolor="white", edgecolor=OUTLINE, label="new camera (mark, facing yaw)"),
                *([Patch(facecolor="white", edgecolor=EXISTING, label="existing camera")]
                  if any(c.get("existing") for c in data.cameras) else []),
@@ -258,12 +270,13 @@ def _plan_figure(data: PlanData):
     fig._camplace_paper = data.paper
     ax, n, (lo, hi) = _plan_axes(fig, data)
     _draw_room(ax, data, n)
+    walls = _draw_walls(ax, data)
     _draw_viewsheds(ax, data)
     kinds = _draw_areas(ax, data)
     _draw_cameras(ax, data, n)
     _scale_bar(ax, n, lo)
     _north_arrow(fig, data)
-    _legend(fig, data, kinds)
+    _legend(fig, data, kinds, walls)
     w, h = page_size_mm(data.paper)
     if data.skipped:
         fig.text((w - MARGIN_MM - SIDE_MM + 6) / w, (MARGIN_MM + 80.0) / h, f"{data.skipped} viewsheds not computed "

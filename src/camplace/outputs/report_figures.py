@@ -11,7 +11,9 @@ import html
 
 import numpy as np
 
-from camplace.outputs.figures import COVERAGE_CLASSES, REGION_COLOURS, CoverageSlice, SceneView, coverage_class
+from camplace.outputs.figures import (COVERAGE_CLASSES, REGION_COLOURS, CoverageSlice, SceneView, coverage_class,
+                                      label_point)
+from camplace.outputs.walls import label_colours, svg_path
 
 MAX_POINTS = 60_000  # target markers drawn in the 3D view at most (uniform subsample above)
 
@@ -210,13 +212,22 @@ def slice_figure(sl: CoverageSlice, view: SceneView, cameras: list[dict]) -> dic
     for _, x0, y0, x1, y1 in sl.boxes:
         shapes.append({"type": "rect", "x0": x0, "y0": y0, "x1": x1, "y1": y1, "fillcolor": "#9e9e9e",
                        "opacity": 0.8, "line": {"color": "#424242", "width": 1}, "layer": "below"})
+    colours = label_colours(sl.walls)
+    for label, geom in sl.walls.items():  # imported walls (prisms) cut at this height, by provenance label
+        shapes.append({"type": "path", "path": svg_path(geom), "fillcolor": colours[label], "fillrule": "evenodd",
+                       "opacity": 0.9, "line": {"color": "#000000", "width": 0.5}, "name": label})
+    for name, corners in view.zones:  # rooms: outline and name
+        shapes.append({"type": "path", "path": "M " + " L ".join(f"{x:.3f},{y:.3f}" for x, y in corners) + " Z",
+                       "line": {"color": "#1b7837", "width": 1}, "name": name})
+    annotations = [{"x": x, "y": y, "text": f"<i>{html.escape(name)}</i>", "showarrow": False,
+                    "font": {"size": 10, "color": "#1b7837"}} for name, c in view.zones for x, y in [label_point(c)]]
     w, h = np.ptp(fp[:, 0]), np.ptp(fp[:, 1])
     layout = {"title": {"text": f"coverage at z = {sl.height:.2f} m", "font": {"size": 14}, "x": 0.01,
                         "xanchor": "left"},
               "height": int(np.clip(80 + 520 * h / max(w, 1e-9), 260, 760)), "margin": {"l": 50, "r": 10, "t": 40, "b": 40},
               "xaxis": {"title": {"text": "x (m)"}, "constrain": "domain"},
               "yaxis": {"title": {"text": "y (m)"}, "scaleanchor": "x", "scaleratio": 1, "constrain": "domain"},
-              "shapes": shapes, "plot_bgcolor": "#ffffff"}
+              "shapes": shapes, "annotations": annotations, "plot_bgcolor": "#ffffff"}
     return {"data": data, "layout": layout}
 
 
