@@ -56,10 +56,15 @@
     S.chain = S.chain.then(async () => {
       const t0 = performance.now();
       const st = await api(method, path, body);
-      if (!st) { render(); return null; }
+      if (!st) {
+        render();
+        perf.last = { method, path: path.split("?")[0], ok: false, dom_ms: performance.now() - t0, frame_ms: null, server_ms: null };
+        perf.count += 1;
+        return null;
+      }
       applyState(st);
       const t1 = performance.now();
-      const rec = { method, path: path.split("?")[0], dom_ms: t1 - t0, frame_ms: null, server_ms: st.timing_ms ? st.timing_ms.total : null };
+      const rec = { method, path: path.split("?")[0], ok: true, dom_ms: t1 - t0, frame_ms: null, server_ms: st.timing_ms ? st.timing_ms.total : null };
       await new Promise((r) => requestAnimationFrame(() => { rec.frame_ms = performance.now() - t0; r(); }));
       perf.last = rec; perf.changes.push(rec); perf.count += 1;
       showTiming(st, rec);
