@@ -61,6 +61,8 @@ def _known(body: dict, keys: tuple[str, ...]) -> None:
 def camera_change(body: dict) -> dict:
     """PUT /api/cameras/{id}: any of position, yaw_deg, pitch_deg, roll_deg, camera, locked, snap."""
     _known(body, CAMERA_KEYS)
+    if not body:
+        raise ApiError(f"body: expected at least one of {', '.join(CAMERA_KEYS)}", "body")
     out: dict = {}
     if "position" in body:
         out["position"] = position(body["position"], allow_xy=True)
