@@ -97,14 +97,16 @@
   const fmt = (v, d) => (typeof v === "number" && isFinite(v) ? v.toFixed(d) : "–");
   const wrapDeg = (a) => { a = ((a + 180) % 360 + 360) % 360 - 180; return a; };
 
-  function covColour(v) {
-    const g = S.gamma;
+  function covColour(v, need) {
+    const g = need || S.gamma;
     if (v <= 0) return "#ef4444";
     if (v >= g) return "#22c55e";
     const t = v / g; // amber → yellow-green
     const r = Math.round(245 - 120 * t), gg = Math.round(158 + 40 * t), b = Math.round(11 + 40 * t);
     return "rgb(" + r + "," + gg + "," + b + ")";
   }
+
+  const gammaAt = (i) => (S.scene.targets_gamma ? S.scene.targets_gamma[i] : 0) || S.gamma;
 
   function worldFromEvent(e) {
     const svg = $("plan");
@@ -142,27 +144,22 @@
     }, gc));
     for (const z of sc.zones || []) {
       el("polygon", { points: pts(z.polygon), class: "zone" }, $("g-zones"));
-      const c = centroid(z.polygon);
-      el("text", { x: c[0], y: -c[1], class: "zone-label", "text-anchor": "middle" }, $("g-zones")).textContent = z.name;
+      const b = bboxOf(z.polygon);
+      const t = el("text", { x: b[0] + 0.12, y: -b[3] + 0.32, class: "zone-label" }, $("g-zones"));
+      t.textContent = z.name;
     }
     for (const z of sc.privacy || []) {
       el("polygon", { points: pts(z.polygon), class: "privacy" }, $("g-zones"));
-      const c = centroid(z.polygon);
-      el("text", { x: c[0], y: -c[1], class: "zone-label", "text-anchor": "middle", fill: "#6d28d9" }, $("g-zones")).textContent = z.name + " (private)";
+      label(z.polygon, z.name + " (private)", "zone-label privacy-label", $("g-zones"));
     }
     for (const r of sc.mount_rules || []) {
       el("polygon", { points: pts(r.polygon), class: "mount-rule " + (r.kind === "forbid" ? "forbid" : "allow") }, $("g-zones"));
-      const c = centroid(r.polygon);
-      el("text", { x: c[0], y: -c[1] - 0.3, class: "zone-label rule-label", "text-anchor": "middle" }, $("g-zones")).textContent = (r.kind === "forbid" ? "no mounts: " : "mounts: ") + (r.name || "");
+      label(r.polygon, (r.kind === "forbid" ? "no mounts" : "mounts") + (r.name ? ": " + r.name : ""), "zone-label rule-label", $("g-zones"), -0.3);
     }
     for (const o of sc.obstacles || []) {
       const tall = (o.zmax || 0) >= 1.5;
       el("polygon", { points: pts(o.polygon), class: "obstacle" + (tall ? "" : " low") }, $("g-obstacles"));
-      const c = centroid(o.polygon);
-      const t = el("text", { x: c[0], y: -c[1] + 0.09, class: "label", "text-anchor": "middle" }, $("g-obstacles"));
-      t.textContent = o.name;
-      const w = bboxOf(o.polygon);
-      if (w[1] - w[0] < 1.2 && w[3] - w[2] > 1.5) t.setAttribute("transform", "rotate(-90 " + c[0] + " " + (-c[1]) + ")");
+      label(o.polygon, o.name, "label", $("g-obstacles"));
     }
     for (const mt of sc.mounts || []) el("circle", { cx: mt[0], cy: -mt[1], r: 0.04, class: "mount" }, $("g-mounts"));
     $("g-mounts").classList.add("hidden");
@@ -193,7 +190,18 @@
     for (const t of S.scene.camera_types || []) item(colourOf(t.name), t.name);
     item("#ef4444", "unseen");
     item(covColour(Math.max(1, S.gamma - 1)), "partly");
-    item("#22c55e", "≥ " + S.gamma + " views");
+    item("#22c55e", S.scene.targets_gamma ? "≥ Γ views" : "≥ " + S.gamma + " views");
+  }
+
+  /* A polygon's name at its centre: turned along a tall narrow shape, left out when it fits neither way. */
+  function label(poly, text, cls, group, dy) {
+    const c = centroid(poly), b = bboxOf(poly);
+    const w = b[1] - b[0], h = b[3] - b[2], len = text.length * 0.15;
+    const t = el("text", { x: c[0], y: -c[1] + (dy || 0.09), class: cls, "text-anchor": "middle" }, group);
+    t.textContent = text;
+    if (len > w && h > w && len <= h * 1.05) t.setAttribute("transform", "rotate(-90 " + c[0] + " " + (-c[1]) + ")");
+    else if (len > w * 1.05 && (h < 0.3 || len > h * 1.05)) t.remove();
+    return t;
   }
 
   function centroid(poly) {
@@ -238,7 +246,7 @@
     for (let i = 0; i < S.covRects.length; i++) {
       const v = cov[i] || 0;
       if (old && old === cov) break;
-      if (!old || old[i] !== v || !S.covDrawn) S.covRects[i].setAttribute("fill", covColour(v));
+      if (!old || old[i] !== v || !S.covDrawn) S.covRects[i].setAttribute("fill", covColour(v, gammaAt(i)));
     }
     S.covDrawn = true;
   }
@@ -391,8 +399,8 @@
       $("ed-" + k + "-v").textContent = fmt(c[key] || 0, 1) + "°";
     }
     $("ed-type").disabled = fixed(c);
-    $("ed-pos").textContent = "position " + c.position.map((v) => fmt(v, 2)).join(", ") + " m" +
-      (c.candidate_id != null ? " · candidate " + c.candidate_id : " · off the grid") +
+    $("ed-pos").textContent = "at " + c.position.map((v) => fmt(v, 2)).join(", ") + " m" +
+      (c.candidate_id != null ? " · cand. " + c.candidate_id : " · off the grid") +
       (typeof c.targets_seen === "number" ? " · sees " + c.targets_seen + " targets" : "") +
       (c.existing ? " · existing camera" : c.locked ? " · locked (unlock to edit)" : "");
   }
@@ -706,7 +714,7 @@
     if (st && st.coverage_floor && $("show-coverage").checked) {
       const h = (sc.target_cell_m || 0.25) / 2;
       (sc.targets_xy || []).forEach((p, i) => {
-        poly([[p[0] - h, p[1] - h, 0], [p[0] + h, p[1] - h, 0], [p[0] + h, p[1] + h, 0], [p[0] - h, p[1] + h, 0]], covColour(st.coverage_floor[i] || 0));
+        poly([[p[0] - h, p[1] - h, 0], [p[0] + h, p[1] - h, 0], [p[0] + h, p[1] + h, 0], [p[0] - h, p[1] + h, 0]], covColour(st.coverage_floor[i] || 0, gammaAt(i)));
       });
     }
     // obstacle faces, far to near
@@ -732,7 +740,7 @@
       const dn0 = [fw[1] * rt0[2] - fw[2] * rt0[1], fw[2] * rt0[0] - fw[0] * rt0[2], fw[0] * rt0[1] - fw[1] * rt0[0]];
       const rt = rt0.map((v, i) => v * Math.cos(r) + dn0[i] * Math.sin(r));
       const dn = dn0.map((v, i) => v * Math.cos(r) - rt0[i] * Math.sin(r));
-      const L = c.id === S.sel ? 2.0 : 1.0, th = Math.tan(t.hfov_deg * Math.PI / 360), tv = Math.tan(t.vfov_deg * Math.PI / 360);
+      const L = c.id === S.sel ? 2.0 : 1.0, th = Math.tan(Math.min(t.hfov_deg, 150) * Math.PI / 360), tv = Math.tan(Math.min(t.vfov_deg, 150) * Math.PI / 360);
       const o = c.position;
       const corner = (sx, sy) => o.map((v, i) => v + L * (fw[i] + sx * th * rt[i] + sy * tv * dn[i]));
       const cs = [corner(-1, -1), corner(1, -1), corner(1, 1), corner(-1, 1)];
