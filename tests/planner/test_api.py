@@ -194,3 +194,37 @@ def test_serve_command_builds_the_app_without_starting_it(demo_dir):
     with TestClient(app, base_url="http://localhost:8770") as c:
         assert c.get("/api/state").status_code == 401
         assert c.get(f"/api/state?token={token}").json()["n_cameras"] == len(session.cams)
+
+
+def test_camplace_serve_prints_the_url_serves_and_stops_on_ctrl_c(demo_dir):
+    import signal
+    import socket
+    import subprocess
+    import sys
+    import time
+
+    import httpx
+
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        port = s.getsockname()[1]
+    proc = subprocess.Popen([sys.executable, "-c", "from camplace.cli import main; main()", "serve", str(demo_dir), "--port", str(port),
+                             "--no-browser"], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        url = proc.stdout.readline().strip()
+        assert url.startswith(f"http://127.0.0.1:{port}/?token="), (url, proc.stderr.read() if proc.poll() else "")
+        token = url.split("token=")[1]
+        for _ in range(100):  # uvicorn starts after the URL is printed
+            try:
+                r = httpx.get(f"http://127.0.0.1:{port}/api/state", headers={"X-Camplace-Token": token}, timeout=5)
+                break
+            except httpx.TransportError:
+                time.sleep(0.1)
+        assert r.status_code == 200 and r.json()["cameras"]
+        assert httpx.get(f"http://127.0.0.1:{port}/api/state", timeout=5).status_code == 401
+        proc.send_signal(signal.SIGINT)
+        assert proc.wait(timeout=20) == 0
+        assert "Traceback" not in proc.stderr.read()
+    finally:
+        if proc.poll() is None:
+            proc.kill()

@@ -18,9 +18,25 @@ def planner_app(target: str, scene: Optional[str], host: str, port: int, progres
 
     session = Session(open_start(target, scene, root=None, progress=progress))
     token = new_token()
-    hosts = {f"127.0.0.1:{port}", f"localhost:{port}", f"{host}:{port}", f"[::1]:{port}"}
+    names = {"127.0.0.1", "localhost", host, "[::1]"}
+    hosts = {f"{h}:{port}" for h in names} | (names if port == 80 else set())  # port 80: browsers omit it
     url = f"http://{'127.0.0.1' if host in ('0.0.0.0', '127.0.0.1') else host}:{port}/?token={token}"
     return create_app(session, token, hosts, port), url, session
+
+
+def check_port(host: str, port: int) -> None:
+    """InputError when ``host:port`` cannot be bound (in use, or not an address of this machine)."""
+    import socket
+
+    from camplace.core.errors import InputError
+
+    try:
+        with socket.socket(socket.AF_INET6 if ":" in host else socket.AF_INET) as s:
+            s.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+            s.bind((host, port))
+    except OSError as err:
+        raise InputError(f"--port {port}: cannot listen on {host}:{port} ({err.strerror or err}); choose another "
+                         f"--port or --host") from None
 
 
 def serve(target: str = typer.Argument(..., help="A run folder (with placement.json) or a scene (YAML file or "
@@ -35,6 +51,7 @@ def serve(target: str = typer.Argument(..., help="A run folder (with placement.j
     evaluate would. Prints the page's URL (with its token); Ctrl-C stops the server."""
     import uvicorn
 
+    check_port(host, port)
     with progress_bars() as prog:
         app, url, session = planner_app(target, scene, host, port, RichProgress(prog))
     console.print(f"camplace planner: {session.scene.name}, {len(session.cams)} cameras; saves under "
@@ -48,7 +65,7 @@ def serve(target: str = typer.Argument(..., help="A run folder (with placement.j
         except Exception:  # noqa: BLE001 - no browser here: the URL is printed
             pass
     try:
-        uvicorn.run(app, host=host, port=port, log_level="warning")
+        uvicorn.run(app, host=host, port=port, log_level="warning", timeout_graceful_shutdown=2)
     except KeyboardInterrupt:
         pass
     console.print("camplace planner: stopped")
