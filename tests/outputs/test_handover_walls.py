@@ -129,3 +129,28 @@ def test_report_slices_draw_walls_and_room_names(dxf_run):
     names = [s.get("name") for s in fig["layout"]["shapes"]]
     assert "A-WALL" in names and {"Office", "Lab"} <= set(names)
     assert {a["text"] for a in fig["layout"]["annotations"]} == {"<i>Office</i>", "<i>Lab</i>"}
+
+
+def test_prism_mesh_is_closed_with_the_prism_volume():
+    trimesh = pytest.importorskip("trimesh")
+    from camplace.outputs.walls import Wall, prism_mesh
+
+    ring = Polygon([(0, 0), (0, 4), (4, 4), (4, 0)], [[(1, 1), (3, 1), (3, 3), (1, 3)]])  # clockwise outside
+    v, t = prism_mesh(Wall("w", "IfcWall", ring, -0.5, 2.0), height=1.5)  # clipped to the room: 0..1.5 m
+    m = trimesh.Trimesh(v, t)
+    m.merge_vertices()
+    assert m.is_watertight and m.is_winding_consistent and m.volume == pytest.approx(12 * 1.5)
+    assert prism_mesh(Wall("w", "x", ring, 2.0, 3.0), height=1.5)[1].shape == (0, 3)  # above the ceiling
+
+
+def test_report_3d_view_has_the_walls_by_label(dxf_run):
+    from camplace.outputs.figures import SceneView
+    from camplace.outputs.report_figures import view3d_figure
+
+    _, r, _ = dxf_run
+    t = r.visibility.targets
+    n = len(t.positions)
+    fig, _ = view3d_figure(SceneView.from_scene(r.scene), t.positions, np.zeros(n), np.ones(n, int), t.region_ids,
+                           t.region_names, [])
+    walls = [d for d in fig["data"] if d.get("name") == "A-WALL"]
+    assert len(walls) == 1 and walls[0]["type"] == "mesh3d" and max(walls[0]["z"]) == pytest.approx(r.scene.height)

@@ -13,7 +13,7 @@ import numpy as np
 
 from camplace.outputs.figures import (COVERAGE_CLASSES, REGION_COLOURS, CoverageSlice, SceneView, coverage_class,
                                       label_point)
-from camplace.outputs.walls import label_colours, svg_path
+from camplace.outputs.walls import label_colours, prism_mesh, svg_path
 
 MAX_POINTS = 60_000  # target markers drawn in the 3D view at most (uniform subsample above)
 
@@ -61,9 +61,30 @@ def _box_corners(bmin, bmax, height: float) -> np.ndarray:
                      [x0, y0, z1], [x1, y0, z1], [x1, y1, z1], [x0, y1, z1]])
 
 
+def _wall_traces(view: SceneView) -> list[dict]:
+    """One mesh3d per provenance label of the prism obstacles (imported walls, ...)."""
+    groups: dict[str, tuple[list, list]] = {}
+    for w in view.walls:
+        v, t = prism_mesh(w, view.height)
+        vs, ts = groups.setdefault(w.label, ([], []))
+        ts.append(t + sum(len(a) for a in vs))
+        vs.append(v)
+    colours = label_colours(groups)
+    out = []
+    for label, (vs, ts) in groups.items():
+        v, t = np.vstack(vs), np.vstack(ts)
+        if not len(t):
+            continue
+        out.append({"type": "mesh3d", "x": _r(v[:, 0]), "y": _r(v[:, 1]), "z": _r(v[:, 2]), "i": t[:, 0].tolist(),
+                    "j": t[:, 1].tolist(), "k": t[:, 2].tolist(), "color": colours[label], "opacity": 0.3,
+                    "flatshading": True, "name": label, "showlegend": True,
+                    "hovertemplate": f"{html.escape(label)}<extra>wall</extra>"})
+    return out
+
+
 def _obstacle_traces(view: SceneView) -> list[dict]:
     if not view.boxes:
-        return []
+        return _wall_traces(view)
     verts, tris, names = [], [], []
     ex, ey, ez = [], [], []
     for k, (name, (bmin, bmax)) in enumerate(view.boxes.items()):
@@ -82,7 +103,7 @@ def _obstacle_traces(view: SceneView) -> list[dict]:
             "hovertemplate": "%{text}<extra>obstacle</extra>"}
     edges = {"type": "scatter3d", "mode": "lines", "x": _r(ex), "y": _r(ey), "z": _r(ez), "name": "obstacle edges",
              "line": {"color": "#5d4037", "width": 2}, "hoverinfo": "skip", "showlegend": False}
-    return [mesh, edges]
+    return [mesh, edges, *_wall_traces(view)]
 
 
 def _target_traces(positions: np.ndarray, coverage: np.ndarray, gamma: np.ndarray, region_ids: np.ndarray,
@@ -220,7 +241,7 @@ def slice_figure(sl: CoverageSlice, view: SceneView, cameras: list[dict]) -> dic
         shapes.append({"type": "path", "path": "M " + " L ".join(f"{x:.3f},{y:.3f}" for x, y in corners) + " Z",
                        "line": {"color": "#1b7837", "width": 1}, "name": name})
     annotations = [{"x": x, "y": y, "text": f"<i>{html.escape(name)}</i>", "showarrow": False,
-                    "font": {"size": 10, "color": "#1b7837"}} for name, c in view.zones for x, y in [label_point(c)]]
+                    "font": {"size": 10, "color": "#1b7837"}, "bgcolor": "rgba(255,255,255,0.75)"} for name, c in view.zones for x, y in [label_point(c)]]
     w, h = np.ptp(fp[:, 0]), np.ptp(fp[:, 1])
     layout = {"title": {"text": f"coverage at z = {sl.height:.2f} m", "font": {"size": 14}, "x": 0.01,
                         "xanchor": "left"},

@@ -15,6 +15,7 @@ from dataclasses import dataclass
 import numpy as np
 import shapely
 from shapely.geometry import Polygon
+from shapely.geometry.polygon import orient
 
 WALL_COLOUR = "#4d4d4d"
 LABEL_COLOURS = {"window": "#9ecae1", "door": "#d9b38c", "column": "#252525", "slab": "#bdbdbd",
@@ -113,7 +114,6 @@ def svg_path(geom, digits: int = 3) -> str:
 def mpl_path(geom):
     """A matplotlib Path of a shapely (Multi)Polygon, holes kept (exteriors counter-clockwise)."""
     from matplotlib.path import Path as MPath
-    from shapely.geometry.polygon import orient
 
     paths = []
     for poly in getattr(geom, "geoms", [geom]):
@@ -123,3 +123,33 @@ def mpl_path(geom):
         for ring in [poly.exterior, *poly.interiors]:
             paths.append(MPath(np.asarray(ring.coords), closed=True))
     return MPath.make_compound_path(*paths) if paths else None
+
+
+def prism_mesh(wall: Wall, height: float) -> tuple[np.ndarray, np.ndarray]:
+    """A closed triangle mesh of one prism, z clipped to [0, height] m: vertices (V, 3),
+    triangles (T, 3) int (caps by constrained Delaunay, sides two triangles per edge)."""
+    z0, z1 = max(wall.zmin, 0.0), min(wall.zmax, height)
+    verts, tris = [], []
+    if z1 <= z0:
+        return np.zeros((0, 3)), np.zeros((0, 3), np.int64)
+    for poly in getattr(wall.shape, "geoms", [wall.shape]):
+        if poly.is_empty or poly.geom_type != "Polygon":
+            continue
+        poly = orient(poly, 1.0)  # exterior counter-clockwise: the sides face outwards
+        for tri in shapely.constrained_delaunay_triangles(poly).geoms:
+            xy = np.asarray(orient(tri, 1.0).exterior.coords, float)[:3, :2]
+            for z, order in ((z0, [0, 2, 1]), (z1, [0, 1, 2])):  # bottom faces down, top up
+                n = sum(len(v) for v in verts)
+                verts.append(np.column_stack([xy, np.full(3, z)]))
+                tris.append(np.array([order]) + n)
+        for ring in [poly.exterior, *poly.interiors]:
+            xy = np.asarray(ring.coords, float)[:, :2]
+            n = sum(len(v) for v in verts)
+            m = len(xy)
+            verts.append(np.vstack([np.column_stack([xy, np.full(m, z0)]), np.column_stack([xy, np.full(m, z1)])]))
+            k = np.arange(m - 1)
+            tris.append(np.vstack([np.column_stack([n + k, n + k + 1, n + m + k + 1]),
+                                   np.column_stack([n + k, n + m + k + 1, n + m + k])]))
+    if not verts:
+        return np.zeros((0, 3)), np.zeros((0, 3), np.int64)
+    return np.vstack(verts), np.vstack(tris).astype(np.int64)
