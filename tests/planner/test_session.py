@@ -152,3 +152,35 @@ def test_mount_rules_and_privacy_refuse_a_pose(tmp_path):
         s.update(c.id, {"position": [4.0, 2.0, 2.9], "yaw_deg": 0.0, "pitch_deg": 30.0})
     assert e.value.field == "position" and e.value.status == 409
     assert s.version == 0  # nothing changed
+
+
+def test_a_yaml_run_folder_with_an_existing_camera(tmp_path):
+    """A run folder of a YAML scene (found beside the folder) whose existing camera opens
+    locked, keeps its id, refuses changes and stays through an optimisation."""
+    import yaml
+
+    from camplace.outputs.write import write_outputs
+    from camplace.planner import optimize
+    from camplace.workflows.run import run
+
+    spec = dict(SITE, zones=[], mount_rules={}, name="yaml-site",
+                existing=[{"id": "old-1", "camera": "cam", "position": [0.5, 0.5, 2.9], "yaw_deg": 45.0,
+                           "pitch_deg": 40.0}])
+    (tmp_path / "site.yaml").write_text(yaml.safe_dump(spec))
+    r = run(tmp_path / "site.yaml")
+    out = tmp_path / "run"
+    write_outputs(out, r.scene.name, r.visibility, r.placement, r.problem.budget, r.metrics, r.timings_s,
+                  scene=r.scene, report=False)
+    s = Session(open_start(out))
+    assert s.opened.scene_ref == tmp_path / "site.yaml" and s.budget == 3 and len(s.cams) == 3
+    old = next(c for c in s.cams if c.existing)
+    assert old.id == "old-1" and old.locked
+    with pytest.raises(ApiError):
+        s.update("old-1", {"locked": False})
+    assert s.metrics.cost == pytest.approx(r.metrics.cost)
+    job = optimize.start(s, {"solver": "greedy", "time_limit_s": 10.0, "budget": 3})
+    job.thread.join(30)
+    assert job.events[-1][0] == "done", job.events[-1]
+    assert s.cams[0].id == "old-1" and np.array_equal(s.cams[0].position, old.position) and len(s.cams) == 3
+    assert s.metrics.cost <= r.metrics.cost + 1e-9  # greedy on the same grid with the same existing camera
+    assert np.array_equal(s.cov, full_coverage(s))
