@@ -165,7 +165,7 @@ def test_nan_bad_json_unknown_id_and_unknown_route(client):
     assert client.get("/api/nothing").status_code == 404 and "error" in client.get("/api/nothing").json()
     r = client.post("/api/cameras", json={"yaw_deg": 1})
     assert r.status_code == 400 and r.json()["field"] == "position"
-    for body, field in (({"solver": "nope"}, "solver"), ({"time_limit_s": -1}, "time_limit_s"),
+    for body, field in (({"solver": "nope"}, "solver"), ({"solver": "min-cameras"}, "solver"), ({"time_limit_s": -1}, "time_limit_s"),
                         ({"budget": 1.5}, "budget")):
         r = client.post("/api/optimize", json=body)
         assert r.status_code == 400 and r.json()["field"] == field
