@@ -77,8 +77,8 @@
     const t = st.timing_ms || {};
     const f = (v) => (typeof v === "number" ? v.toFixed(0) : "–");
     let s = "";
-    if (rec) s += "last change " + f(rec.frame_ms) + " ms in the page · ";
-    s += "server " + f(t.total) + " ms (raycast " + f(t.raycast) + ", metrics " + f(t.metrics) + ")";
+    if (rec) s += "last change " + f(rec.frame_ms) + " ms · ";
+    s += "server " + f(t.total) + " ms (raycast " + f(t.raycast) + (t.viewshed != null ? ", viewshed " + f(t.viewshed) : "") + ", metrics " + f(t.metrics) + ")";
     $("timing").textContent = s;
   }
 
@@ -251,26 +251,42 @@
     S.covDrawn = true;
   }
 
+  /* Cameras and viewsheds, redrawn only where a camera changed (or was previewed). */
   function drawCameras(st) {
     const gv = $("g-viewsheds"), gc = $("g-cameras");
-    gv.textContent = ""; gc.textContent = "";
-    const order = st.cameras.slice().sort((a, b) => (String(a.id) === String(S.sel)) - (String(b.id) === String(S.sel)));
-    for (const c of order) {
+    const els = S.camEls || (S.camEls = new Map());
+    const seen = new Set();
+    let selEls = null;
+    for (const c of st.cameras) {
+      const key = String(c.id);
+      const isSel = key === String(S.sel);
+      const vs = c.viewshed || [];
+      const sig = [c.position.join(","), c.yaw_deg, c.pitch_deg, c.roll_deg, c.camera, c.locked, c.existing, isSel,
+        vs.length, vs.length ? vs[0].join(",") + vs[vs.length >> 1].join(",") : ""].join("|");
+      seen.add(key);
+      let e = els.get(key);
+      if (e && e.sig === sig && S.previewed !== key) { if (isSel) selEls = e; continue; }
+      if (e) { if (e.vs) e.vs.remove(); e.g.remove(); }
+      e = { sig, vs: null, g: null };
       const col = colourOf(c.camera);
-      const isSel = String(c.id) === String(S.sel);
-      if (c.viewshed && c.viewshed.length > 2) {
-        el("polygon", { points: pts(c.viewshed), class: "viewshed" + (isSel ? " sel" : ""), fill: col, stroke: col, "data-id": c.id }, gv);
-      }
-      const g = el("g", { class: "cam" + (isSel ? " sel" : "") + (c.locked ? " locked" : ""), "data-id": c.id,
+      if (vs.length > 2) e.vs = el("polygon", { points: pts(vs), class: "viewshed" + (isSel ? " sel" : ""), fill: col, stroke: col, "data-id": key }, gv);
+      const g = el("g", { class: "cam" + (isSel ? " sel" : "") + (c.locked ? " locked" : ""), "data-id": key,
         transform: "translate(" + c.position[0].toFixed(3) + "," + (-c.position[1]).toFixed(3) + ")" }, gc);
       const yaw = c.yaw_deg * Math.PI / 180;
       el("line", { x1: 0, y1: 0, x2: (0.5 * Math.cos(yaw)).toFixed(3), y2: (-0.5 * Math.sin(yaw)).toFixed(3), class: "dir", stroke: col }, g);
       if (isSel) el("circle", { r: 0.3, class: "ring" }, g);
       if (fixed(c)) el("rect", { x: -0.16, y: -0.16, width: 0.32, height: 0.32, class: "body", fill: col }, g);
       else el("circle", { r: 0.17, class: "body", fill: col }, g);
-      const t = el("text", { x: 0.2, y: 0.36, class: "cam-label" }, g);
-      t.textContent = String(c.id);
+      el("text", { x: 0.2, y: 0.36, class: "cam-label" }, g).textContent = key;
+      e.g = g;
+      els.set(key, e);
+      if (isSel) selEls = e;
     }
+    for (const [key, e] of els) {
+      if (!seen.has(key)) { if (e.vs) e.vs.remove(); e.g.remove(); els.delete(key); }
+    }
+    if (selEls) { if (selEls.vs) gv.appendChild(selEls.vs); gc.appendChild(selEls.g); }  // selected on top
+    S.previewed = null;
     drawHandle();
   }
 
@@ -458,6 +474,7 @@
       const dx = w[0] - d.start[0], dy = w[1] - d.start[1];
       d.to = [d.c.position[0] + dx, d.c.position[1] + dy];
       if (d.g) d.g.setAttribute("transform", "translate(" + d.to[0] + "," + (-d.to[1]) + ")");
+      S.previewed = String(d.id);
       const vs = document.querySelector('#g-viewsheds polygon[data-id="' + d.id + '"]');
       if (vs) vs.setAttribute("transform", "translate(" + dx + "," + (-dy) + ")");
       $("g-handle").textContent = "";
@@ -470,6 +487,7 @@
   }
 
   function previewYaw(c, yaw) {
+    S.previewed = String(c.id);
     const g = document.querySelector('#g-cameras .cam[data-id="' + c.id + '"] line.dir');
     const r = yaw * Math.PI / 180;
     if (g) { g.setAttribute("x2", 0.5 * Math.cos(r)); g.setAttribute("y2", -0.5 * Math.sin(r)); }
