@@ -9,12 +9,13 @@ only when all of them are complete, so a failure leaves the previous set intact.
 
 from __future__ import annotations
 
-import io
+import contextlib
 import json
 import os
 import tempfile
 import weakref
 from pathlib import Path
+from typing import Iterator
 
 import numpy as np
 
@@ -22,7 +23,11 @@ import numpy as np
 def atomic_write_bytes(path: str | Path, data: bytes) -> Path:
     """Write data to a temporary file beside path (fsynced), then rename it over path."""
     path = Path(path)
-    tmp = _write_temp(path, data)
+    return _commit(_write_temp(path, data), path)
+
+
+def _commit(tmp: str, path: Path) -> Path:
+    """Rename the finished temporary file over path (deleted when that fails)."""
     try:
         os.replace(tmp, path)
     except BaseException:
@@ -40,18 +45,50 @@ def atomic_write_json(path: str | Path, obj: object) -> Path:
 
 
 def atomic_savez(path: str | Path, **arrays: np.ndarray) -> Path:
-    buf = io.BytesIO()
-    np.savez_compressed(buf, **arrays)
-    return atomic_write_bytes(path, buf.getvalue())
+    path = Path(path)
+    return _commit(_savez_temp(path, arrays), path)
 
 
-def _write_temp(path: Path, data: bytes) -> str:
-    """Write data to a new temporary file beside path (fsynced); returns its name."""
+def _savez_temp(path: Path, arrays: dict) -> str:
+    """np.savez_compressed streamed into a new temporary file beside path (fsynced; no
+    copy of the arrays or of the compressed bytes in memory); returns its name."""
+    return _write_temp(path, lambda f: np.savez_compressed(f, **arrays))
+
+
+@contextlib.contextmanager
+def atomic_npy_memmap(path: str | Path, dtype, shape: tuple[int, ...]) -> Iterator[np.ndarray]:
+    """A writable memory map of a new ``.npy`` file (``dtype``, ``shape``) on a temporary
+    name beside ``path``; leaving the ``with`` block normally flushes, fsyncs and renames
+    it over ``path``, an exception deletes it. For arrays too large to build in memory
+    (out-of-core V, camplace.visibility.cache)."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    os.close(fd)
+    try:
+        arr = np.lib.format.open_memmap(tmp, mode="w+", dtype=dtype, shape=tuple(int(n) for n in shape))
+        yield arr
+        arr.flush()
+        del arr
+        with open(tmp, "rb+") as f:
+            os.fsync(f.fileno())
+    except BaseException:
+        _unlink(tmp)
+        raise
+    _commit(tmp, path)
+
+
+def _write_temp(path: Path, data) -> str:
+    """Write data (bytes, or a function writing into the open binary file) to a new
+    temporary file beside path (fsynced); returns its name."""
     path.parent.mkdir(parents=True, exist_ok=True)
     fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
     try:
         with os.fdopen(fd, "wb") as f:
-            f.write(data)
+            if callable(data):
+                data(f)
+            else:
+                f.write(data)
             f.flush()
             os.fsync(f.fileno())
     except BaseException:
@@ -100,9 +137,9 @@ class AtomicBatch:
         return self.stage_text(path, json.dumps(obj, indent=2, sort_keys=False) + "\n")
 
     def stage_savez(self, path: str | Path, **arrays: np.ndarray) -> Path:
-        buf = io.BytesIO()
-        np.savez_compressed(buf, **arrays)
-        return self.stage_bytes(path, buf.getvalue())
+        path = Path(path)
+        self._staged.append((_savez_temp(path, arrays), path))
+        return path
 
     def commit(self) -> list[Path]:
         done = []

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import numba
 import numpy as np
 import scipy.sparse as sp
 
@@ -48,21 +49,37 @@ class Feasibility:
         return "; ".join(parts) if parts else "every target can reach its required coverage"
 
 
+@numba.njit(cache=True)
+def _seen_and_locations(indptr, indices, order, loc, n_p):
+    """((N_p,) candidates seeing each target, (N_p,) distinct locations seeing it): rows
+    visited in ``order`` (grouped by location ``loc``), O(N_p) memory beyond V."""
+    seen = np.zeros(n_p, np.int64)
+    n_loc = np.zeros(n_p, np.int64)
+    last = np.full(n_p, -1, np.int64)
+    for i in order:
+        L = loc[i]
+        for q in range(indptr[i], indptr[i + 1]):
+            j = indices[q]
+            seen[j] += 1
+            if last[j] != L:
+                last[j] = L
+                n_loc[j] += 1
+    return seen, n_loc
+
+
 def check_feasibility(V: sp.csr_matrix, gamma: np.ndarray, location_ids: np.ndarray,
                       region_ids: np.ndarray, region_names: tuple[str, ...]) -> Feasibility:
     """V: (N_g, N_p) CSR 0/1; gamma: (N_p,); location_ids: (N_g,); region_ids: (N_p,)."""
     n_g, n_p = V.shape
     gamma = np.asarray(gamma, np.int64)
-    seen = np.bincount(V.indices, minlength=n_p)[:n_p] if V.nnz else np.zeros(n_p, np.int64)
-    unseen = np.nonzero((gamma > 0) & (seen == 0))[0]
-    # distinct locations per target: (locations x candidates) @ V, counted with no duplicates
-    if n_g:
+    if n_g:  # distinct locations per target, one pass over V's rows grouped by location (no copy of V)
         _, loc = np.unique(np.asarray(location_ids), return_inverse=True)
-        A = sp.csr_matrix((np.ones(n_g, np.int64), (loc.ravel(), np.arange(n_g))), shape=(int(loc.max()) + 1, n_g))
-        M = (A @ V.astype(np.int64)).tocsc()
-        n_loc = np.diff(M.indptr)
+        loc = loc.astype(np.int64).ravel()
+        seen, n_loc = _seen_and_locations(np.asarray(V.indptr, np.int64), V.indices,
+                                          np.argsort(loc, kind="stable"), loc, n_p)
     else:
-        n_loc = np.zeros(n_p, np.int64)
+        seen = n_loc = np.zeros(n_p, np.int64)
+    unseen = np.nonzero((gamma > 0) & (seen == 0))[0]
     short = np.nonzero(n_loc < gamma)[0]
     by_region = {}
     for r, name in enumerate(region_names):
