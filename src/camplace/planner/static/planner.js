@@ -789,7 +789,7 @@
     const st = await api("GET", "/api/state");
     if (!st) return;
     applyState(st);
-    showTiming(st, null);
+    $("timing").textContent = "no change yet";
     if (st.busy) { $("opt-status").textContent = "an optimisation is running…"; follow("the solver"); }
     message("ready: drag a camera, turn it with its handle or the sliders; “Optimise the rest” keeps the locked ones");
     document.body.dataset.ready = "1";
