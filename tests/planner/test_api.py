@@ -174,6 +174,7 @@ def test_nan_bad_json_unknown_id_and_unknown_route(client):
 def test_add_delete_undo_redo_and_scene(client):
     sc = client.get("/api/scene").json()
     assert sc["name"] == "demo" and sc["mounts"] and sc["camera_types"][0]["hfov_deg"] > 0
+    assert len(sc["targets_gamma"]) == len(sc["targets_xy"]) and "min-cameras" not in sc["solvers"]
     n0 = len(client.get("/api/state").json()["cameras"])
     s = client.post("/api/cameras", json={"position": sc["mounts"][0][:2], "yaw_deg": 45}).json()
     assert len(s["cameras"]) == n0 + 1 and s["cameras"][-1]["viewshed"]

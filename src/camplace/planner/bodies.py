@@ -98,9 +98,10 @@ def optimize_request(body: dict, default_budget: int) -> dict:
         raise ApiError(f"solver: unknown solver {json.dumps(solver)[:40]}; expected one of "
                        f"{', '.join(sorted(SOLVERS))}", "solver")
     if SOLVERS[solver].tags.ignores_camera_budget:
-        fill = sorted(n for n, x in SOLVERS.items() if not x.tags.ignores_camera_budget)
+        from camplace.planner.sceneinfo import budget_solvers
+
         raise ApiError(f"solver: '{solver}' chooses how many cameras, the planner fills a budget; expected one of "
-                       f"{', '.join(fill)}", "solver")
+                       f"{', '.join(budget_solvers())}", "solver")
     limit = number(body.get("time_limit_s", 10.0), "time_limit_s")
     if not 0.0 < limit <= 3600.0:
         raise ApiError(f"time_limit_s: expected 0 < seconds <= 3600, got {limit:g}", "time_limit_s")

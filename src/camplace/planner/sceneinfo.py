@@ -8,6 +8,14 @@ def _poly(points) -> list:
     return np.round(np.asarray(points, float), 4).tolist()
 
 
+def budget_solvers() -> list[str]:
+    """The registered solvers that fill a camera budget (POST /api/optimize), greedy first."""
+    from camplace.solvers import SOLVERS
+
+    names = sorted(n for n, x in SOLVERS.items() if not x.tags.ignores_camera_budget)
+    return sorted(names, key=lambda n: n != "greedy")
+
+
 def scene_payload(session) -> dict:
     """The /api/scene object (see docs/planner.md) of a camplace.planner.session.Session."""
     from camplace.outputs.plan_data import site_areas
@@ -37,5 +45,8 @@ def scene_payload(session) -> dict:
                              for c in session.lenses],
             "budget": int(session.budget), "working_height_m": float(session.height),
             "targets_xy": np.round(tg.positions[session.floor, :2], 4).tolist(),
+            "targets_gamma": tg.gamma[session.floor].astype(int).tolist(),
+            "coverage_required": int(tg.gamma[session.floor].max()) if len(session.floor) else 0,
+            "solvers": budget_solvers(),
             "target_z_m": float(tg.positions[session.floor[0], 2]) if len(session.floor) else None,
             "target_cell_m": float(sc.spec.voxel_size) * session.floor_step}
