@@ -229,3 +229,19 @@ def test_camplace_serve_prints_the_url_serves_and_stops_on_ctrl_c(demo_dir):
     finally:
         if proc.poll() is None:
             proc.kill()
+
+
+def test_random_bodies_never_give_a_server_error(client):
+    import random
+
+    rnd = random.Random(7)
+    values = [None, True, 0, -1, 1e308, -1e308, 3.5, "x", "", [], [1], [1, 2], [1e308, 0, 2.9], [0, 0, 0],
+              [1, 2, "3"], {}, {"a": 1}, "wide", [[1, 2, 3]]]
+    keys = ["position", "yaw_deg", "pitch_deg", "roll_deg", "camera", "locked", "snap", "solver", "budget",
+            "time_limit_s", "dir", "other"]
+    for n in range(60):
+        body = {k: rnd.choice(values) for k in rnd.sample(keys, rnd.randint(0, 4))}
+        method, path = rnd.choice([("PUT", "/api/cameras/C3"), ("POST", "/api/cameras"), ("PUT", "/api/cameras/x")])
+        r = client.request(method, path, json=body)
+        assert r.status_code < 500, (method, path, body, r.text)
+        assert r.status_code == 200 or set(r.json()) == {"error", "field"}, (body, r.text)
