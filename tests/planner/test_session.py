@@ -100,8 +100,16 @@ def test_snapping_and_free_positions(session):
     c = session.cams[0]
     session.update(c.id, {"position": [1.13, 2.96, 1.0]})
     got = session.cams[0].position
-    d = np.hypot(*(session.mounts[:, :2] - [1.13, 2.96]).T)
+    others = np.array([o.position for o in session.cams[1:]])
+    free = ~(np.abs(session.mounts[:, None] - others[None]).max(2) <= 1e-3).any(1)
+    d = np.hypot(*(session.mounts[free, :2] - [1.13, 2.96]).T)
     assert any(np.allclose(got, m) for m in session.mounts) and np.hypot(*(got[:2] - [1.13, 2.96])) == d.min()
+    # dropped onto another camera's mount: the nearest free mount instead (one camera per location)
+    target = session.cams[1].position.copy()
+    session.update(c.id, {"position": target})
+    assert not np.allclose(session.cams[0].position, target)
+    held = {tuple(np.round(o.position, 3)) for o in session.cams}
+    assert len(held) == len(session.cams)
     session.update(c.id, {"position": [1.13, 2.96, 2.5], "snap": False})
     assert np.allclose(session.cams[0].position, [1.13, 2.96, 2.5])
     for bad in ([7.0, 2.0, 2.5], [1.0, 1.0, 3.5]):  # outside the footprint, above the ceiling

@@ -218,9 +218,17 @@ class Session:
 
     # ------------------------------------------------------------------ rules
 
-    def snap(self, position: np.ndarray) -> np.ndarray:
-        """The allowed mount nearest ``position`` in plan (then in height)."""
-        d2 = ((self.mounts[:, :2] - position[:2]) ** 2).sum(1)
+    def snap(self, position: np.ndarray, taken: np.ndarray | None = None) -> np.ndarray:
+        """The allowed mount nearest ``position`` in plan (then in height), skipping the
+        mounts (to 1 mm) in ``taken`` ((K, 3) m: other cameras' positions; one camera per
+        location). ApiError('position') when every mount is taken."""
+        free = np.ones(len(self.mounts), bool)
+        if taken is not None and len(taken):
+            d_taken = np.abs(self.mounts[:, None, :] - np.asarray(taken, float)[None, :, :]).max(2)
+            free = ~(d_taken <= 1e-3).any(1)
+        if not free.any():
+            raise ApiError("position: every allowed mount already holds a camera", "position", 409)
+        d2 = np.where(free, ((self.mounts[:, :2] - position[:2]) ** 2).sum(1), np.inf)
         near = np.flatnonzero(d2 <= d2.min() + 1e-9)
         best = near[np.argmin(np.abs(self.mounts[near, 2] - position[2]))]
         return self.mounts[best].astype(float).copy()
@@ -297,7 +305,7 @@ class Session:
                                409)
             pos = cam.position
             if "position" in change:
-                pos = self._place(change["position"], change.get("snap", True))
+                pos = self._place(change["position"], change.get("snap", True), cam.id)
             ang = cam.angles.copy()
             for j, f in enumerate(("yaw_deg", "pitch_deg", "roll_deg")):
                 if f in change:
@@ -312,12 +320,13 @@ class Session:
             new = self._make(cam.id, pos, ang, lens, bool(locked), cam.existing)
             return self._commit(self.cams[:k] + (new,) + self.cams[k + 1:], t0, (cam, new))
 
-    def _place(self, position: np.ndarray, snap: bool) -> np.ndarray:
+    def _place(self, position: np.ndarray, snap: bool, moving: str | None = None) -> np.ndarray:
         pos = np.asarray(position, float)
         if len(pos) == 2:
             pos = np.r_[pos, self.mount_height(pos)]
         if snap:
-            return self.snap(pos)
+            others = [c.position for c in self.cams if c.id != moving]
+            return self.snap(pos, np.array(others, float).reshape(-1, 3))
         self.check_position(pos)
         return pos
 
