@@ -166,3 +166,13 @@ def test_bad_options_and_missing_positions():
     with pytest.raises(InputError) as err:
         solve_zones(p, initial=(0, 1))  # two poses at one location
     assert err.value.option == "initial"
+
+
+def test_dask_cluster_equals_serial():
+    distributed = pytest.importorskip("distributed")
+    p = floor_problem(4, 40, 20, 40, 160, 8)
+    a = solve_zones(p, tile_m=10.0, seed=2, max_sweeps=2)
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=False, dashboard_address=None) as cl:
+        b = solve_zones(p, tile_m=10.0, seed=2, max_sweeps=2, scheduler=cl.scheduler_address)
+    assert b.info["executor"] == "dask"
+    assert np.array_equal(a.selected, b.selected) and a.objective == b.objective

@@ -35,6 +35,7 @@ from __future__ import annotations
 import hashlib
 import json
 import time
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -265,11 +266,13 @@ def solve_zones(problem: PlacementProblem, *, time_limit_s: float | None = None,
                 if stopped(should_stop) or (left is not None and left <= 0.05):
                     break
                 cov = problem.coverage(sel)
-                t_tile = tile_time_s if left is None else max(0.05, min(tile_time_s, left))
-                tasks = [t for t in (_tile_task(problem, g, tiling, int(k), sel, cov, max_tile_nnz, t_tile, seed)
+                tasks = [t for t in (_tile_task(problem, g, tiling, int(k), sel, cov, max_tile_nnz, tile_time_s, seed)
                                      for k in np.flatnonzero(tiling.colour == c)) if t is not None]
+                if left is not None and tasks:  # the batch's tiles share the time left (rounds of `workers`)
+                    rounds = -(-len(tasks) // max(1, runner.workers))
+                    tasks = [replace(t, time_limit_s=max(0.05, min(tile_time_s, left / rounds))) for t in tasks]
                 n_mip += sum(t.method == "mip" for t in tasks)
-                for task, (tile, local, _, _) in zip(tasks, runner.map(tasks, should_stop)):
+                for task, (tile, local, _, _) in zip(tasks, runner.map(tasks, should_stop, end)):
                     rows = tiling.rows[tile]
                     new = np.sort(np.concatenate([sel[tiling.tile_of[sel] != tile], rows[local]]))
                     if not g.ok(new):

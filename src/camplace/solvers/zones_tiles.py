@@ -12,7 +12,8 @@ results in tile order is the same as solving them one after another.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+import time
+from dataclasses import dataclass, replace
 
 import numpy as np
 import scipy.sparse as sp
@@ -172,14 +173,25 @@ class TileRunner:
         self._pool = None
         self.name = "dask" if self._dask else ("process-pool" if self.workers > 1 else "in-process")
 
-    def map(self, tasks: list[TileTask], should_stop=None) -> list[tuple[int, np.ndarray, float, str]]:
+    def map(self, tasks: list[TileTask], should_stop=None,
+            end: float = float("inf")) -> list[tuple[int, np.ndarray, float, str]]:
+        """(tile, local selection, cost, status) of each task, in task order; in-process,
+        each task's limit is cut to the time left before ``end`` (perf_counter()) and a
+        task started after it keeps its tile unchanged."""
         if not tasks:
             return []
         if self._dask is not None:
             out: dict[int, tuple] = dict(self._dask.map_unordered(solve_tile, None, tasks))
             return [out[k] for k in range(len(tasks))]
         if self.workers <= 1 or len(tasks) == 1:
-            return [solve_tile(None, t, should_stop) for t in tasks]
+            res = []
+            for t in tasks:
+                left = end - time.perf_counter()
+                if left <= 0.05:
+                    res.append((t.tile, np.sort(np.asarray(t.current, np.int64)), t.sub.cost(t.current), "skipped"))
+                else:
+                    res.append(solve_tile(None, replace(t, time_limit_s=min(t.time_limit_s, left)), should_stop))
+            return res
         if self._pool is None:
             import multiprocessing as mp
             from concurrent.futures import ProcessPoolExecutor
