@@ -228,8 +228,13 @@ def run_storeys(path: Path, scenes: list):
             if not state["quiet"]:
                 console.print(f"[bold]storey '{escape(name)}'[/bold] (floor at {elev:g} m) -> "
                               f"{escape(str(out_dir / slug))}")
-            run_pipeline(parse_scene(data, f"{path} (storey '{name}')"), budget, solver, out_dir / slug, *args,
-                         **options)
+            try:
+                run_pipeline(parse_scene(data, f"{path} (storey '{name}')"), budget, solver, out_dir / slug, *args,
+                             **options)
+            except typer.Exit:  # interrupted: that storey's best placement is written; summarise the ones done
+                rows.append(storey_row(name, out_dir / slug, elev, data["room"]["height"]))
+                storeys_summary(out_dir, path.name, rows)
+                raise
             rows.append(storey_row(name, out_dir / slug, elev, data["room"]["height"]))
         summary = storeys_summary(out_dir, path.name, rows)
         if state["quiet"]:
