@@ -39,6 +39,7 @@ FLAGS = {
     "cloud": "",  # the space file: the message names it already
     "units": "--units", "wall_height": "--wall-height", "ceiling_height": "--ceiling-height", "scale": "--scale",
     "ref": "--ref", "storey": "--storey", "wall_layers": "--wall-layers", "furniture_heights": "--layer-height",
+    "doors": "--doors", "glass": "--glass",
 }
 
 

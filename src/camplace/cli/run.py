@@ -16,7 +16,7 @@ from camplace.cli.common import (CACHE_OPT, FRAME_OPT, MAX_MEMORY_OPT, NO_CACHE_
                                  TIME_LIMIT_OPT, WORKERS_OPT, RichProgress, StopFlag, certify_solver, check_options,
                                  console, memory_bytes, progress_bars, repeatable_requested, scale_options, state)
 from camplace.cli.space import (CEILING_OPT, REF_OPT, SCALE_OPT, STOREY_OPT, UNITS_OPT, WALL_HEIGHT_OPT,
-                                 LAYER_HEIGHT_OPT, WALL_LAYERS_OPT,
+                                 DOORS_OPT, GLASS_OPT, LAYER_HEIGHT_OPT, WALL_LAYERS_OPT,
                                  ImportOptions, describe_import, plan_import_options, scene_data_from_file, scene_yaml,
                                  space_kind)
 from camplace.cli.summary import write_and_summarise
@@ -164,6 +164,7 @@ def run_cmd(scene: Optional[str] = typer.Argument(None, help="Scene YAML file, b
             ceiling_height: Optional[float] = CEILING_OPT, scale: Optional[float] = SCALE_OPT,
             ref: Optional[str] = REF_OPT, storey: Optional[str] = STOREY_OPT,
             wall_layers: Optional[str] = WALL_LAYERS_OPT, layer_height: Optional[list[str]] = LAYER_HEIGHT_OPT,
+            doors: Optional[str] = DOORS_OPT, glass: Optional[str] = GLASS_OPT,
             cloud: Optional[Path] = typer.Option(None, "--cloud", hidden=True,
                                                  help="Deprecated: give the scan as SCENE (camplace run SCAN)."),
             save_scene: Optional[Path] = typer.Option(None, "--save-scene", hidden=True,
@@ -192,7 +193,8 @@ def run_cmd(scene: Optional[str] = typer.Argument(None, help="Scene YAML file, b
         raise InputError("--save-scene: use camplace scene import FILE --out SCENE.yaml")
     plan = plan_import_options(space_kind(scene) if isinstance(scene, str) else None, units=units,
                                wall_height=wall_height, ceiling_height=ceiling_height, scale=scale, ref=ref,
-                               storey=storey, wall_layers=wall_layers, layer_height=layer_height)
+                               storey=storey, wall_layers=wall_layers, layer_height=layer_height, doors=doors,
+                               glass=glass)
     storeys = None
     if storey == "all":  # every storey of an IFC file, each into its own folder
         from camplace.cli.scene_import import storey_scenes

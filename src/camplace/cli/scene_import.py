@@ -11,7 +11,7 @@ from rich.markup import escape
 
 from camplace.cli.common import console, state
 from camplace.cli.space import (CEILING_OPT, REF_OPT, SCALE_OPT, STOREY_OPT, UNITS_OPT, WALL_HEIGHT_OPT,
-                                 LAYER_HEIGHT_OPT, WALL_LAYERS_OPT,
+                                 DOORS_OPT, GLASS_OPT, LAYER_HEIGHT_OPT, WALL_LAYERS_OPT,
                                  ImportOptions, describe_import, scene_data_from_file, scene_yaml)
 from camplace.core.errors import InputError
 
@@ -42,7 +42,8 @@ def import_cmd(file: Path = typer.Argument(..., help="A scan (PLY, PCD, XYZ/CSV,
                units: Optional[str] = UNITS_OPT, wall_height: Optional[float] = WALL_HEIGHT_OPT,
                ceiling_height: Optional[float] = CEILING_OPT, scale: Optional[float] = SCALE_OPT,
                ref: Optional[str] = REF_OPT, storey: Optional[str] = STOREY_OPT,
-               wall_layers: Optional[str] = WALL_LAYERS_OPT, layer_height: Optional[list[str]] = LAYER_HEIGHT_OPT) -> None:
+               wall_layers: Optional[str] = WALL_LAYERS_OPT, layer_height: Optional[list[str]] = LAYER_HEIGHT_OPT,
+               doors: Optional[str] = DOORS_OPT, glass: Optional[str] = GLASS_OPT) -> None:
     """Write the scene built from a space file as YAML to edit, then camplace run it.
 
     The floor is levelled to z = 0, ceiling and footprint detected, walkable volume
@@ -57,7 +58,7 @@ def import_cmd(file: Path = typer.Argument(..., help="A scan (PLY, PCD, XYZ/CSV,
     opts = ImportOptions(up=up, level_floor=not no_level_floor, crop=crop, downsample=downsample, heights=heights,
                          coverage=coverage, wall_mounts=wall_mounts, viewpoint=list(viewpoint or []), units=units,
                          wall_height=wall_height, ceiling_height=ceiling_height, scale=scale, ref=ref, storey=storey,
-                         wall_layers=wall_layers, layer_height=layer_height)
+                         wall_layers=wall_layers, layer_height=layer_height, doors=doors, glass=glass)
     if storey == "all":
         _write_storeys(file, opts, budget, out)
         return

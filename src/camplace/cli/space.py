@@ -37,9 +37,11 @@ WALL_LAYERS_OPT = typer.Option(None, "--wall-layers", help="DXF: wall layer patt
                                "(default A-WALL*,WALL*,WAND*).")
 LAYER_HEIGHT_OPT = typer.Option(None, "--layer-height", help="DXF: LAYER=M, the height (m) of the furniture blocks on "
                                 "layers matching LAYER; repeat for several.")
+DOORS_OPT = typer.Option(None, "--doors", help="IFC, DXF: open (default; doors do not occlude) or closed.")
+GLASS_OPT = typer.Option(None, "--glass", help="IFC: opaque (default; windows occlude) or transparent.")
 PLAN_FLAGS = {"units": "--units", "wall_height": "--wall-height", "ceiling_height": "--ceiling-height",
               "scale": "--scale", "ref": "--ref", "storey": "--storey", "wall_layers": "--wall-layers",
-              "layer_height": "--layer-height"}
+              "layer_height": "--layer-height", "doors": "--doors", "glass": "--glass"}
 
 
 @dataclass(frozen=True)
@@ -63,6 +65,8 @@ class ImportOptions:
     storey: str | None = None
     wall_layers: str | None = None
     layer_height: list[str] | None = None
+    doors: str | None = None
+    glass: str | None = None
 
     def plan_kwargs(self, budget: int | None) -> dict:
         """camplace.scene.importers.import_plan keyword arguments (None: the importer's default)."""
@@ -74,7 +78,8 @@ class ImportOptions:
                     scale=self.scale, ref=floats(self.ref, "--ref", 5) if self.ref else None, storey=self.storey,
                     heights=floats(self.heights, "--heights"), coverage=self.coverage, budget=budget,
                     wall_layers=tuple(p.strip() for p in self.wall_layers.split(",") if p.strip())
-                    if self.wall_layers else None, furniture_heights=layer_heights(self.layer_height))
+                    if self.wall_layers else None, furniture_heights=layer_heights(self.layer_height),
+                    doors=self.doors, glass=self.glass)
 
     def kwargs(self, budget: int | None) -> dict:
         """scene_from_cloud keyword arguments (InputError naming the flag on bad text)."""
