@@ -1,6 +1,15 @@
-"""Site-scale benchmark (issue 7): time and peak memory of each stage on the procedural
+"""Site-scale benchmark (issues 7, 21): time and peak memory of each stage on the procedural
 warehouse at several floor areas, locally and with a local Dask cluster, and the
 log-log growth exponents of the cost in N_g, N_p and nnz(V).
+
+``--run`` (issue 21) measures instead the whole pipeline as ``camplace run`` does it
+(camplace.workflows.run.run with the block cache, out-of-core V, then every output file
+with the report and the plan set): per stage the wall time and the peak resident memory
+(VmRSS, and its anonymous part RssAnon: the memory-mapped V is file-backed page cache that
+the kernel can drop) sampled every 50 ms from /proc/self/status, plus VmHWM at the end.
+
+    python benchmarks/scale.py --run --sizes 10000 30000 100000 --solvers greedy-fast \
+        --out benchmarks/results/scale_run.json
 
 Each (size, mode) runs in its own subprocess so that peak memory (ru_maxrss) is that
 run's alone. Modes: ``local`` (in-process, numba threads = all cores; every stage and
@@ -116,6 +125,189 @@ def one(size: float, mode: str, dask_workers: int, solvers: list[str], budget: i
     return out
 
 
+def _proc_status() -> dict[str, float]:
+    """VmRSS, RssAnon, RssFile, VmHWM of this process in MiB (Linux /proc/self/status)."""
+    out = {}
+    try:
+        with open("/proc/self/status") as f:
+            for line in f:
+                k, _, v = line.partition(":")
+                if k in ("VmRSS", "RssAnon", "RssFile", "VmHWM"):
+                    out[k] = float(v.split()[0]) / 1024.0
+    except OSError:
+        pass
+    return out
+
+
+class StageSampler:
+    """Wall time and peak memory per pipeline stage: ``progress(stage, done, total)`` marks
+    the current stage; a thread samples /proc/self/status every ``every_s`` seconds."""
+
+    def __init__(self, every_s: float = 0.05) -> None:
+        import threading
+
+        self.stage = "start"
+        self.stages: dict[str, dict] = {}
+        self._t = time.perf_counter()
+        self._enter("start")
+        self._stop = threading.Event()
+        self._th = threading.Thread(target=self._loop, args=(every_s,), daemon=True)
+        self._th.start()
+
+    def _enter(self, name: str) -> None:
+        now = time.perf_counter()
+        if self.stage in self.stages:
+            self.stages[self.stage]["s"] += now - self._t
+        self._t = now
+        self.stage = name
+        self.stages.setdefault(name, {"s": 0.0, "peak_rss_mib": 0.0, "peak_anon_mib": 0.0})
+        self._sample()
+
+    def _sample(self) -> None:
+        m = _proc_status()
+        st = self.stages[self.stage]
+        st["peak_rss_mib"] = max(st["peak_rss_mib"], m.get("VmRSS", 0.0))
+        st["peak_anon_mib"] = max(st["peak_anon_mib"], m.get("RssAnon", 0.0))
+
+    def _loop(self, every_s: float) -> None:
+        while not self._stop.wait(every_s):
+            self._sample()
+
+    def __call__(self, stage: str, done: int, total: int) -> None:
+        name = {"greedy": "solve", "tabu": "solve", "mip": "solve"}.get(stage, stage)
+        if name != self.stage:
+            self._enter(name)
+
+    def close(self) -> dict:
+        self._enter("end")
+        self._stop.set()
+        self._th.join()
+        self.stages.pop("end", None)
+        return self.stages
+
+
+def run_one(size: float, solver: str, budget: int | None, cache: Path, out_dir: Path, time_limit_s: float) -> dict:
+    """camplace run warehouse:<size> end to end in this process (cache at ``cache``,
+    outputs and plan set into ``out_dir``); per-stage time and memory."""
+    from camplace.outputs.write import write_outputs
+    from camplace.workflows.run import run
+
+    sampler = StageSampler()
+    t0 = time.perf_counter()
+    r = run(f"warehouse:{size:g}", budget=budget, solver=solver, progress=sampler, cache_dir=cache,
+            time_limit_s=time_limit_s)
+    sampler("outputs", 0, 1)
+    t = time.perf_counter()
+    write_outputs(out_dir, r.scene.name, r.visibility, r.placement, r.problem.budget, r.metrics, r.timings_s,
+                  scene=r.scene)
+    report_s = time.perf_counter() - t
+    total = time.perf_counter() - t0
+    st = sampler.close()
+    red = r.placement.info.get("reduction", {})
+    return {"size_m2": size, "mode": "run", "solver": solver, "N_g": int(r.visibility.V.shape[0]),
+            "N_p": int(r.visibility.V.shape[1]), "nnz": int(r.visibility.V.nnz), "V_hash": _v_hash(r.visibility.V),
+            "cached_chunks": r.visibility.info.get("cached_chunks"), "chunks": r.visibility.info.get("chunks"),
+            "stages": st, "timings_s": dict(r.timings_s, report=report_s), "total_s": total,
+            "reduction_s": red.get("seconds"), "nnz_reduced": red.get("nonzeros_after"),
+            "objective": r.placement.objective, "coverage_gap": r.metrics.coverage_gap,
+            "cameras": int(len(r.placement.selected)), "status": r.placement.status,
+            "VmHWM_mib": _proc_status().get("VmHWM"), "ru_maxrss_mib": _rss_peak_mib(),
+            "load_avg": os.getloadavg()[0]}
+
+
+def tiled_one(size: float, copies: int, solver: str, cache: Path, work: Path, time_limit_s: float) -> dict:
+    """The stages after visibility on ``copies`` side-by-side copies of warehouse:<size>'s V
+    (block diagonal: a floor ``copies`` times larger, with that many independent halls),
+    V memory-mapped from files written block by block; per-stage time and memory.
+    Measures the out-of-core stages at a size whose raycasting is too slow for this box."""
+    import scipy.sparse as sp
+
+    from camplace.metrics.coverage import compute_metrics
+    from camplace.metrics.triangulation import well_triangulated_of_selection
+    from camplace.problem.feasibility import check_feasibility
+    from camplace.problem.model import PlacementProblem
+    from camplace.solvers import solve
+    from camplace.workflows.run import prepare
+
+    sampler = StageSampler()
+    sampler("prepare (cached V)", 0, 1)
+    _, vis = prepare(f"warehouse:{size:g}", cache_dir=cache)
+    V1, t1, c1 = vis.V, vis.targets, vis.candidates
+    n1, m1, z1 = V1.shape[0], V1.shape[1], int(V1.nnz)
+    sampler("tile V to disk", 0, 1)
+    work.mkdir(parents=True, exist_ok=True)
+    fmt = np.lib.format
+    indices = fmt.open_memmap(work / "indices.npy", mode="w+", dtype=np.int32, shape=(z1 * copies,))
+    data = fmt.open_memmap(work / "data.npy", mode="w+", dtype=np.uint8, shape=(z1 * copies,))
+    base_ptr = np.asarray(V1.indptr, np.int64)
+    indptr = np.concatenate([base_ptr[:-1] + k * z1 for k in range(copies)] + [[z1 * copies]])
+    for k in range(copies):
+        indices[k * z1:(k + 1) * z1] = np.asarray(V1.indices) + k * m1
+        data[k * z1:(k + 1) * z1] = 1
+    indices.flush()
+    data.flush()
+    del indices, data
+    V = sp.csr_matrix((np.load(work / "data.npy", mmap_mode="r"), np.load(work / "indices.npy", mmap_mode="r"),
+                       indptr), shape=(n1 * copies, m1 * copies), copy=False)
+    width = float(np.ptp(c1.positions[:, 0])) + 20.0
+    shift = lambda p, k: p + np.array([k * width, 0.0, 0.0])  # noqa: E731
+    cand_pos = np.concatenate([shift(c1.positions, k) for k in range(copies)])
+    targ_pos = np.concatenate([shift(t1.positions, k) for k in range(copies)])
+    gamma, weights = np.tile(t1.gamma, copies), np.tile(t1.weights, copies)
+    loc = np.concatenate([c1.location_ids + k * (int(c1.location_ids.max()) + 1) for k in range(copies)])
+    regions = np.tile(t1.region_ids, copies)
+    sampler("feasibility", 0, 1)
+    check_feasibility(V, gamma, loc, regions, t1.region_names)
+    budget = 400 * copies if size == 10000 else int(round(size * copies / 25.0))
+    problem = PlacementProblem(V, gamma, weights, budget, loc, np.ones(V.shape[0]), None,
+                               candidate_positions=cand_pos, target_positions=targ_pos)
+    sampler("solve", 0, 1)
+    p = solve(problem, solver, time_limit_s=time_limit_s)
+    sampler("metrics", 0, 1)
+    well = well_triangulated_of_selection(V, cand_pos, targ_pos, p.selected)
+    m = compute_metrics(problem, p.selected, regions, t1.region_names, well_triangulated=well)
+    sampler("visibility.npz", 0, 1)
+    from camplace.core.files import atomic_savez
+
+    atomic_savez(work / "visibility.npz", data=V.data, indices=V.indices, indptr=V.indptr)
+    st = sampler.close()
+    red = p.info.get("reduction", {})
+    return {"size_m2": size * copies, "mode": "tiled", "tiles_of": size, "copies": copies, "solver": solver,
+            "N_g": int(V.shape[0]), "N_p": int(V.shape[1]), "nnz": int(V.nnz), "stages": st,
+            "reduction_s": red.get("seconds"), "nnz_reduced": red.get("nonzeros_after"),
+            "objective": p.objective, "coverage_gap": m.coverage_gap,
+            "cameras": int(len(p.selected)), "total_s": sum(v["s"] for v in st.values()),
+            "VmHWM_mib": _proc_status().get("VmHWM"), "load_avg": os.getloadavg()[0]}
+
+
+def run_table(results: list[dict]) -> str:
+    """Markdown: per size, each stage's seconds and peak RSS / anonymous MiB; then log-log fits."""
+    names = []
+    for r in results:
+        names += [k for k in r["stages"] if k not in names and k != "start"]
+    head = "| floor m² | nnz(V) | " + " | ".join(names) + " | total s | VmHWM MiB |"
+    lines = ["Each stage: seconds / peak RSS MiB / peak anonymous MiB.", "", head, "|" + "---|" * (len(names) + 4)]
+    for r in results:
+        cells = []
+        for k in names:
+            v = r["stages"].get(k)
+            cells.append("-" if v is None else f"{v['s']:.1f} s / {v['peak_rss_mib']:,.0f} / {v['peak_anon_mib']:,.0f}")
+        lines.append(f"| {r['size_m2']:,.0f} | {r['nnz']:,} | " + " | ".join(cells)
+                     + f" | {r['total_s']:.0f} | {r['VmHWM_mib']:,.0f} |")
+    if len(results) >= 2:
+        nnz = [r["nnz"] for r in results]
+        fits = []
+        for k in names:
+            if all(k in r["stages"] and r["stages"][k]["s"] > 0 for r in results):
+                e_t = _fit(nnz, [r["stages"][k]["s"] for r in results])
+                e_m = _fit(nnz, [max(r["stages"][k]["peak_anon_mib"], 1.0) for r in results])
+                fits.append(f"{k}: time ∝ nnz^{e_t:.2f}, anon. memory ∝ nnz^{e_m:.2f}")
+        fits.append(f"total: time ∝ nnz^{_fit(nnz, [r['total_s'] for r in results]):.2f}, "
+                    f"VmHWM ∝ nnz^{_fit(nnz, [r['VmHWM_mib'] for r in results]):.2f}")
+        lines += ["", "Log-log fits over the sizes: " + "; ".join(fits) + "."]
+    return "\n".join(lines)
+
+
 def _fit(x: list[float], y: list[float]) -> float | None:
     """Least-squares slope of log y against log x (None with fewer than 2 distinct x)."""
     x, y = np.log(np.asarray(x, float)), np.log(np.asarray(y, float))
@@ -161,6 +353,29 @@ def table(results: list[dict]) -> str:
     return "\n".join(lines)
 
 
+def _child(cmd: list[str]) -> dict:
+    """Run one measurement in a fresh process (its own peak memory); its JSON line."""
+    print(f"# {' '.join(cmd[1:])}", file=sys.stderr, flush=True)
+    p = subprocess.run(cmd, capture_output=True, text=True)
+    if p.returncode != 0:
+        print(p.stderr[-3000:], file=sys.stderr)
+        raise SystemExit(p.returncode)
+    r = json.loads(p.stdout.strip().splitlines()[-1])
+    print(json.dumps(r), file=sys.stderr, flush=True)
+    return r
+
+
+def _save(out: Path | None, results: list[dict]) -> dict:
+    """Write {meta, results} to ``out`` (when given) and print the meta line; returns meta."""
+    meta = {"cpu_count": os.cpu_count(), "load_avg_end": os.getloadavg(),
+            "when": time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime())}
+    if out:
+        out.parent.mkdir(parents=True, exist_ok=True)
+        out.write_text(json.dumps({"meta": meta, "results": results}, indent=1))
+    print(f"{meta}", file=sys.stderr)
+    return meta
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--sizes", type=float, nargs="+", default=[1000, 5000, 10000])
@@ -168,31 +383,60 @@ def main() -> None:
     ap.add_argument("--solvers", nargs="+", default=["greedy", "greedy-fast"])
     ap.add_argument("--budget", type=int, default=None, help="default: the scene's (area / 25 m²)")
     ap.add_argument("--out", type=Path, default=None)
+    ap.add_argument("--run", action="store_true", help="end to end as camplace run (one solver: the first)")
+    ap.add_argument("--cache", type=Path, default=None, help="--run: the visibility cache (default a temp folder)")
+    ap.add_argument("--outputs", type=Path, default=None, help="--run: where the outputs go (default a temp folder)")
+    ap.add_argument("--time-limit", type=float, default=600.0, help="--run: the solver's time limit, s")
+    ap.add_argument("--tiled", type=int, default=0, metavar="K",
+                    help="the stages after visibility on K side-by-side copies of each size's (cached) V")
     ap.add_argument("--one", type=float, default=None, help=argparse.SUPPRESS)
     ap.add_argument("--mode", default="local", help=argparse.SUPPRESS)
     a = ap.parse_args()
+    if a.one is not None and a.mode == "tiled":
+        print(json.dumps(tiled_one(a.one, a.tiled, a.solvers[0], a.cache, a.outputs, a.time_limit)))
+        return
+    if a.one is not None and a.mode == "run":
+        print(json.dumps(run_one(a.one, a.solvers[0], a.budget, a.cache, a.outputs, a.time_limit)))
+        return
     if a.one is not None:
         print(json.dumps(one(a.one, a.mode, a.dask_workers, a.solvers, a.budget)))
+        return
+    if a.tiled:
+        import tempfile
+
+        results = []
+        for size in a.sizes:
+            with tempfile.TemporaryDirectory(prefix="camplace-tiled-", dir=a.outputs) as tmp:
+                cmd = [sys.executable, __file__, "--one", str(size), "--mode", "tiled", "--tiled", str(a.tiled),
+                       "--solvers", a.solvers[0], "--cache", str(a.cache), "--outputs", tmp,
+                       "--time-limit", str(a.time_limit)]
+                results.append(_child(cmd))
+        _save(a.out, results)
+        print(run_table(results))
+        return
+    if a.run:
+        import tempfile
+
+        results = []
+        with tempfile.TemporaryDirectory(prefix="camplace-scale-") as tmp:
+            for size in a.sizes:
+                cache = a.cache or Path(tmp) / "cache"
+                outd = (a.outputs or Path(tmp) / "out") / f"warehouse-{size:g}"
+                cmd = [sys.executable, __file__, "--one", str(size), "--mode", "run", "--solvers", a.solvers[0],
+                       "--cache", str(cache), "--outputs", str(outd), "--time-limit", str(a.time_limit)]
+                cmd += ["--budget", str(a.budget)] if a.budget else []
+                results.append(_child(cmd))
+        _save(a.out, results)
+        print(run_table(results))
         return
     results = []
     for size in a.sizes:
         for mode in ("local", "dask") if a.dask_workers > 0 else ("local",):
             cmd = [sys.executable, __file__, "--one", str(size), "--mode", mode, "--dask-workers",
                    str(a.dask_workers), "--solvers", *a.solvers] + (["--budget", str(a.budget)] if a.budget else [])
-            print(f"# {' '.join(cmd[1:])}", file=sys.stderr, flush=True)
-            p = subprocess.run(cmd, capture_output=True, text=True)
-            if p.returncode != 0:
-                print(p.stderr[-3000:], file=sys.stderr)
-                raise SystemExit(p.returncode)
-            r = json.loads(p.stdout.strip().splitlines()[-1])
-            print(json.dumps(r), file=sys.stderr, flush=True)
-            results.append(r)
-    meta = {"cpu_count": os.cpu_count(), "load_avg_end": os.getloadavg(), "when": time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime())}
-    if a.out:
-        a.out.parent.mkdir(parents=True, exist_ok=True)
-        a.out.write_text(json.dumps({"meta": meta, "results": results}, indent=1))
+            results.append(_child(cmd))
+    _save(a.out, results)
     print(table(results))
-    print(f"\n{meta}")
 
 
 if __name__ == "__main__":

@@ -128,8 +128,8 @@ def visibility_arrays(vis: Visibility) -> dict[str, np.ndarray]:
     """The arrays of visibility.npz (no pickles)."""
     V, t, c = vis.V, vis.targets, vis.candidates
     return {
-        "data": V.data.astype(np.uint8), "indices": V.indices.astype(np.int32),
-        "indptr": V.indptr.astype(np.int64), "shape": np.array(V.shape, dtype=np.int64),
+        "data": V.data.astype(np.uint8, copy=False), "indices": V.indices.astype(np.int32, copy=False),
+        "indptr": V.indptr.astype(np.int64, copy=False), "shape": np.array(V.shape, dtype=np.int64),
         "gamma": t.gamma.astype(np.int64), "weights": t.weights.astype(np.float64),
         "target_positions": t.positions.astype(np.float64), "target_normals": t.normals.astype(np.float64),
         "target_region_ids": t.region_ids.astype(np.int32), "region_names": np.array(t.region_names, dtype=str),

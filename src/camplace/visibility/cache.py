@@ -5,7 +5,10 @@ A cache entry is a folder ``<root>/visibility/<key>/`` with ``meta.json`` and
 ``block-000000.npz``, ``block-000001.npz``, ... (CSR ``indptr`` (rows + 1,) int64 and
 ``indices`` (nnz,) int32 of the block's rows, uncompressed). Each block is written
 atomically as soon as it is computed, so an interrupted run resumes from its finished
-blocks and a second run loads them all. The key hashes every input that can change V
+blocks and a second run loads them all. Once every block is there, V is also written
+block by block as one CSR in three uncompressed ``.npy`` files (``V-indptr.npy``,
+``V-indices.npy``, ``V-data.npy``) that later stages read memory-mapped
+(``np.load(mmap_mode="r")``): V then lives in the page cache, not in the process's heap. The key hashes every input that can change V
 (occupancy grid, targets, candidates, camera models, mode, chunking) and the code
 version (package version + the source of the modules that compute V), so a changed
 input never reuses a stale entry.
@@ -29,7 +32,7 @@ from typing import Any
 import numpy as np
 
 from camplace.core.errors import InputError
-from camplace.core.files import atomic_write_bytes, atomic_write_json
+from camplace.core.files import atomic_npy_memmap, atomic_write_bytes, atomic_write_json
 
 CACHE_ENV = "CAMPLACE_CACHE"
 FORMAT = 1
@@ -112,7 +115,7 @@ class BlockStore:
             if meta_path.is_file():
                 old = json.loads(meta_path.read_text())
                 if old != meta:  # same key, different layout: never mix blocks
-                    for p in self.dir.glob("block-*.npz"):
+                    for p in [*self.dir.glob("block-*.npz"), *self.dir.glob("V-*.npy")]:
                         p.unlink()
                     atomic_write_json(meta_path, meta)
             else:
@@ -162,3 +165,44 @@ class BlockStore:
                 (len(indices) and (indices.min() < 0 or indices.max() >= self.n_cols)):
             return None
         return indptr.astype(np.int64, copy=False), indices.astype(np.int32, copy=False)
+
+    ASSEMBLED = ("indptr", "indices", "data")
+
+    def assembled_path(self, name: str) -> Path:
+        """``V-<name>.npy`` of the assembled CSR (name in ASSEMBLED)."""
+        return self.dir / f"V-{name}.npy"
+
+    def load_assembled(self, n_rows: int) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
+        """(indptr (n_rows + 1,) int64, indices (nnz,) int32, data (nnz,) uint8) of the
+        assembled V, memory-mapped read-only; None when missing or inconsistent."""
+        try:
+            indptr, indices, data = (np.load(self.assembled_path(n), mmap_mode="r", allow_pickle=False)
+                                     for n in self.ASSEMBLED)
+        except (OSError, ValueError, EOFError):
+            return None
+        ok = (indptr.dtype == np.int64 and indices.dtype == np.int32 and data.dtype == np.uint8
+              and indptr.shape == (n_rows + 1,) and len(indices) == len(data)
+              and int(indptr[0]) == 0 and int(indptr[-1]) == len(indices))
+        return (indptr, indices, data) if ok else None
+
+    def write_assembled(self, indptr: np.ndarray, nnz: int, block_indices) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Write the assembled V of ``nnz`` entries: the blocks' indices from ``block_indices``
+        (an iterator of (offset, indices) in block order, which also fills ``indptr``
+        (rows + 1,) int64, in memory: it is small), each file atomically; returns
+        load_assembled()'s memory maps."""
+        nnz = int(nnz)
+        with atomic_npy_memmap(self.assembled_path("indices"), np.int32, (nnz,)) as out:
+            for pos, bi in block_indices:
+                out[pos:pos + len(bi)] = bi
+        with atomic_npy_memmap(self.assembled_path("data"), np.uint8, (nnz,)) as out:
+            step = 1 << 26
+            for a in range(0, nnz, step):
+                out[a:a + step] = 1
+        if int(indptr[-1]) != nnz:
+            raise ValueError(f"cache: the blocks hold {int(indptr[-1])} entries, expected {nnz}")
+        with atomic_npy_memmap(self.assembled_path("indptr"), np.int64, indptr.shape) as out:
+            out[:] = indptr
+        got = self.load_assembled(len(indptr) - 1)
+        if got is None:  # pragma: no cover - the files were just written
+            raise OSError(f"cache: cannot read back the assembled V in {self.dir}")
+        return got

@@ -200,6 +200,10 @@ def chunked_rows(n_cols: int, bounds: list[tuple[int, int]], task: Callable, mak
             done += 1
             if progress:
                 progress("visibility", done, len(bounds))
+    if store is not None:  # out of core: V as memory-mapped CSR files in the cache entry
+        V = _assembled(store, n, n_cols, bounds, nnz, task, make_shared, shared, cached)
+        if V is not None:
+            return V, cached
     indptr = np.zeros(n + 1, np.int64)
     indices = np.empty(int(nnz.sum()), np.int32)
     pos = 0
@@ -223,6 +227,45 @@ def chunked_rows(n_cols: int, bounds: list[tuple[int, int]], task: Callable, mak
     indices = indices[:pos]
     V = sp.csr_matrix((np.ones(len(indices), np.uint8), indices, indptr), shape=(n, n_cols))
     return V, cached
+
+
+class _BlockChanged(Exception):
+    """A cached block was recomputed with another entry count during the assembly."""
+
+
+def _assembled(store, n: int, n_cols: int, bounds: list[tuple[int, int]], nnz: np.ndarray, task: Callable,
+               make_shared: Callable[[], object], shared, cached: list[int]) -> sp.csr_matrix | None:
+    """V from the store's assembled CSR files (memory-mapped), writing them block by block
+    first when missing; the working set is one block. None when a block changed size
+    while being read (the caller then assembles in memory)."""
+    got = store.load_assembled(n)
+    if got is None or len(got[1]) != int(nnz.sum()):
+        indptr = np.zeros(n + 1, np.int64)
+        state = {"shared": shared}
+
+        def blocks():
+            pos = 0
+            for k, (s, e) in enumerate(bounds):
+                blk = store.load(k)
+                if blk is None or len(blk[1]) != nnz[k]:  # damaged or replaced since its count was read
+                    state["shared"] = make_shared() if state["shared"] is None else state["shared"]
+                    blk = task(state["shared"], (s, e))
+                    store.save(k, *blk)
+                    if k in cached:
+                        cached.remove(k)
+                    if len(blk[1]) != nnz[k]:
+                        raise _BlockChanged
+                bp, bi = blk
+                indptr[s + 1:e + 1] = bp[1:] + pos
+                yield pos, bi
+                pos += len(bi)
+
+        try:
+            got = store.write_assembled(indptr, int(nnz.sum()), blocks())
+        except _BlockChanged:
+            return None
+    indptr, indices, data = got
+    return sp.csr_matrix((data, indices, indptr), shape=(n, n_cols), copy=False)
 
 
 def drop_blind_candidates(vis: Visibility) -> Visibility:

@@ -129,6 +129,7 @@ def prepare_site(scene: str | Path | SceneSpec, progress: Progress | None = None
                          f"generated, {len(cands)} in free space); check mounts, cameras (max_range, fov_deg) "
                          f"and targets")
     tg = vis.targets
+    _stage(progress, "feasibility")
     feas = check_feasibility(vis.V, tg.gamma, vis.candidates.location_ids, tg.region_ids, tg.region_names)
     if not feas.ok:
         msg = feas.describe(tg.positions, tg.region_ids, tg.region_names)
@@ -349,6 +350,8 @@ def run(scene: str | Path | SceneSpec, budget: int | None = None, solver: str | 
         solver_options.setdefault("should_stop", should_stop)
     if progress is not None:
         solver_options.setdefault("progress", progress)  # solver stages (greedy, tabu, mip, ...) as bars
+    if solver == "zones" and not well_triangulated:  # the tiles run where V ran; sweeps resume from the cache
+        _zones_defaults(solver_options, workers, scheduler, cache_dir)
     money = sc.spec.placement.money_budget if money_budget is None else money_budget
     if money is not None and not (money >= 0 and np.isfinite(money)):
         raise InputError(f"money budget: expected a non-negative number, got {money!r}")
@@ -378,6 +381,7 @@ def run(scene: str | Path | SceneSpec, budget: int | None = None, solver: str | 
             guard=None if site is None else site.guard)
         timings["beyond_grid"] = time.perf_counter() - t
     t = time.perf_counter()
+    _stage(progress, "metrics")
     if site is not None:  # existing cameras join V and the selection, with the full Γ
         vis, problem, placement = site.fold(vis, problem, placement)
     metrics = placement_metrics(vis, problem, placement.selected, triangulation_deg)
@@ -386,6 +390,21 @@ def run(scene: str | Path | SceneSpec, budget: int | None = None, solver: str | 
     metrics = replace(metrics, grid_cost=grid_cost(placement))
     timings["metrics"] = time.perf_counter() - t
     return RunResult(sc, vis, problem, placement, metrics, timings, log)
+
+
+def _zones_defaults(options: dict, workers: int, scheduler: str | None, cache_dir: str | Path | None) -> None:
+    """The zone solver's executor and checkpoint from the run's: its tiles on the same
+    Dask scheduler (or ``CAMPLACE_SCHEDULER``) or ``workers`` processes as the visibility
+    blocks, and its per-sweep checkpoints under ``cache_dir``/zones (so an interrupted run
+    resumes from the cached V blocks and from the last finished sweep)."""
+    import os
+
+    from camplace.visibility.executors import SCHEDULER_ENV
+
+    options.setdefault("workers", workers)
+    options.setdefault("scheduler", scheduler or os.environ.get(SCHEDULER_ENV) or None)
+    if cache_dir is not None:
+        options.setdefault("checkpoint", str(Path(cache_dir).expanduser() / "zones"))
 
 
 def grid_cost(placement: Placement) -> float | None:
