@@ -144,7 +144,7 @@ def test_checkpoint_resumes(tmp_path):
     one = solve_zones(p, tile_m=10.0, max_sweeps=1, checkpoint=str(tmp_path))
     f = checkpoint_path(tmp_path, problem_key(p))
     saved = json.loads(f.read_text())
-    assert saved["sweeps"] == 1 and saved["selected"] == one.selected.tolist()
+    assert saved["sweeps"] == 1 and saved["batches"] == 0 and saved["selected"] == one.selected.tolist()
     again = solve_zones(p, tile_m=10.0, checkpoint=str(tmp_path))
     assert again.info["resumed_from_sweep"] == 1 and again.info["start_objective"] == one.objective
     assert again.objective <= one.objective
@@ -176,3 +176,19 @@ def test_dask_cluster_equals_serial():
         b = solve_zones(p, tile_m=10.0, seed=2, max_sweeps=2, scheduler=cl.scheduler_address)
     assert b.info["executor"] == "dask"
     assert np.array_equal(a.selected, b.selected) and a.objective == b.objective
+
+
+def test_checkpoint_after_each_batch_resumes_mid_sweep(tmp_path):
+    """A stop after the first colour batch: the checkpoint says 1 batch done; the restart
+    skips that batch and ends where an uninterrupted solve ends."""
+    p = floor_problem(9, 40, 20, 40, 160, 8)
+    full = solve_zones(p, tile_m=10.0, seed=1)
+    n = []
+    cut = solve_zones(p, tile_m=10.0, seed=1, checkpoint=str(tmp_path), progress=lambda *a: n.append(a),
+                      should_stop=lambda: len(n) >= 1)
+    assert cut.status == "interrupted"
+    saved = json.loads(checkpoint_path(tmp_path, problem_key(p)).read_text())
+    assert (saved["sweeps"], saved["batches"]) == (0, 1) and saved["selected"] == cut.selected.tolist()
+    again = solve_zones(p, tile_m=10.0, seed=1, checkpoint=str(tmp_path))
+    assert (again.info["resumed_from_sweep"], again.info["resumed_batches"]) == (0, 1)
+    assert again.objective == pytest.approx(full.objective) and np.array_equal(again.selected, full.selected)

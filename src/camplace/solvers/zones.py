@@ -71,8 +71,10 @@ def checkpoint_path(folder: str | Path, key: str) -> Path:
     return Path(folder) / f"zones-{key}.json"
 
 
-def load_checkpoint(problem: PlacementProblem, folder: str | Path | None, key: str) -> tuple[np.ndarray, int] | None:
-    """(selection, sweeps done) saved for this problem, None when absent, unreadable or infeasible."""
+def load_checkpoint(problem: PlacementProblem, folder: str | Path | None,
+                    key: str) -> tuple[np.ndarray, int, int] | None:
+    """(selection, sweeps done, colour batches done in the next sweep) saved for this
+    problem, None when absent, unreadable or infeasible."""
     if folder is None:
         return None
     path = checkpoint_path(folder, key)
@@ -82,16 +84,18 @@ def load_checkpoint(problem: PlacementProblem, folder: str | Path | None, key: s
         if data.get("key") != key:
             return None
         problem.check_feasible(sel)
-        return sel, int(data.get("sweeps", 0))
+        return sel, int(data.get("sweeps", 0)), int(data.get("batches", 0))
     except (OSError, ValueError, KeyError, TypeError):
         return None
 
 
-def save_checkpoint(folder: str | Path, key: str, selected: np.ndarray, cost: float, sweeps: int) -> None:
-    """Write the selection after ``sweeps`` sweeps atomically (camplace.core.files)."""
+def save_checkpoint(folder: str | Path, key: str, selected: np.ndarray, cost: float, sweeps: int,
+                    batches: int = 0) -> None:
+    """Write the selection after ``sweeps`` complete sweeps and ``batches`` colour batches
+    of the next one atomically (camplace.core.files)."""
     Path(folder).mkdir(parents=True, exist_ok=True)
-    atomic_write_json(checkpoint_path(folder, key), {"key": key, "sweeps": int(sweeps), "cost": float(cost),
-                                                     "selected": [int(i) for i in selected]})
+    atomic_write_json(checkpoint_path(folder, key), {"key": key, "sweeps": int(sweeps), "batches": int(batches),
+                                                     "cost": float(cost), "selected": [int(i) for i in selected]})
 
 
 class _Globals:
@@ -216,10 +220,10 @@ def solve_zones(problem: PlacementProblem, *, time_limit_s: float | None = None,
     info: dict = {}
     key = problem_key(problem) if checkpoint is not None else ""
     resumed = load_checkpoint(problem, checkpoint, key)
-    sweeps_done = 0
+    sweeps_done, skip = 0, 0
     if resumed is not None:
-        sel, sweeps_done = resumed
-        info["resumed_from_sweep"] = sweeps_done
+        sel, sweeps_done, skip = resumed
+        info.update(resumed_from_sweep=sweeps_done, resumed_batches=skip)
     elif initial is not None:
         sel = np.sort(np.asarray(initial, np.int64))
         try:
@@ -261,7 +265,11 @@ def solve_zones(problem: PlacementProblem, *, time_limit_s: float | None = None,
             sweep = sweeps_done + len(sweep_log)
             tiling = make_tiling(problem, size, 0.5 * size * (sweep % 2), xy)
             before, n_better, n_mip = cost, 0, 0
-            for c in range(int(tiling.colour.max()) + 1 if tiling.n_tiles else 0):
+            n_colours = int(tiling.colour.max()) + 1 if tiling.n_tiles else 0
+            saved = (sweep, skip)
+            for c in range(n_colours):
+                if c < skip:  # done before the restart (checkpoint)
+                    continue
                 left = time_left(end)
                 if stopped(should_stop) or (left is not None and left <= 0.05):
                     break
@@ -272,7 +280,9 @@ def solve_zones(problem: PlacementProblem, *, time_limit_s: float | None = None,
                     rounds = -(-len(tasks) // max(1, runner.workers))
                     tasks = [replace(t, time_limit_s=max(0.05, min(tile_time_s, left / rounds))) for t in tasks]
                 n_mip += sum(t.method == "mip" for t in tasks)
-                for task, (tile, local, _, _) in zip(tasks, runner.map(tasks, should_stop, end)):
+                results = runner.map(tasks, should_stop, end)
+                cut = any(r[3] in ("interrupted", "skipped") for r in results)
+                for task, (tile, local, _, _) in zip(tasks, results):
                     rows = tiling.rows[tile]
                     new = np.sort(np.concatenate([sel[tiling.tile_of[sel] != tile], rows[local]]))
                     if not g.ok(new):
@@ -284,6 +294,9 @@ def solve_zones(problem: PlacementProblem, *, time_limit_s: float | None = None,
                             on_incumbent(cost, bound)
                 if progress:
                     progress("zones", c + 1, int(tiling.colour.max()) + 1)
+                if checkpoint is not None:  # a batch with a tile cut by the stop or skipped counts as not done
+                    save_checkpoint(checkpoint, key, sel, cost, sweep, c if cut else c + 1)
+                    saved = (sweep, c if cut else c + 1)
             n_moves = 0
             if moves and not stopped(should_stop) and time.perf_counter() < end:
                 sel, n_moves = budget_moves(problem, sel, tiling, g, should_stop, end)
@@ -294,8 +307,9 @@ def solve_zones(problem: PlacementProblem, *, time_limit_s: float | None = None,
             sweep_log.append({"sweep": sweep, "tiles": tiling.n_tiles, "colours": int(tiling.colour.max()) + 1
                               if tiling.n_tiles else 0, "mip_tiles": n_mip, "improved_tiles": n_better,
                               "moves": n_moves, "cost": cost, "seconds": time.perf_counter() - t0})
-            if checkpoint is not None:
+            if checkpoint is not None and saved == (sweep, n_colours):  # the whole sweep done
                 save_checkpoint(checkpoint, key, sel, cost, sweep + 1)
+            skip = 0
             idle = idle + 1 if cost >= before - TOL * max(1.0, before) else 0
     if status == "heuristic" and bound >= cost - 1e-9 * max(1.0, cost):
         status = "optimal"
