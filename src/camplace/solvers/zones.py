@@ -202,7 +202,7 @@ def solve_zones(problem: PlacementProblem, *, time_limit_s: float | None = None,
     between neighbouring tiles and the full-problem Lagrangian bound (module doc).
     tile_m: tile side (m, default 3 × the camera range); max_tile_nnz: largest tile model
     solved by the MIP; tile_time_s: per-tile limit (s); workers / scheduler: where the tiles
-    of one colour run; checkpoint: folder for the per-sweep selection (resume); initial:
+    of one colour run; checkpoint: folder for the per-batch selection (resume); initial:
     start selection (candidate ids; default greedy-fast)."""
     from camplace.solvers.bounds import lagrangian_bound
     from camplace.solvers.greedy_fast import solve_greedy_fast
@@ -311,7 +311,9 @@ def solve_zones(problem: PlacementProblem, *, time_limit_s: float | None = None,
                 save_checkpoint(checkpoint, key, sel, cost, sweep + 1)
             skip = 0
             idle = idle + 1 if cost >= before - TOL * max(1.0, before) else 0
-    if status == "heuristic" and bound >= cost - 1e-9 * max(1.0, cost):
+    if stopped(should_stop):  # also when the stop came in the last sweep
+        status = "interrupted"
+    elif status == "heuristic" and bound >= cost - 1e-9 * max(1.0, cost):
         status = "optimal"
     info.update(sweeps=sweep_log, key=key or None)
     return Placement(sel, cost, min(bound, cost), status, "zones", time.perf_counter() - t0, info)
