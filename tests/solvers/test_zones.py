@@ -152,6 +152,11 @@ def test_checkpoint_resumes(tmp_path):
     assert "resumed_from_sweep" not in solve_zones(other, tile_m=10.0, max_sweeps=1,
                                                    checkpoint=str(tmp_path)).info
     assert problem_key(p) != problem_key(other)
+    from dataclasses import replace
+
+    wide = sp.csr_matrix((p.V.data, p.V.indices.astype(np.int64), p.V.indptr.astype(np.int64)), shape=p.V.shape)
+    assert problem_key(replace(p, V=wide)) == problem_key(p)  # the stored index dtype does not matter
+    assert problem_key(replace(p, budget=p.budget + 1)) != problem_key(p)
 
 
 def test_bad_options_and_missing_positions():

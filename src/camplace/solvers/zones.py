@@ -59,7 +59,10 @@ def problem_key(problem: PlacementProblem) -> str:
     h = hashlib.blake2b(digest_size=12)
     for a in (problem.V.indptr, problem.V.indices, problem.gamma, problem.weights, problem.location_ids,
               problem.costs, np.zeros(0) if problem.type_ids is None else problem.type_ids):
-        h.update(np.ascontiguousarray(a).tobytes())
+        a = np.asarray(a).ravel()
+        kind = np.int64 if a.dtype.kind in "iub" else np.float64  # the same key whatever the stored dtype
+        for i in range(0, len(a), 1 << 22):  # in pieces: a memory-mapped V is never copied whole
+            h.update(memoryview(np.ascontiguousarray(a[i:i + (1 << 22)], dtype=kind)))
         h.update(b"|")
     h.update(repr((int(problem.budget), problem.money_budget, sorted((problem.type_limits or {}).items()),
                    problem.V.shape)).encode())
