@@ -102,3 +102,18 @@ def test_run_resumes_from_the_cached_blocks(tmp_path):
     same_csr(resumed.visibility.V, ref.visibility.V)
     assert np.array_equal(resumed.placement.selected, ref.placement.selected)
     assert resumed.metrics.to_dict() | {"timings_s": {}} == ref.metrics.to_dict() | {"timings_s": {}}
+
+
+def test_zones_run_resumes_from_its_checkpoint_under_the_cache(tmp_path):
+    """With the zone solver, the run's cache also holds the per-sweep checkpoint: a second
+    run loads every V block and starts from the last finished sweep."""
+    from camplace.workflows.run import run
+
+    opts = {"solver": "zones", "cache_dir": tmp_path, "tile_time_s": 20.0, "bound_time_s": 1.0}
+    first = run("warehouse:300", max_sweeps=1, **opts)
+    assert list((tmp_path / "zones").glob("*.json"))
+    assert first.placement.info.get("resumed_from_sweep") is None
+    second = run("warehouse:300", max_sweeps=2, **opts)
+    assert second.visibility.info["cached_chunks"] == second.visibility.info["chunks"]
+    assert second.placement.info["resumed_from_sweep"] == 1
+    assert second.placement.objective <= first.placement.objective

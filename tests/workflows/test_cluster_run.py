@@ -55,3 +55,14 @@ def test_api_run_on_a_cluster_used_the_cluster(cluster):
     same_csr(remote.visibility.V, local.visibility.V)
     assert np.array_equal(remote.placement.selected, local.placement.selected)
     assert remote.placement.objective == local.placement.objective
+
+
+def test_zones_tiles_run_on_the_same_cluster(cluster):
+    from camplace.workflows.run import run
+
+    opts = {"solver": "zones", "max_sweeps": 1, "tile_time_s": 60.0, "bound_time_s": 1.0}
+    local = run(SCENE, **opts)
+    remote = run(SCENE, scheduler=cluster.scheduler_address, **opts)
+    assert remote.placement.info["executor"] == "dask" and local.placement.info["executor"] == "in-process"
+    assert np.array_equal(remote.placement.selected, local.placement.selected)
+    assert remote.placement.objective == local.placement.objective

@@ -42,6 +42,8 @@ def plotly_js() -> str:
 # ----------------------------------------------------------------------------- camera views
 VIEW_WIDTH = 240  # pixels of each rendered camera view in the report
 VIEW_BUDGET_S = 1.0  # rendering stops after this many seconds (the rest: `camplace render`)
+VIEW_MAX_CELLS = 80_000_000  # occupancy cells above which no view is rendered (preparing the grids alone
+#                             takes longer than the report's budget: ~10 s per 70 M cells on 2 cores)
 
 
 def camera_views(scene, vis, selected: np.ndarray, width: int = VIEW_WIDTH,
@@ -58,6 +60,8 @@ def camera_views(scene, vis, selected: np.ndarray, width: int = VIEW_WIDTH,
 
     t0 = time.perf_counter()
     sel = np.asarray(selected, np.int64)
+    if np.isfinite(budget_s) and int(np.prod(scene.occupancy.occupied.shape)) > VIEW_MAX_CELLS:
+        return [], len(sel)  # a site-scale scene: the page says none of them is shown
     cov = np.bincount(vis.V[sel].indices, minlength=vis.V.shape[1]) if len(sel) else np.zeros(vis.V.shape[1], int)
     cls = coverage_class(cov)
     colours = np.array([[int(c[1:3], 16), int(c[3:5], 16), int(c[5:7], 16)] for _, c in COVERAGE_CLASSES], np.uint8)
@@ -94,8 +98,11 @@ def _views_section(views: list[dict] | None, skipped: int) -> str:
         return ""
     cards = "".join(f"<figure><img src='{v['uri']}' alt='view of camera {v['id']}'>"
                     f"<figcaption>{html.escape(v['caption'])}</figcaption></figure>" for v in views)
-    more = (f"<p class=note>{skipped} more views not rendered within the report's time budget; "
-            f"<code>camplace render</code> draws any camera.</p>" if skipped else "")
+    shown = len(views)
+    why = " (this scene is too large to prepare its grids within it)" if not shown else ""
+    more = (f"<p class=note>showing {shown} of {shown + skipped} camera views: {skipped} more views not rendered "
+            f"within the report's time budget{why}; <code>camplace render</code> draws any camera.</p>"
+            if skipped else "")
     return (f"<section><h2>Camera views</h2><p class=note>What each selected camera sees (rays through its "
             f"lens model into the occupancy grid, in grey, darker beyond range); dots: the targets it covers, "
             f"coloured by how many selected cameras see them.</p><div class='views'>{cards}</div>{more}</section>")
