@@ -186,7 +186,8 @@ class StageSampler:
         return self.stages
 
 
-def run_one(size: float, solver: str, budget: int | None, cache: Path, out_dir: Path, time_limit_s: float) -> dict:
+def run_one(size: float, solver: str, budget: int | None, cache: Path, out_dir: Path | None,
+            time_limit_s: float) -> dict:
     """camplace run warehouse:<size> end to end in this process (cache at ``cache``,
     outputs and plan set into ``out_dir``); per-stage time and memory."""
     from camplace.outputs.write import write_outputs
@@ -198,8 +199,9 @@ def run_one(size: float, solver: str, budget: int | None, cache: Path, out_dir: 
             time_limit_s=time_limit_s)
     sampler("outputs", 0, 1)
     t = time.perf_counter()
-    write_outputs(out_dir, r.scene.name, r.visibility, r.placement, r.problem.budget, r.metrics, r.timings_s,
-                  scene=r.scene)
+    if out_dir is not None:  # None: --no-outputs
+        write_outputs(out_dir, r.scene.name, r.visibility, r.placement, r.problem.budget, r.metrics, r.timings_s,
+                      scene=r.scene)
     report_s = time.perf_counter() - t
     total = time.perf_counter() - t0
     st = sampler.close()
@@ -387,6 +389,7 @@ def main() -> None:
     ap.add_argument("--cache", type=Path, default=None, help="--run: the visibility cache (default a temp folder)")
     ap.add_argument("--outputs", type=Path, default=None, help="--run: where the outputs go (default a temp folder)")
     ap.add_argument("--time-limit", type=float, default=600.0, help="--run: the solver's time limit, s")
+    ap.add_argument("--no-outputs", action="store_true", help="--run: stop after the metrics (no files written)")
     ap.add_argument("--tiled", type=int, default=0, metavar="K",
                     help="the stages after visibility on K side-by-side copies of each size's (cached) V")
     ap.add_argument("--one", type=float, default=None, help=argparse.SUPPRESS)
@@ -396,7 +399,8 @@ def main() -> None:
         print(json.dumps(tiled_one(a.one, a.tiled, a.solvers[0], a.cache, a.outputs, a.time_limit)))
         return
     if a.one is not None and a.mode == "run":
-        print(json.dumps(run_one(a.one, a.solvers[0], a.budget, a.cache, a.outputs, a.time_limit)))
+        print(json.dumps(run_one(a.one, a.solvers[0], a.budget, a.cache, None if a.no_outputs else a.outputs,
+                                 a.time_limit)))
         return
     if a.one is not None:
         print(json.dumps(one(a.one, a.mode, a.dask_workers, a.solvers, a.budget)))
@@ -424,7 +428,7 @@ def main() -> None:
                 outd = (a.outputs or Path(tmp) / "out") / f"warehouse-{size:g}"
                 cmd = [sys.executable, __file__, "--one", str(size), "--mode", "run", "--solvers", a.solvers[0],
                        "--cache", str(cache), "--outputs", str(outd), "--time-limit", str(a.time_limit)]
-                cmd += ["--budget", str(a.budget)] if a.budget else []
+                cmd += (["--budget", str(a.budget)] if a.budget else []) + (["--no-outputs"] if a.no_outputs else [])
                 results.append(_child(cmd))
         _save(a.out, results)
         print(run_table(results))

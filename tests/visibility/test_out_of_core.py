@@ -117,3 +117,14 @@ def test_zones_run_resumes_from_its_checkpoint_under_the_cache(tmp_path):
     assert second.visibility.info["cached_chunks"] == second.visibility.info["chunks"]
     assert second.placement.info["resumed_from_sweep"] == 1
     assert second.placement.objective <= first.placement.objective
+
+
+def test_release_pages_keeps_the_values(tmp_path, demo_inputs, ref_v):
+    from camplace.visibility.cache import release_pages
+
+    sc, t, c = demo_inputs
+    V = compute_visibility(sc.occupancy, t, c, chunk_size=CHUNK, cache_dir=tmp_path).V
+    assert int(V.indices.sum()) == int(ref_v.indices.sum())  # every page touched
+    assert release_pages(V.indices, V.data) == 2
+    same_csr(V, ref_v)  # read back from the page cache
+    assert release_pages(np.arange(5), ref_v.indices) == 0  # plain arrays: nothing to release

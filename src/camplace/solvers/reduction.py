@@ -20,6 +20,7 @@ import scipy.sparse as sp
 
 from camplace.problem.model import PlacementProblem, Reduction, reduce_problem
 from camplace.solvers.base import Placement
+from camplace.visibility.cache import release_pages
 
 _M1 = np.uint64(0x9E3779B97F4A7C15)
 _M2 = np.uint64(0xC2B2AE3D27D4EB4F)
@@ -196,6 +197,7 @@ def reduce_streaming(problem: PlacementProblem, dominance: bool = True) -> Reduc
     new_id = np.full(n_p, -1, np.int64)
     new_id[live_t[reps]] = np.arange(n_new)
     ok, r_ptr, r_idx = _check_and_build(indptr, indices, live, cand, rep, new_id)
+    release_pages(V.indices, V.data)  # a memory-mapped V (the cache): its pages leave this process's RSS
     if not ok:  # a hash collision merged two different columns: the exact (in-memory) path
         return reduce_problem(problem, dominance)
     first = reps
