@@ -34,3 +34,25 @@ def test_target_cloud_is_capped_and_said(demo_run):
     assert f"showing 100 of {len(t.positions)} targets" in page or \
         (f"of {len(t.positions)} targets" in page and "showing" in page)
     assert np.all(cov >= 0)
+
+
+def test_many_cameras_draw_a_sample_of_frusta_and_say_so(demo_run, monkeypatch):
+    from camplace.outputs import report_figures
+    from camplace.outputs.figures import SceneView
+    from camplace.outputs.write import placement_dict
+
+    t = demo_run.visibility.targets
+    cov = demo_run.problem.coverage(demo_run.placement.selected)
+    placement = placement_dict(demo_run.scene.name, demo_run.placement, demo_run.problem.budget,
+                               demo_run.visibility.candidates)
+    cams = placement["cameras"]
+    assert len(cams) >= 3
+    monkeypatch.setattr(report_figures, "MAX_FRUSTA", 2)
+    view = SceneView.from_targets("demo", t.positions, cams)
+    fig, _ = report_figures.view3d_figure(view, t.positions, cov, t.gamma, t.region_ids, t.region_names, cams)
+    frusta = next(d for d in fig["data"] if str(d.get("name", "")).startswith("camera frusta"))
+    assert frusta["name"] == f"camera frusta (showing 2 of {len(cams)})"
+    assert sum(v is None for v in frusta["x"]) == 2 * 8  # 8 edges per drawn frustum
+    page = report_html.render_report(view, placement, {"regions": {}}, t.positions, t.is_surface, cov, t.gamma,
+                                     t.region_ids, t.region_names, dated=False)
+    assert f"showing 2 of {len(cams)} camera frusta" in page

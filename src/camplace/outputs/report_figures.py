@@ -16,6 +16,7 @@ from camplace.outputs.figures import (COVERAGE_CLASSES, REGION_COLOURS, Coverage
 from camplace.outputs.walls import label_colours, prism_mesh, svg_path
 
 MAX_POINTS = 60_000  # target markers drawn in the 3D view at most (uniform subsample above)
+MAX_FRUSTA = 300  # camera frusta drawn at most (an even sample above); above it ids show on hover only
 
 
 def _r(a, nd: int = 3) -> list:
@@ -164,11 +165,17 @@ def frustum_corners(cam: dict, depth: float) -> np.ndarray:
     return np.vstack([C, C + d @ R.T])
 
 
+def shown_frusta(n: int) -> np.ndarray:
+    """Indices of the cameras whose frusta are drawn: all up to MAX_FRUSTA, else an even sample of that many."""
+    return np.arange(n) if n <= MAX_FRUSTA else np.unique(np.linspace(0, n - 1, MAX_FRUSTA).round().astype(int))
+
+
 def _camera_traces(cameras: list[dict], depth: float) -> list[dict]:
     if not cameras:
         return []
     xs, ys, zs = [], [], []
-    for cam in cameras:
+    drawn = shown_frusta(len(cameras))
+    for cam in (cameras[int(k)] for k in drawn):
         p = frustum_corners(cam, depth)
         for a, b in ((0, 1), (0, 2), (0, 3), (0, 4), (1, 2), (2, 3), (3, 4), (4, 1)):
             xs += [p[a, 0], p[b, 0], None]
@@ -179,10 +186,13 @@ def _camera_traces(cameras: list[dict], depth: float) -> list[dict]:
     hover = [f"camera {c.get('candidate_id')} ({html.escape(str(c.get('camera', '')))})<br>"
              f"yaw {c['yaw_deg']:.1f}\u00b0 pitch {c['pitch_deg']:.1f}\u00b0 roll {c['roll_deg']:.1f}\u00b0"
              for c in cameras]
+    few = len(cameras) <= MAX_FRUSTA
     return [
-        {"type": "scatter3d", "mode": "lines", "x": _r(xs), "y": _r(ys), "z": _r(zs), "name": "camera frusta",
+        {"type": "scatter3d", "mode": "lines", "x": _r(xs), "y": _r(ys), "z": _r(zs),
+         "name": "camera frusta" if few else f"camera frusta (showing {len(drawn)} of {len(cameras)})",
          "line": {"color": "#000000", "width": 3}, "hoverinfo": "skip"},
-        {"type": "scatter3d", "mode": "markers+text", "x": _r(pos[:, 0]), "y": _r(pos[:, 1]), "z": _r(pos[:, 2]),
+        {"type": "scatter3d", "mode": "markers+text" if few else "markers", "x": _r(pos[:, 0]), "y": _r(pos[:, 1]),
+         "z": _r(pos[:, 2]),
          "text": ids, "textposition": "top center", "textfont": {"size": 10, "color": "#000000"},
          "marker": {"size": 4, "color": "#000000", "symbol": "diamond"}, "name": f"cameras ({len(cameras)})",
          "hovertext": hover, "hovertemplate": "%{hovertext}<br>(%{x}, %{y}, %{z}) m<extra></extra>"},
@@ -223,7 +233,8 @@ def slice_figure(sl: CoverageSlice, view: SceneView, cameras: list[dict]) -> dic
              "hovertemplate": "(%{x}, %{y}) m: seen by %{customdata} cameras<extra></extra>"}]
     if cameras:
         pos = np.array([c["position"] for c in cameras], float)
-        data.append({"type": "scatter", "mode": "markers+text", "x": _r(pos[:, 0]), "y": _r(pos[:, 1]),
+        data.append({"type": "scatter", "mode": "markers+text" if len(cameras) <= MAX_FRUSTA else "markers",
+                     "x": _r(pos[:, 0]), "y": _r(pos[:, 1]),
                      "text": [str(c.get("candidate_id")) for c in cameras], "textposition": "top center",
                      "textfont": {"size": 9}, "marker": {"color": "#000000", "size": 5}, "name": "cameras",
                      "hovertemplate": "camera %{text}<extra></extra>", "showlegend": False})

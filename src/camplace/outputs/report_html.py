@@ -23,7 +23,8 @@ import numpy as np
 
 from camplace.core.files import atomic_write_text
 from camplace.outputs.figures import COVERAGE_CLASSES, CoverageSlice, SceneView, coverage_class, coverage_slices
-from camplace.outputs.report_figures import MAX_POINTS, frustum_depth, histogram_figure, slice_figure, view3d_figure
+from camplace.outputs.report_figures import (MAX_POINTS, frustum_depth, histogram_figure, shown_frusta, slice_figure,
+                                             view3d_figure)
 
 _PLOTLY_JS: str | None = None
 
@@ -133,6 +134,12 @@ def _fmt(v, nd: int = 6) -> str:
     return str(v)
 
 
+def _frusta_note(n: int) -> str:
+    """'' or ' (showing N of M frusta; ids on hover)' when the 3D view draws a sample of the cameras."""
+    k = len(shown_frusta(n))
+    return "" if k == n else f" (showing {k} of {n} camera frusta, an even sample; ids on hover)"
+
+
 def _rows(pairs) -> str:
     return "".join(f"<tr><th>{html.escape(str(k))}</th><td>{html.escape(str(v))}</td></tr>" for k, v in pairs)
 
@@ -232,7 +239,7 @@ def render_report(view: SceneView, placement: dict, metrics: dict, positions: np
 <main>
 <div class="top"><section class="summary"><h2>Summary</h2><table>{_rows(_summary_pairs(placement, metrics, len(positions), n_candidates))}</table></section>
 <section class="view"><h2>3D view</h2><p class="legend">{legend}</p>
-<p class="note">Target voxels coloured by how many selected cameras see them ({sub}); camera frusta drawn {frustum_depth(view):.2f} m deep with candidate ids. Drag to rotate, scroll to zoom, click legend entries to hide a class.</p>
+<p class="note">Target voxels coloured by how many selected cameras see them ({sub}); camera frusta drawn {frustum_depth(view):.2f} m deep with candidate ids{_frusta_note(len(cameras))}. Drag to rotate, scroll to zoom, click legend entries to hide a class.</p>
 <div id="view3d" class="plot"></div></section></div>
 <section><h2>Coverage slices per target height</h2><p class="legend">{legend}</p>
 <p class="note">Volume targets at each height; grey boxes: obstacles crossing that height; black dots: cameras (ids).</p>
