@@ -11,27 +11,10 @@ import pytest
 from starlette.testclient import TestClient
 
 from camplace.planner.app import create_app
-from camplace.planner.opening import open_start
 from camplace.planner.session import Session
 
 TOKEN = "test-token"
 BASE = "http://127.0.0.1:8765"
-
-
-@pytest.fixture(scope="module")
-def demo_dir(tmp_path_factory, demo_run):
-    from camplace.outputs.write import write_outputs
-
-    out = tmp_path_factory.mktemp("planner-api")
-    r = demo_run
-    write_outputs(out, r.scene.name, r.visibility, r.placement, r.problem.budget, r.metrics, r.timings_s,
-                  scene=r.scene, report=False)
-    return out
-
-
-@pytest.fixture(scope="module")
-def opened(demo_dir):
-    return open_start(demo_dir)
 
 
 @pytest.fixture
