@@ -77,6 +77,27 @@ def demo_out(tmp_path_factory, demo_run):
     return out
 
 
+@pytest.fixture(scope="module")
+def demo_dir(tmp_path_factory, demo_run):
+    """The demo run's contract files (grid placement, no report) in a folder of this module's
+    own (the planner tests save into it)."""
+    from camplace.outputs.write import write_outputs
+
+    out = tmp_path_factory.mktemp("planner-demo")
+    r = demo_run
+    write_outputs(out, r.scene.name, r.visibility, r.placement, r.problem.budget, r.metrics, r.timings_s,
+                  scene=r.scene, report=False)
+    return out
+
+
+@pytest.fixture(scope="module")
+def opened(demo_dir):
+    """camplace.planner.opening.open_start on :func:`demo_dir`."""
+    from camplace.planner.opening import open_start
+
+    return open_start(demo_dir)
+
+
 def small_random_problem(seed: int, n_g: int = 9, n_p: int = 10, budget: int = 3, n_loc: int = 5,
                          density: float = 0.4, weighted: bool = False):
     """A random PlacementProblem small enough for brute force (bound tests)."""
