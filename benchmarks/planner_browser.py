@@ -72,13 +72,11 @@ def browser():
 
 
 def wait(drv, js: str, timeout: float = 60.0):
-    t0 = time.monotonic()
-    while time.monotonic() - t0 < timeout:
-        v = drv.execute_script("return " + js)
-        if v:
-            return v
-        time.sleep(0.01)
-    raise TimeoutError(js)
+    """Poll ``return <js>`` in the page (Selenium's WebDriverWait) until it is truthy."""
+    from selenium.webdriver.support.ui import WebDriverWait
+
+    return WebDriverWait(drv, timeout, poll_frequency=0.01).until(lambda d: d.execute_script("return " + js),
+                                                                 message=js)
 
 
 def main() -> None:

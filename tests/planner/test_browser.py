@@ -88,14 +88,14 @@ def browser(server):
 
 def wait_for(drv, js: str, what: str, timeout: float = WAIT_S):
     """Poll ``return <js>`` in the page until it is truthy; fail naming ``what``."""
-    t0 = time.monotonic()
-    while time.monotonic() - t0 < timeout:
-        v = drv.execute_script("return " + js)
-        if v:
-            return v
-        time.sleep(0.05)
-    msg = drv.execute_script("return document.getElementById('message').textContent")
-    raise AssertionError(f"timed out waiting for {what}; page message: {msg!r}")
+    from selenium.common.exceptions import TimeoutException
+    from selenium.webdriver.support.ui import WebDriverWait
+
+    try:
+        return WebDriverWait(drv, timeout, poll_frequency=0.05).until(lambda d: d.execute_script("return " + js))
+    except TimeoutException:
+        msg = drv.execute_script("return document.getElementById('message').textContent")
+        raise AssertionError(f"timed out waiting for {what}; page message: {msg!r}") from None
 
 
 def metric_text(drv) -> dict:
