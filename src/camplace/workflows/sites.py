@@ -29,6 +29,7 @@ from camplace.cameras.placement_files import Poses, candidates_from_poses, read_
 from camplace.metrics.coverage import Metrics
 from camplace.problem.gains import shortfall_cost
 from camplace.problem.model import PlacementProblem
+from camplace.problem.offset import offset_gamma
 from camplace.scene.build import Scene
 from camplace.solvers.base import Placement
 from camplace.targets.build import Targets, privacy_targets
@@ -135,7 +136,7 @@ class Site:
         cov = self.coverage()
         if cov is None:
             return problem
-        return replace(problem, gamma=np.maximum(problem.gamma - cov, 0).astype(np.int64))
+        return replace(problem, gamma=offset_gamma(problem.gamma, cov))
 
     def fold(self, vis: Visibility, problem: PlacementProblem,
              placement: Placement) -> tuple[Visibility, PlacementProblem, Placement]:
