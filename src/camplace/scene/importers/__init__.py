@@ -11,6 +11,8 @@ helpers below build those parts the same way for every format.
 from __future__ import annotations
 
 import importlib
+from collections import Counter
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Iterable
 
@@ -27,6 +29,31 @@ UNITS_M = {"mm": 0.001, "cm": 0.01, "m": 1.0, "in": 0.0254, "ft": 0.3048}  # met
 COMMON_OPTIONS = ("name", "units", "wall_height", "ceiling_height", "heights", "coverage", "budget")
 DEFAULT_CEILING_M = 3.0
 MIN_PRISM_AREA_M2 = 1e-4  # wall pieces smaller than this (1 cm²) are dropped
+GRID_M = 1e-4  # every imported polygon is snapped to this grid (the 4 decimals the YAML keeps) and made valid on it
+SLIVER_M = 0.002  # a piece thinner than this (2 mm: area / half its perimeter) is a sliver, dropped
+
+
+@dataclass
+class PlanImport:
+    """What an importer understood of a plan, beside the scene mapping it made.
+
+    ``scene``: the scene-file mapping (room, obstacles, zones, ...; lengths in m).
+    ``kind``: 'ifc', 'dxf' or 'image'. ``used``: what the importer took and how, one
+    short line per item for the summary table (e.g. {"wall layers": "Walls (60 LINE)",
+    "units": "cm ($INSUNITS 5)", "scale": "0.0313 m/px (scale bar)"}). ``skipped``:
+    reason -> count of what it left out (never a failed import for one bad element).
+    ``openings``: plan polygons (m, [[x, y], ...]) of the doors and windows it found,
+    for the preview. ``storeys``: IFC, every storey of the file as {"name",
+    "elevation_m", "rooms": [[name, area m²], ...], "chosen": bool}. ``notes``: lines
+    the user should read (a guessed scale, the default storey and why)."""
+
+    scene: dict
+    kind: str
+    used: dict[str, str] = field(default_factory=dict)
+    skipped: Counter = field(default_factory=Counter)
+    openings: list[list[list[float]]] = field(default_factory=list)
+    storeys: list[dict] = field(default_factory=list)
+    notes: list[str] = field(default_factory=list)
 
 
 def plan_kind(path: str | Path) -> str | None:
@@ -41,22 +68,34 @@ def unit_scale(units: str) -> float:
     return UNITS_M[units]
 
 
-def import_plan(path: str | Path, **options: Any) -> dict:
-    """The scene mapping of a plan file (``options``: None values are left to the
-    importer's defaults; an option the format does not take is an InputError)."""
+def read_plan(path: str | Path, **options: Any) -> PlanImport:
+    """What the importer understood of a plan file: the scene mapping and the summary
+    (``options``: None values are left to the importer's defaults; an option the format
+    does not take is an InputError)."""
     module, p, given = _importer(path, options)
-    return module.import_plan(p, **given)
+    return module.read(p, **given)
 
 
-def import_storey_plans(path: str | Path, **options: Any) -> list[tuple[str, dict, float]]:
-    """(storey name, scene mapping, floor elevation m) of every storey of an IFC file
-    (storey 'all'; options as import_plan). Each scene has its floor at z = 0."""
+def import_plan(path: str | Path, **options: Any) -> dict:
+    """The scene mapping of a plan file (options as read_plan)."""
+    return read_plan(path, **options).scene
+
+
+def read_storey_plans(path: str | Path, **options: Any) -> list[tuple[str, PlanImport, float]]:
+    """(storey name, what was understood, floor elevation m) of every storey of an IFC
+    file (storey 'all'; options as read_plan). Each scene has its floor at z = 0."""
     if plan_kind(path) not in (None, "ifc"):
         raise InputError(f"storey: 'all' belongs to IFC files; {Path(path).name} is a {plan_kind(path)} plan "
                          "with one storey", option="storey")
     module, p, given = _importer(path, dict(options, storey="all"))
     levels = module.storey_elevations(p, units=given.get("units"))
-    return [(name, data, levels.get(name, 0.0)) for name, data in module.import_storeys(p, **given)]
+    return [(name, got, levels.get(name, 0.0)) for name, got in module.read_storeys(p, **given)]
+
+
+def import_storey_plans(path: str | Path, **options: Any) -> list[tuple[str, dict, float]]:
+    """(storey name, scene mapping, floor elevation m) of every storey of an IFC file
+    (storey 'all'; options as import_plan). Each scene has its floor at z = 0."""
+    return [(name, got.scene, elev) for name, got, elev in read_storey_plans(path, **options)]
 
 
 def _importer(path: str | Path, options: dict):
@@ -92,33 +131,78 @@ def _ring(coords: Iterable, digits: int = 4) -> list[list[float]]:
     return [[float(x), float(y)] for x, y in pts]
 
 
-def prism_obstacles(geom, zmin: float, zmax: float, prefix: str, source: dict[str, str],
-                    tolerance: float = 0.005) -> list[dict]:
-    """Scene obstacles (``prism:``) of the polygons of ``geom`` (m), named prefix-1..n,
-    each with ``source`` provenance; simplified by ``tolerance`` m, specks dropped."""
+def _is_sliver(poly: Polygon, min_area: float) -> bool:
+    """True for a piece too small or too thin (mean width 2·area/perimeter < SLIVER_M) to keep."""
+    return poly.area < min_area or 2 * poly.area < SLIVER_M * poly.length
+
+
+def clean_polygons(geom, *, tolerance: float = 0.0, min_area: float = MIN_PRISM_AREA_M2, holes: bool = True,
+                   skipped: Counter | None = None) -> list[Polygon]:
+    """The valid polygons (m) of any shapely geometry, ready for the scene schema: simplified
+    by ``tolerance`` m, snapped to GRID_M and made valid on that grid (shapely make_valid,
+    multipolygons split), slivers and specks under ``min_area`` m² dropped (counted in
+    ``skipped['slivers']``), oriented counter-clockwise. Each polygon's rings rounded to 4
+    decimals still form a valid polygon (the importers never write a prism the schema
+    would refuse); ``holes=False`` keeps the outer rings only."""
+    if geom is None or geom.is_empty:
+        return []
+    g = shapely.make_valid(geom)
+    if tolerance:
+        g = shapely.make_valid(g.simplify(tolerance))
     out = []
-    for poly in polygons_of(shapely.make_valid(geom.simplify(tolerance)) if tolerance else geom):
+    for poly in polygons_of(shapely.make_valid(shapely.set_precision(g, GRID_M))):
+        if not holes:
+            poly = Polygon(poly.exterior)
         poly = shapely.geometry.polygon.orient(poly)
-        if poly.area < MIN_PRISM_AREA_M2 or len(poly.exterior.coords) < 4:
+        if _is_sliver(poly, min_area):
+            if skipped is not None and poly.area > 0:
+                skipped["slivers"] += 1
             continue
-        holes = [_ring(h.coords) for h in poly.interiors if Polygon(h).area >= MIN_PRISM_AREA_M2]
+        rings = [Polygon(h) for h in poly.interiors]
+        kept = [h for h in poly.interiors if Polygon(h).area >= min_area] if rings else []
+        fixed = Polygon(_ring(poly.exterior.coords), [_ring(h.coords) for h in kept])
+        if not fixed.is_valid:  # rounding made it touch itself: one more pass on the grid
+            pieces = polygons_of(shapely.make_valid(shapely.set_precision(fixed.buffer(0), GRID_M)))
+            pieces = [q for q in pieces if not _is_sliver(q, min_area)
+                      and Polygon(_ring(q.exterior.coords), [_ring(h.coords) for h in q.interiors]).is_valid]
+            if not pieces and skipped is not None:
+                skipped["invalid polygons"] += 1
+            out += [shapely.geometry.polygon.orient(q) for q in pieces]
+            continue
+        out.append(shapely.geometry.polygon.orient(fixed))
+    return out
+
+
+def prism_obstacles(geom, zmin: float, zmax: float, prefix: str, source: dict[str, str],
+                    tolerance: float = 0.005, skipped: Counter | None = None) -> list[dict]:
+    """Scene obstacles (``prism:``) of the polygons of ``geom`` (m), named prefix-1..n,
+    each with ``source`` provenance; simplified by ``tolerance`` m and made valid
+    (clean_polygons), slivers counted in ``skipped``. An empty z range gives none."""
+    if not float(zmax) - float(zmin) >= 1e-4:
+        if skipped is not None and geom is not None and not geom.is_empty:
+            skipped["flat elements"] += 1
+        return []
+    out = []
+    for poly in clean_polygons(geom, tolerance=tolerance, skipped=skipped):
         prism: dict = {"polygon": _ring(poly.exterior.coords), "z": [round(float(zmin), 4), round(float(zmax), 4)]}
-        if holes:
-            prism["holes"] = holes
+        if poly.interiors:
+            prism["holes"] = [_ring(h.coords) for h in poly.interiors]
         out.append({"name": f"{prefix}-{len(out) + 1}", "prism": prism, "source": dict(source)})
     return out
 
 
-def room_zones(rooms: list[tuple[str, Polygon]], coverage: int) -> list[dict]:
-    """Volume zones (``zones:``) of named room polygons (m); duplicate names get -2, -3..."""
+def room_zones(rooms: list[tuple[str, Polygon]], coverage: int, skipped: Counter | None = None) -> list[dict]:
+    """Volume zones (``zones:``) of named room polygons (m; outer rings, made valid);
+    a room in several pieces gives name, name-2, ...; duplicate names get -2, -3..."""
     out, seen = [], {}
     for name, poly in rooms:
-        for k, piece in enumerate(polygons_of(poly)):
+        pieces = sorted(clean_polygons(poly, tolerance=0.005, min_area=0.01, holes=False, skipped=skipped),
+                        key=lambda q: -q.area)
+        for k, piece in enumerate(pieces):
             base = name if k == 0 else f"{name}-{k + 1}"
             seen[base] = seen.get(base, 0) + 1
             label = base if seen[base] == 1 else f"{base}-{seen[base]}"
-            ext = shapely.geometry.polygon.orient(piece.simplify(0.005))
-            out.append({"name": label, "polygon": _ring(ext.exterior.coords), "coverage": int(coverage)})
+            out.append({"name": label, "polygon": _ring(piece.exterior.coords), "coverage": int(coverage)})
     return out
 
 
@@ -128,7 +212,8 @@ def footprint_of(parts: list, source: str) -> Polygon:
     if not polys:
         raise InputError(f"{source}: no walls or rooms found to make a footprint of")
     big = max(polys, key=lambda q: q.area)
-    return shapely.geometry.polygon.orient(Polygon(big.exterior).simplify(0.005))
+    outline = shapely.make_valid(shapely.set_precision(Polygon(big.exterior).simplify(0.005), 1e-3))
+    return shapely.geometry.polygon.orient(Polygon(max(polygons_of(outline), key=lambda q: q.area).exterior))
 
 
 def rooms_footprint(rooms: list, walls, gap: float, source: str) -> Polygon:

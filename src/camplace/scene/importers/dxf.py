@@ -18,7 +18,7 @@ import shapely
 from shapely.geometry import LineString, MultiPoint, Point, Polygon, box
 
 from camplace.core.errors import InputError
-from camplace.scene.importers import (DEFAULT_CEILING_M, footprint_of, plan_scene, polygons_of, prism_obstacles,
+from camplace.scene.importers import (PlanImport, DEFAULT_CEILING_M, footprint_of, plan_scene, polygons_of, prism_obstacles,
                                       room_zones, rooms_footprint, unit_scale)
 
 OPTIONS = ("wall_layers", "door_layers", "window_layers", "furniture_layers", "furniture_heights", "room_layers",
@@ -248,3 +248,8 @@ def import_plan(path: Path, *, name: str | None = None, units: str | None = None
     footprint = rooms_footprint([p for _, p in rooms], walls, max_wall_thickness, str(path))
     return plan_scene(name or path.stem, footprint, ceiling, obstacles, room_zones(rooms, coverage or 2),
                       heights=heights, coverage=coverage, budget=budget)
+
+
+def read(path: Path, **options) -> PlanImport:
+    """What was understood of the plan (options as import_plan)."""
+    return PlanImport(import_plan(path, **options), "dxf")

@@ -23,7 +23,7 @@ import shapely
 from shapely.geometry import Polygon
 
 from camplace.core.errors import InputError
-from camplace.scene.importers import (UNITS_M, footprint_of, plan_scene, polygons_of, prism_obstacles, room_zones,
+from camplace.scene.importers import (UNITS_M, PlanImport, footprint_of, plan_scene, polygons_of, prism_obstacles, room_zones,
                                       validated)
 from camplace.scene.importers.ifc_geometry import Element, clip_z, element_shapes, plan_shape, z_bands
 
@@ -289,3 +289,13 @@ def import_plan(path: str | Path, **options) -> dict:
         raise InputError(f"{path}: storey 'all' gives one scene per storey; import them with import_storeys",
                          option="storey")
     return import_storeys(path, **options)[0][1]
+
+
+def read_storeys(path: str | Path, **options) -> list[tuple[str, PlanImport]]:
+    """(storey name, what was understood) of each storey imported (options as import_storeys)."""
+    return [(name, PlanImport(data, "ifc")) for name, data in import_storeys(path, **options)]
+
+
+def read(path: str | Path, **options) -> PlanImport:
+    """What was understood of one storey of an IFC file (options as import_plan)."""
+    return PlanImport(import_plan(path, **options), "ifc")

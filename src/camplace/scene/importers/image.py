@@ -20,7 +20,8 @@ from scipy import ndimage
 from shapely.geometry import Polygon
 
 from camplace.core.errors import InputError
-from camplace.scene.importers import DEFAULT_CEILING_M, plan_scene, prism_obstacles, room_zones, rooms_footprint
+from camplace.scene.importers import (DEFAULT_CEILING_M, PlanImport, plan_scene, prism_obstacles, room_zones,
+                                      rooms_footprint)
 
 OPTIONS = ("scale", "ref", "threshold", "min_wall_thickness", "door_width", "min_room_area")
 MAX_PIXELS = 100_000_000
@@ -130,3 +131,8 @@ def import_plan(path: Path, *, name: str | None = None, units: str | None = None
     footprint = rooms_footprint([p for _, p in rooms], wall_geom, door_width, str(path))
     return plan_scene(name or path.stem, footprint, ceiling, obstacles, room_zones(rooms, coverage or 2),
                       heights=heights, coverage=coverage, budget=budget)
+
+
+def read(path: Path, **options) -> PlanImport:
+    """What was understood of the plan (options as import_plan)."""
+    return PlanImport(import_plan(path, **options), "image")
