@@ -216,6 +216,23 @@ def footprint_of(parts: list, source: str) -> Polygon:
     return shapely.geometry.polygon.orient(Polygon(max(polygons_of(outline), key=lambda q: q.area).exterior))
 
 
+def walls_outline(walls, gap: float = 1.5, min_share: float = 0.5) -> Polygon:
+    """The building's outline (m, no holes) from its walls alone, when no closed rooms
+    say it (open plans, pavilions): the area enclosed by the outer walls (the walls
+    closed over openings up to ``gap`` m, holes filled, largest piece) when it covers at
+    least ``min_share`` of the walls' convex hull; else that convex hull. The same rule
+    for every format, so a DXF and an IFC of one building agree."""
+    hull = walls.convex_hull if walls is not None and not walls.is_empty else Polygon()
+    if not isinstance(hull, Polygon) or hull.area <= 0:
+        raise InputError("no walls to make a footprint of")
+    d = gap / 2
+    closed = shapely.make_valid(walls.buffer(d, join_style="mitre").buffer(-d, join_style="mitre"))
+    filled = [Polygon(q.exterior) for q in polygons_of(closed)]
+    best = max(filled, key=lambda q: q.area) if filled else Polygon()
+    shape = best if best.area >= min_share * hull.area else hull
+    return footprint_of([shape], "walls")
+
+
 def rooms_footprint(rooms: list, walls, gap: float, source: str) -> Polygon:
     """The footprint of a plan: the room polygons (m) merged across the walls between them
     (a closing by ``gap`` m, the thickest wall), outline of the largest piece; the walls'
