@@ -125,7 +125,8 @@ def robust_row(a, problem, grid, row) -> None:
 def triangulation_table(scenes: list[str], budgets: list[int]) -> str:
     """Plain greedy against the triangulation-aware greedy (--well-triangulated)."""
     from camplace.problem.model import shortfall_cost
-    from camplace.metrics.triangulation import effective_coverage, well_triangulated_of_selection
+    from camplace.metrics.triangulation import well_triangulated_of_selection
+    from camplace.problem.triangulation import effective_coverage
 
     out = ["| scene | N_s | greedy | cost | triangulation-aware cost | well triangulated | non-triangulatable | s |",
            "|---|---|---|---|---|---|---|---|"]

@@ -82,7 +82,7 @@ def one(size: float, mode: str, dask_workers: int, solvers: list[str], budget: i
     if mode == "dask":
         from dask.distributed import Client, LocalCluster
 
-        from camplace.visibility.executors import DaskExecutor
+        from camplace.core.executors import DaskExecutor
 
         t = time.perf_counter()
         cluster = LocalCluster(n_workers=dask_workers, threads_per_worker=1, processes=True,

@@ -2,6 +2,8 @@
 
 - imports point down the pipeline's layers (LAYERS), never up, and never in a circle,
   not even inside a function (every ``import`` in the AST counts);
+- solvers see only the problem: camplace.solvers imports camplace.core, camplace.problem
+  and itself, never another stage (executors and memory release are in core/);
 - no module over 500 lines;
 - no library string names a CLI flag (only ``camplace.cli`` words errors for the
   command line).
@@ -61,6 +63,15 @@ def test_imports_point_down():
     up = sorted(f"{m} -> {o}" for m, os in import_graph().items() for o in os
                 if _layer(m) >= 0 and _layer(o) > _layer(m))
     assert not up, "imports that point up the pipeline:\n" + "\n".join(up)
+
+
+SOLVER_SEES = {"core", "problem", "solvers"}
+
+
+def test_solvers_import_only_problem_and_core():
+    bad = sorted(f"{m} -> {o}" for m, os in import_graph().items() if m.startswith("camplace.solvers")
+                 for o in os if o.split(".")[1] not in SOLVER_SEES)
+    assert not bad, "solvers that reach into a stage other than problem/:\n" + "\n".join(bad)
 
 
 def test_no_import_cycles():

@@ -13,8 +13,8 @@ from hypothesis import strategies as st
 
 from camplace.core.errors import InputError
 from camplace.problem.model import build_problem
-from camplace.metrics.triangulation import (effective_coverage, ray_angle_deg, well_triangulated,
-                                            well_triangulated_of_selection)
+from camplace.metrics.triangulation import ray_angle_deg, well_triangulated, well_triangulated_of_selection
+from camplace.problem.triangulation import effective_coverage
 
 FACING = np.array([[-2.0, 0.0, 1.0], [2.0, 0.0, 1.0]])  # two cameras facing each other across (0, 0, 1)
 SIDE = np.array([[-1.0, 0.0, 3.0], [1.0, 0.0, 3.0]])  # side by side 2 m apart, 2 m above the point (0, 0, 1)

@@ -9,7 +9,7 @@ import pytest
 import scipy.sparse as sp
 
 from camplace.core.errors import InputError
-from camplace.metrics.triangulation import effective_coverage
+from camplace.problem.triangulation import effective_coverage
 from camplace.problem.model import build_problem, shortfall_cost
 from camplace.solvers import solve
 

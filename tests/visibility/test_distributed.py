@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from camplace.visibility.executors import (DaskExecutor, InProcessExecutor, ProcessPoolChunkExecutor, SCHEDULER_ENV,
+from camplace.core.executors import (DaskExecutor, InProcessExecutor, ProcessPoolChunkExecutor, SCHEDULER_ENV,
                                   make_executor)
 from camplace.core.errors import InputError
 from camplace.visibility.voxel import compute_visibility

@@ -121,7 +121,7 @@ def test_zones_run_resumes_from_its_checkpoint_under_the_cache(tmp_path):
 
 
 def test_release_pages_keeps_the_values(tmp_path, demo_inputs, ref_v):
-    from camplace.visibility.cache import release_pages
+    from camplace.core.memory import release_pages
 
     sc, t, c = demo_inputs
     V = compute_visibility(sc.occupancy, t, c, chunk_size=CHUNK, cache_dir=tmp_path).V

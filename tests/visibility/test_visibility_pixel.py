@@ -179,7 +179,7 @@ def test_workers_and_cache_give_the_same_v(demo_inputs, tmp_path):
     """Pixel mode runs on the same executors and block cache as voxel mode: a 2-process
     pool and a cached / reloaded V equal the in-process V bit for bit (demo, every 4th
     candidate, stride 16, chunks of 16 candidates)."""
-    from camplace.visibility.executors import InProcessExecutor, ProcessPoolChunkExecutor
+    from camplace.core.executors import InProcessExecutor, ProcessPoolChunkExecutor
 
     sc, t, c = demo_inputs
     c = c.subset(np.arange(0, len(c), 4))

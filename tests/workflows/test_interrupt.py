@@ -212,13 +212,13 @@ def test_visibility_workers_do_not_receive_ctrl_c():
     whole process group) reaches only the parent, which stops between chunks."""
     import re
 
-    from camplace.visibility.executors import _sigint_ignored
+    from camplace.core.executors import sigint_ignored
 
     def blocked(pid: int) -> bool:
         status = Path(f"/proc/{pid}/status").read_text()
         return bool(int(re.search(r"SigBlk:\s*([0-9a-f]+)", status).group(1), 16) & (1 << (signal.SIGINT - 1)))
 
-    with _sigint_ignored():
+    with sigint_ignored():
         child = subprocess.Popen([sys.executable, "-c", "import time; time.sleep(10)"])
     try:
         assert not blocked(os.getpid())  # the parent's mask is restored

@@ -1,4 +1,5 @@
-"""The one memory guard: how much a run may plan to use, and the error when a size won't fit.
+"""The one memory guard: how much a run may plan to use, the error when a size won't fit, and
+``release_pages`` (drop a memory-mapped array's resident pages from this process).
 
 The limit is ``CAMPLACE_MAX_MEMORY_GB`` when set, else 80 % of physical RAM; a library
 call that takes ``max_memory_bytes`` passes it as ``limit``. Every refusal is worded by
@@ -9,6 +10,8 @@ from __future__ import annotations
 
 import math
 import os
+
+import numpy as np
 
 from camplace.core.errors import InputError
 
@@ -69,3 +72,27 @@ def check_grid_memory(shape: tuple[int, ...], bytes_per_cell: float, what: str, 
     return check_memory(grid_bytes(shape, bytes_per_cell), f"{what}: a {'x'.join(str(int(s)) for s in shape)} grid",
                         "use a coarser occupancy_resolution or crop the scan",
                         items=f"{cells:.3g} cells of {bytes_per_cell:g} bytes", limit=limit)
+
+
+def release_pages(*arrays: np.ndarray) -> int:
+    """Drop the resident pages of the memory-mapped files under ``arrays`` (e.g. V's
+    ``indices`` / ``data`` from the cache) from this process (madvise MADV_DONTNEED): they
+    stay in the page cache and fault back in on the next read, so values never change;
+    the process's resident size falls by what it had touched. Returns how many maps
+    were released (arrays not backed by a map are skipped)."""
+    import mmap
+
+    done = 0
+    for a in arrays:
+        b = a
+        while b is not None:
+            m = getattr(b, "_mmap", None) if isinstance(b, np.memmap) else (b if isinstance(b, mmap.mmap) else None)
+            if m is not None and hasattr(m, "madvise") and hasattr(mmap, "MADV_DONTNEED"):
+                try:
+                    m.madvise(mmap.MADV_DONTNEED)
+                    done += 1
+                except (OSError, ValueError):  # closed map, or a platform without it: nothing to release
+                    pass
+                break
+            b = getattr(b, "base", None)
+    return done

@@ -1,7 +1,7 @@
 """``greedy-triangulated``: greedy with the triangulation requirement.
 
 A camera counts toward Γ_j only if it forms a well-conditioned pair at j with another
-selected camera that sees j (camplace.metrics.triangulation has the pair test). The solver
+selected camera that sees j (camplace.problem.triangulation has the pair test). The solver
 needs geometry, which it gets through the problem: ``problem.candidate_positions``
 (N_g, 3) m and ``problem.target_positions`` (N_p, 3) m (set by
 camplace.workflows.run.problem_from_visibility); the registry never reduces its problem.
@@ -15,7 +15,7 @@ import numba
 import numpy as np
 
 from camplace.core.errors import InputError
-from camplace.metrics.triangulation import DEFAULT_MAX_DEG, DEFAULT_MIN_DEG, apply_add, check_angle_range, pair_up
+from camplace.problem.triangulation import DEFAULT_MAX_DEG, DEFAULT_MIN_DEG, apply_add, check_angle_range, pair_up
 from camplace.problem.model import PlacementProblem, TypeBudget, shortfall_cost
 from camplace.solvers.base import OnIncumbent, Placement, ProgressFn, ShouldStop, deadline, stopped
 from camplace.solvers.greedy import marginal_gains

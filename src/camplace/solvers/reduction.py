@@ -20,7 +20,7 @@ import scipy.sparse as sp
 
 from camplace.problem.model import PlacementProblem, Reduction, reduce_problem
 from camplace.solvers.base import Placement
-from camplace.visibility.cache import release_pages
+from camplace.core.memory import release_pages
 
 _M1 = np.uint64(0x9E3779B97F4A7C15)
 _M2 = np.uint64(0xC2B2AE3D27D4EB4F)

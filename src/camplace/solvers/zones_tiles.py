@@ -18,6 +18,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 import scipy.sparse as sp
 
+from camplace.core.executors import DaskExecutor, check_workers, run_task, sigint_ignored
 from camplace.problem.model import PlacementProblem
 from camplace.solvers.base import Placement
 from camplace.solvers.highs_util import convex_model_nnz
@@ -154,19 +155,15 @@ def solve_tile(shared: object, task: TileTask, should_stop=None) -> tuple[int, n
 
 
 def _pool_solve(task: TileTask):
-    from camplace.visibility.executors import run_task
-
     return run_task(solve_tile, None, task, 1)
 
 
 class TileRunner:
     """Solves a list of TileTasks, results in task order: in-process (workers = 1), on a
     persistent local process pool (workers > 1, spawned once per solve), or on a Dask
-    cluster (scheduler address, camplace.visibility.executors.DaskExecutor). A context manager."""
+    cluster (scheduler address, camplace.core.executors.DaskExecutor). A context manager."""
 
     def __init__(self, workers: int = 1, scheduler: str | None = None) -> None:
-        from camplace.visibility.executors import DaskExecutor, check_workers
-
         check_workers(int(workers))
         self.workers = int(workers)
         self._dask = DaskExecutor(scheduler) if scheduler else None
@@ -197,9 +194,7 @@ class TileRunner:
             from concurrent.futures import ProcessPoolExecutor
 
             self._pool = ProcessPoolExecutor(self.workers, mp_context=mp.get_context("spawn"))
-        from camplace.visibility.executors import _sigint_ignored
-
-        with _sigint_ignored():  # workers spawned on the first submit keep SIGINT blocked (the parent stops them)
+        with sigint_ignored():  # workers spawned on the first submit keep SIGINT blocked (the parent stops them)
             results = self._pool.map(_pool_solve, tasks)
         return list(results)
 

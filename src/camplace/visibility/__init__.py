@@ -6,7 +6,8 @@
 - ``voxel`` (default: centre test by line of sight) and ``pixel`` (the paper's per-pixel
   raycasting): the engines;
 - ``raywalk``: the 3D DDA and first-hit routines they (and the renders) share;
-- ``executors``: in-process, process pool, Dask; ``cache``: V's blocks by content hash;
+- ``cache``: V's blocks by content hash (the executors that run the blocks are in
+  camplace.core.executors);
 - ``testing``: ``check_engine``, the conformance checks every engine passes.
 """
 

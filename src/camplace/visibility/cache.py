@@ -98,30 +98,6 @@ def code_version(*modules: ModuleType) -> str:
     return f"{__version__}+{h.hexdigest()}"
 
 
-def release_pages(*arrays: np.ndarray) -> int:
-    """Drop the resident pages of the memory-mapped files under ``arrays`` (e.g. V's
-    ``indices`` / ``data`` from the cache) from this process (madvise MADV_DONTNEED): they
-    stay in the page cache and fault back in on the next read, so values never change;
-    the process's resident size falls by what it had touched. Returns how many maps
-    were released (arrays not backed by a map are skipped)."""
-    import mmap
-
-    done = 0
-    for a in arrays:
-        b = a
-        while b is not None:
-            m = getattr(b, "_mmap", None) if isinstance(b, np.memmap) else (b if isinstance(b, mmap.mmap) else None)
-            if m is not None and hasattr(m, "madvise") and hasattr(mmap, "MADV_DONTNEED"):
-                try:
-                    m.madvise(mmap.MADV_DONTNEED)
-                    done += 1
-                except (OSError, ValueError):  # closed map, or a platform without it: nothing to release
-                    pass
-                break
-            b = getattr(b, "base", None)
-    return done
-
-
 class BlockStore:
     """The blocks of one V under ``root/visibility/<key>/``. ``bounds``: the row range
     [start, stop) of each block; ``n_cols``: N_p."""

@@ -9,7 +9,7 @@ cuts the candidates into blocks of ``engine.chunk_size`` rows and
    hash of the inputs, ``engine.cache_tag()`` and the source of ``engine.code_modules()``;
 2. for the blocks not there, builds ``shared = engine.setup(occupancy, targets,
    candidates)`` once (shipped once to each worker of the executor,
-   camplace.visibility.executors) and maps ``engine.rows(shared, start, stop)`` over them:
+   camplace.core.executors) and maps ``engine.rows(shared, start, stop)`` over them:
    the CSR (indptr, indices) pieces of V's rows [start, stop);
 3. assembles V block by block (``chunked_rows``), never dense.
 
@@ -127,7 +127,7 @@ def compute_visibility(engine: VisibilityEngine, occupancy: OccupancyGrid, targe
                        progress: Progress | None = None) -> Visibility:
     """V of every candidate (rows in candidate order) by ``engine``.
 
-    Blocks of ``engine.chunk_size`` rows run on ``executor`` (camplace.visibility.executors;
+    Blocks of ``engine.chunk_size`` rows run on ``executor`` (camplace.core.executors;
     default in-process) and stream back as CSR pieces, copied into the final CSR arrays.
     With ``cache_dir`` each block is also stored under a content-hash key
     (camplace.visibility.cache): finished blocks are loaded instead of recomputed (a second
@@ -166,11 +166,11 @@ def chunked_rows(n_cols: int, bounds: list[tuple[int, int]], task: Callable, mak
     ``task(shared, bounds[k])`` -> (indptr (rows + 1,) int64, indices (nnz,) int32).
 
     The blocks not in ``store`` (a camplace.visibility.cache.BlockStore, or None) run on ``executor``
-    (camplace.visibility.executors; default in-process) and are stored as they arrive; ``shared``
+    (camplace.core.executors; default in-process) and are stored as they arrive; ``shared``
     = ``make_shared()`` is built only when a block must be computed. The matrix is then
     assembled block by block (from the store when there is one), never densified.
     Returns (matrix, indices of the blocks loaded from the store)."""
-    from camplace.visibility.executors import InProcessExecutor
+    from camplace.core.executors import InProcessExecutor
 
     n = bounds[-1][1] if bounds else 0
     blocks: dict[int, tuple[np.ndarray, np.ndarray]] = {}

@@ -30,7 +30,7 @@ from camplace.cameras.candidates import Candidates
 from camplace.scene.build import OccupancyGrid
 from camplace.targets.build import Targets
 from camplace.visibility.engine import Visibility, VisibilityEngine, compute_visibility
-from camplace.visibility.executors import Executor, InProcessExecutor, ProcessPoolChunkExecutor
+from camplace.core.executors import Executor, InProcessExecutor, ProcessPoolChunkExecutor
 
 EXECUTORS = ("in-process", "process-pool", "dask")
 
@@ -112,7 +112,7 @@ class _LocalDask(Executor):
     def __init__(self) -> None:
         from dask.distributed import Client, LocalCluster
 
-        from camplace.visibility.executors import DaskExecutor
+        from camplace.core.executors import DaskExecutor
 
         self._cluster = LocalCluster(n_workers=1, threads_per_worker=1, processes=False, dashboard_address=None)
         self._inner = DaskExecutor(client=Client(self._cluster, set_as_default=False), threads_per_task=1)

@@ -60,7 +60,7 @@ def evaluate(scene: str | Path | SceneSpec, placement: str | Path | Poses, progr
     into the scene frame by the inverse of Scene.input_from_scene, camplace.scene.frames)."""
     from camplace.outputs.write import check_frame
     from camplace.scene.frames import invert
-    from camplace.visibility.executors import make_executor
+    from camplace.core.executors import make_executor
     from camplace.workflows.run import RunResult, placement_metrics, problem_from_visibility, scene_inputs
     from camplace.solvers.base import Placement
     from camplace.visibility.engine import compute_visibility

@@ -25,7 +25,7 @@ from camplace.problem.model import PlacementProblem, with_type_limits
 from camplace.scene.build import Scene, build_scene
 from camplace.solvers import Placement, solve
 from camplace.targets.build import Targets, build_targets
-from camplace.visibility.executors import make_executor
+from camplace.core.executors import make_executor
 from camplace.visibility.engine import Visibility, compute_visibility, drop_blind_candidates
 from camplace.visibility.registry import get_engine
 from camplace.workflows.sites import Site, site_of
@@ -75,7 +75,7 @@ def prepare_site(scene: str | Path | SceneSpec, progress: Progress | None = None
 
     Visibility chunks run on a Dask cluster when ``scheduler`` (``tcp://host:port``, or
     env CAMPLACE_SCHEDULER) is given, on ``workers`` local processes when > 1, else
-    in-process (camplace.visibility.executors); with ``cache_dir`` V is stored / reused in
+    in-process (camplace.core.executors); with ``cache_dir`` V is stored / reused in
     blocks under a content-hash key (camplace.visibility.cache). Same V bit for bit either way;
     both visibility modes.
 
@@ -399,7 +399,7 @@ def _zones_defaults(options: dict, workers: int, scheduler: str | None, cache_di
     resumes from the cached V blocks and from the last finished sweep)."""
     import os
 
-    from camplace.visibility.executors import SCHEDULER_ENV
+    from camplace.core.executors import SCHEDULER_ENV
 
     options.setdefault("workers", workers)
     options.setdefault("scheduler", scheduler or os.environ.get(SCHEDULER_ENV) or None)

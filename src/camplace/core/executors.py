@@ -1,9 +1,9 @@
 """Executors for chunked maps: in-process, a local process pool, or a Dask cluster.
 
-The visibility stage is a map over chunks of candidates: ``fn(shared, task)`` for
-every task, where ``shared`` (occupancy grid, targets, candidates: tens of MB) is the
-same for all tasks and is shipped to each worker once, and ``task`` is small (a row
-range). Every executor has the same interface, ``map_unordered(fn, shared, tasks)``,
+Infrastructure every stage may use (the visibility stage maps blocks of candidate rows,
+the zone solver maps floor tiles): ``fn(shared, task)`` for every task, where ``shared``
+(e.g. occupancy grid, targets, candidates: tens of MB) is the same for all tasks and is
+shipped to each worker once, and ``task`` is small (a row range). Every executor has the same interface, ``map_unordered(fn, shared, tasks)``,
 which yields ``(task_index, result)`` as results arrive, so the caller can stream them
 to disk or assemble them without holding everything twice. Results do not depend on the
 executor: each task is computed by the same function on the same inputs.
@@ -104,7 +104,7 @@ def _pool_init(shared: Any, n_threads: int | None) -> None:
 
 
 @contextlib.contextmanager
-def _sigint_ignored():
+def sigint_ignored():
     """Block SIGINT while worker processes are spawned: they inherit the blocked mask
     (across exec), so a Ctrl-C - sent by the terminal to the whole process group -
     reaches only the parent, which stops cleanly between chunks (camplace.workflows.run),
@@ -146,7 +146,7 @@ class ProcessPoolChunkExecutor(Executor):
         n = min(self.workers, len(tasks))
         with ProcessPoolExecutor(n, mp_context=ctx, initializer=_pool_init,
                                  initargs=(shared, self.threads_per_worker)) as pool:
-            with _sigint_ignored():  # the workers are spawned here and keep SIGINT ignored (see below)
+            with sigint_ignored():  # the workers are spawned here and keep SIGINT ignored (see below)
                 futures = {pool.submit(_pool_call, fn, t): k for k, t in enumerate(tasks)}
             try:
                 for fut in as_completed(futures):
