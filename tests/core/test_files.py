@@ -104,3 +104,32 @@ def test_library_writes_files_only_through_camplace_files():
             if RAW_WRITE.search(line) and "os.devnull" not in line and not line.lstrip().startswith("#"):
                 offenders.append(f"{f.relative_to(SRC)}:{n}: {line.strip()}")
     assert not offenders, "write through camplace.core.files (atomic):\n" + "\n".join(offenders)
+
+
+def test_written_files_get_the_mode_of_an_ordinary_write(tmp_path):
+    """Outputs are readable as any file the user writes: 0666 less the umask (not the
+    0600 of a private temporary file); a file that exists keeps its mode."""
+    import os
+    import stat
+
+    old = os.umask(0o027)
+    try:
+        plain = tmp_path / "plain.txt"
+        plain.write_text("x")
+        atomic_write_text(tmp_path / "a.txt", "x")
+        atomic_savez(tmp_path / "z.npz", x=np.arange(3))
+        with AtomicBatch() as b:
+            b.stage_json(tmp_path / "b.json", [1])
+        from camplace.core.files import atomic_npy_memmap
+
+        with atomic_npy_memmap(tmp_path / "m.npy", np.uint8, (4,)) as arr:
+            arr[:] = 1
+        want = stat.S_IMODE(plain.stat().st_mode)
+        assert want == 0o640
+        for name in ("a.txt", "z.npz", "b.json", "m.npy"):
+            assert stat.S_IMODE((tmp_path / name).stat().st_mode) == want, name
+        os.chmod(tmp_path / "a.txt", 0o604)
+        atomic_write_text(tmp_path / "a.txt", "y")  # rewriting keeps the file's own mode
+        assert stat.S_IMODE((tmp_path / "a.txt").stat().st_mode) == 0o604
+    finally:
+        os.umask(old)

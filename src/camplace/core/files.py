@@ -12,7 +12,8 @@ from __future__ import annotations
 import contextlib
 import json
 import os
-import tempfile
+import secrets
+import stat
 import weakref
 from pathlib import Path
 from typing import Iterator
@@ -62,8 +63,7 @@ def atomic_npy_memmap(path: str | Path, dtype, shape: tuple[int, ...]) -> Iterat
     it over ``path``, an exception deletes it. For arrays too large to build in memory
     (out-of-core V, camplace.visibility.cache)."""
     path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    fd, tmp = _open_temp(path)
     os.close(fd)
     try:
         arr = np.lib.format.open_memmap(tmp, mode="w+", dtype=dtype, shape=tuple(int(n) for n in shape))
@@ -78,11 +78,34 @@ def atomic_npy_memmap(path: str | Path, dtype, shape: tuple[int, ...]) -> Iterat
     _commit(tmp, path)
 
 
+def _open_temp(path: Path) -> tuple[int, str]:
+    """A new temporary file beside path, open for writing: (fd, name). Its mode is the one
+    an ordinary write would give: path's own mode when path exists, else 0666 less the
+    umask (the kernel applies it), never the private 0600 of tempfile.mkstemp."""
+    path.parent.mkdir(parents=True, exist_ok=True)
+    try:
+        mode = stat.S_IMODE(os.stat(path).st_mode)
+    except OSError:
+        mode = None
+    while True:
+        tmp = str(path.parent / f".{path.name}.{secrets.token_hex(4)}.tmp")
+        try:
+            fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL | getattr(os, "O_BINARY", 0), 0o666)
+        except FileExistsError:
+            continue
+        break
+    if mode is not None:
+        try:
+            os.fchmod(fd, mode)
+        except OSError:  # not the file's owner: the umask's mode, as a plain write would keep
+            pass
+    return fd, tmp
+
+
 def _write_temp(path: Path, data) -> str:
     """Write data (bytes, or a function writing into the open binary file) to a new
     temporary file beside path (fsynced); returns its name."""
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    fd, tmp = _open_temp(path)
     try:
         with os.fdopen(fd, "wb") as f:
             if callable(data):

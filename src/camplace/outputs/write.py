@@ -83,7 +83,8 @@ def placement_dict(scene_name: str, placement: Placement, budget: int, candidate
         "bound": None if placement.bound is None else float(placement.bound),
         "gap": placement.gap,
         **{k: str(placement.info[k]) for k in ("incumbent_method", "bound_method") if k in placement.info},
-        **{k: placement.info[k] for k in ("refine", "adaptive", "robust") if k in placement.info},  # issue 10
+        # issue 10; their wall-clock seconds go to metrics.json timings_s only (run_timings)
+        **{k: _timeless(placement.info[k]) for k in ("refine", "adaptive", "robust") if k in placement.info},
         "n_cameras": int(len(placement.selected)),
         "frame": frame,
         "input_from_scene": [[float(v) for v in row] for row in T],
@@ -170,8 +171,6 @@ def write_outputs(out_dir: str | Path, scene_name: str, vis: Visibility, placeme
     out.mkdir(parents=True, exist_ok=True)
     T = getattr(scene, "input_from_scene", None)
     pdict = placement_dict(scene_name, placement, budget, vis.candidates, T, frame)
-    if repeatable:  # the refine / adaptive / robust figures hold timings too
-        pdict.update({k: _no_seconds(pdict[k]) for k in ("refine", "adaptive", "robust") if k in pdict})
     timings = dict(timings)
     # shown in report.html (no "report"); repeatable: 0.0 as in metrics.json, so the page is byte-identical
     report_timings = {k: 0.0 if repeatable else round(float(v), 4) for k, v in timings.items()}
@@ -212,12 +211,13 @@ def write_outputs(out_dir: str | Path, scene_name: str, vis: Visibility, placeme
     return paths
 
 
-def _no_seconds(value):
-    """``value`` with every ``seconds`` entry of its dicts (nested too) written as 0.0."""
+def _timeless(value):
+    """``value`` without the wall-clock entries of its dicts (nested too): keys ``seconds``
+    and ``*_seconds``; placement.json must be byte-identical between identical runs."""
     if isinstance(value, dict):
-        return {k: 0.0 if k == "seconds" else _no_seconds(v) for k, v in value.items()}
+        return {k: _timeless(v) for k, v in value.items() if not (k == "seconds" or k.endswith("_seconds"))}
     if isinstance(value, list):
-        return [_no_seconds(v) for v in value]
+        return [_timeless(v) for v in value]
     return value
 
 
