@@ -139,3 +139,28 @@ def test_wall_cameras_only_turn():
     bw, bc = pose_box(sc, c, int(wall[0])), pose_box(sc, c, int(ceil[0]))
     assert bw.half[:3].tolist() == [0, 0, 0] and bw.half[4] == pytest.approx(0.499 * 20)
     assert bc.half[:2].tolist() == pytest.approx([0.499, 0.499]) and bc.half[3] == pytest.approx(0.499 * 90)
+
+
+def test_a_moved_pose_keeps_the_mount_clearance():
+    """Issue 25: a refined camera 1 mm from a wall face. The box around the grid point
+    x = 2 reaches x = 2.499, 1 mm from the wall at x = 2.5: a move closer than the
+    clearance (0.1 m) is refused, and no refined pose of a run breaks it."""
+    from conftest import box_room
+
+    from camplace.cameras.mount_rules import CEILING_BACK, occupied_distance
+    from camplace.improve.refine import _valid_positions
+    from camplace.workflows.run import run
+
+    spec = box_room([{"name": "wall", "box": {"min": [2.5, 0.0, 0.0], "max": [2.7, 2.5, 3.0]}}],
+                    mounts=[{"kind": "ceiling_grid", "camera": "cam", "spacing": 1.0, "yaw_deg": [0, 180],
+                             "pitch_deg": [45]}])
+    r = run(spec, budget=3, refine=True, refine_time_s=5.0)
+    c = r.visibility.candidates
+    i = int(np.flatnonzero(np.all(np.isclose(c.positions, [2.0, 1.0, 2.9]), axis=1))[0])
+    box = pose_box(r.scene, c, i)
+    assert box.centre[0] + box.half[0] > 2.49 and box.clearance == 0.1
+    trial = np.array([np.r_[x, 1.0, 2.9, c.angles_deg[i]] for x in (2.499, 2.45, 2.35, 2.0)])
+    assert _valid_positions(box, r.scene.occupancy, trial).tolist() == [False, False, True, True]
+    sel = r.placement.selected
+    d = occupied_distance(r.scene.occupancy, c.positions[sel], CEILING_BACK, reach=0.1)
+    assert np.all(d >= 0.1 - 1e-6)

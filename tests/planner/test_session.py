@@ -175,3 +175,25 @@ def test_a_yaml_run_folder_with_an_existing_camera(tmp_path):
     assert s.cams[0].id == "old-1" and np.array_equal(s.cams[0].position, old.position) and len(s.cams) == 3
     assert s.metrics.cost <= r.metrics.cost + 1e-9  # greedy on the same grid with the same existing camera
     assert np.array_equal(s.cov, full_coverage(s))
+
+
+def test_clearance_snaps_away_and_refuses_a_pose_too_close(tmp_path):
+    """Issue 25: the grid point (3, 1) lies 0.05 m from a wall face (x = 3.05): no mount
+    there, a camera dropped on it snaps to a mount that keeps the clearance, and a free
+    position closer than the clearance is refused."""
+    from camplace.cameras.mount_rules import CEILING_BACK, occupied_distance
+
+    site = dict(SITE, zones=[], mount_rules={},
+                obstacles=[{"name": "wall", "box": {"min": [3.05, 0.0, 0.0], "max": [3.25, 2.5, 3.0]}}])
+    s = Session(open_start(parse_scene(site), root=tmp_path))
+    assert not np.any(np.all(np.isclose(s.mounts[:, :2], [3.0, 1.0]), axis=1))
+    assert np.all(occupied_distance(s.scene.occupancy, s.mounts, CEILING_BACK, reach=0.1) >= 0.1 - 1e-6)
+    c = s.cams[0]
+    s.update(c.id, {"position": [3.0, 1.0]})
+    got = s.cams[0].position
+    assert occupied_distance(s.scene.occupancy, got[None], CEILING_BACK, reach=0.1)[0] == np.inf
+    with pytest.raises(ApiError, match="clearance") as e:
+        s.update(c.id, {"position": [2.98, 1.0, 2.9], "snap": False})
+    assert e.value.field == "position"
+    s.update(c.id, {"position": [2.9, 1.0, 2.9], "snap": False})  # 0.15 m from the face
+    assert np.allclose(s.cams[0].position, [2.9, 1.0, 2.9])

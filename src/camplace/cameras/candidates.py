@@ -14,7 +14,7 @@ import numpy as np
 import shapely
 
 from camplace.cameras.models import CameraModel
-from camplace.cameras.mount_rules import allowed_xy, explicit_points
+from camplace.cameras.mount_rules import CEILING_BACK, allowed_xy, clear_of_occupied, explicit_points
 from camplace.spec.schema import Mount, angle_values
 from camplace.core.errors import InputError
 from camplace.scene.build import Scene
@@ -160,23 +160,68 @@ def mount_positions(scene: Scene, mount: Mount, points: np.ndarray | None) -> tu
     return ceiling_grid_positions(scene, mount), None
 
 
+def mount_backs(mount: Mount, base_yaw: np.ndarray | None, n: int) -> np.ndarray:
+    """(n, 3): the direction of the surface each of a mount's n positions hangs from: up
+    (+z) for a ceiling grid, into the wall (minus the inward normal, ``base_yaw`` degrees)
+    for a wall mount (camplace.cameras.mount_rules.occupied_distance ignores what lies behind)."""
+    if mount.kind == "wall" and base_yaw is not None:
+        yaw = np.radians(np.asarray(base_yaw, float))
+        return -np.c_[np.cos(yaw), np.sin(yaw), np.zeros(len(yaw))]
+    return np.tile(CEILING_BACK, (n, 1))
+
+
+def surface_back(scene: Scene, position: np.ndarray) -> np.ndarray:
+    """(3,): the direction of the surface a camera at ``position`` (3,) m hangs from, by the
+    mount at its height (a ceiling grid: up; a wall mount: into the nearest wall); zero when
+    no mount has that height (then every side keeps the clearance)."""
+    z = float(position[2])
+    for m in scene.spec.mounts:
+        if m.kind == "ceiling_grid" and abs(scene.height - m.offset_below_ceiling - z) < 1e-6:
+            return CEILING_BACK.copy()
+        if m.kind == "wall" and abs(float(m.height) - z) < 1e-6:
+            return mount_backs(m, nearest_wall_yaw(scene, m, np.asarray(position, float)[None, :2]), 1)[0]
+    return np.zeros(3)
+
+
+def mount_points(scene: Scene, mount: Mount, points: np.ndarray | None) -> tuple[np.ndarray, np.ndarray | None, dict]:
+    """The positions (M, 3) m of one mount where a camera may hang, their base yaw (M,)
+    degrees or None, and the counts of positions removed: by the mount rules' areas
+    (``ruled_out``), inside an obstacle or, on scans, unobserved space (``inside``),
+    closer than ``mount_rules.clearance`` to a wall or obstacle (``clearance``)."""
+    p, base_yaw = mount_positions(scene, mount, points)
+    counts = {"ruled_out": 0, "inside": 0, "clearance": 0}
+    if scene.spec.mount_rules.active:  # forbid / allow polygons (camplace.cameras.mount_rules)
+        keep = allowed_xy(scene, p[:, :2])
+        counts["ruled_out"] = int((~keep).sum())
+        p, base_yaw = p[keep], None if base_yaw is None else base_yaw[keep]
+    inside = scene.occupancy.is_occupied(p)
+    if getattr(scene, "free_space", None) is not None:  # scans: not in space no scanner saw (inside things)
+        inside |= ~scene.free_space.observed_at(p)
+    keep = ~inside
+    keep[keep] = clear_of_occupied(scene, p[keep], mount_backs(mount, None if base_yaw is None else base_yaw[keep],
+                                                                int(keep.sum())))
+    counts.update(inside=int(inside.sum()), clearance=int((~inside & ~keep).sum()))
+    return p[keep], None if base_yaw is None else base_yaw[keep], counts
+
+
 def build_candidates(scene: Scene, cameras: dict[str, CameraModel]) -> Candidates:
-    """Every mount of the scene expanded into poses; poses inside an obstacle are dropped."""
+    """Every mount of the scene expanded into poses; poses inside an obstacle or closer
+    than ``mount_rules.clearance`` to one are dropped (counted per pose in ``info``)."""
     cam_list = tuple(cameras.values())
     cam_index = {c.name: k for k, c in enumerate(cam_list)}
     pos, ang, cid = [], [], []
     rules = scene.spec.mount_rules
     points = explicit_points(scene)
-    ruled_out = 0  # mount positions the forbid / allow polygons removed
+    ruled_out = n_all = n_inside = n_close = 0
     for mount in scene.spec.mounts:
-        p, base_yaw = mount_positions(scene, mount, points)
-        if rules.active:  # forbid / allow polygons (camplace.cameras.mount_rules)
-            keep = allowed_xy(scene, p[:, :2])
-            ruled_out += int((~keep).sum())
-            p, base_yaw = p[keep], None if base_yaw is None else base_yaw[keep]
         yaws, pitches, rolls = (angle_values(a) for a in (mount.yaw_deg, mount.pitch_deg, mount.roll_deg))
         yy, pp, rr = np.meshgrid(yaws, pitches, rolls, indexing="ij")
         a = np.c_[yy.ravel(), pp.ravel(), rr.ravel()]
+        p, base_yaw, counts = mount_points(scene, mount, points)
+        ruled_out += counts["ruled_out"]
+        n_inside += counts["inside"] * len(a)
+        n_close += counts["clearance"] * len(a)
+        n_all += (len(p) + counts["inside"] + counts["clearance"]) * len(a)
         pos.append(np.repeat(p, len(a), axis=0))
         a_all = np.tile(a, (len(p), 1))
         if base_yaw is not None:
@@ -186,16 +231,13 @@ def build_candidates(scene: Scene, cameras: dict[str, CameraModel]) -> Candidate
     positions = np.concatenate(pos) if pos else np.zeros((0, 3))
     angles = np.concatenate(ang) if ang else np.zeros((0, 3))
     camera_ids = np.concatenate(cid) if cid else np.zeros(0, np.int32)
-    n_all = len(positions)
-    inside_obstacle = scene.occupancy.is_occupied(positions)
-    if getattr(scene, "free_space", None) is not None:  # scans: not in space no scanner saw (inside things)
-        inside_obstacle |= ~scene.free_space.observed_at(positions)
-    positions, angles, camera_ids = positions[~inside_obstacle], angles[~inside_obstacle], camera_ids[~inside_obstacle]
     if len(positions) == 0:
         raise InputError(f"scene '{scene.name}': mounts: no candidate pose lies in free space "
-                         f"({n_all} generated, {int(inside_obstacle.sum())} inside obstacles or walls)")
+                         f"({n_all} generated, {n_inside} inside obstacles or walls, {n_close} closer than "
+                         f"mount_rules.clearance ({rules.clearance:g} m) to a wall or obstacle)")
     rot = rotation_from_ypr(angles[:, 0], angles[:, 1], angles[:, 2])
-    info = {"generated": n_all, "dropped_inside_obstacle": int(inside_obstacle.sum())}
+    info = {"generated": n_all, "dropped_inside_obstacle": n_inside, "dropped_clearance": n_close,
+            "clearance_m": float(rules.clearance)}
     if rules.active:
         info.update(mount_positions_ruled_out=ruled_out, explicit_points=None if points is None else len(points))
     return Candidates(positions, rot, angles, camera_ids, location_ids_of(positions), cam_list, info)

@@ -2,8 +2,10 @@
 
 ``mount_rules.forbid`` polygons (floor plan, m) hold no camera (their boundary included);
 with ``allow`` cameras hang only inside those polygons (boundary included); ``points``
-(a CSV of x,y,z, metres, header optional) replaces the grid positions of every mount.
-The same rules bound refined and adaptive poses (camplace.improve.refine.pose_box).
+(a CSV of x,y,z, metres, header optional) replaces the grid positions of every mount;
+``clearance`` (m) keeps every camera that far from walls and obstacles (occupied cells),
+except on the side of the surface it hangs from (clear_of_occupied). The same rules bound
+refined and adaptive poses (camplace.improve.refine.pose_box) and the planner.
 """
 
 from __future__ import annotations
@@ -18,7 +20,10 @@ from shapely.geometry import Polygon
 from shapely.ops import unary_union
 
 from camplace.core.errors import InputError
-from camplace.scene.build import Scene
+from camplace.scene.build import OccupancyGrid, Scene
+
+CEILING_BACK = np.array([0.0, 0.0, 1.0])  # a ceiling-mounted camera hangs from the surface above it
+CHUNK = 1024  # points per block of occupied_distance (about 250 neighbour cells each)
 
 
 def _union(polygons) -> object:
@@ -83,3 +88,55 @@ def explicit_points(scene: Scene) -> np.ndarray | None:
     if not out:
         raise InputError(f"{key}: '{path.name}' holds no x,y,z row; expected one mount point per line")
     return np.asarray(out, float)
+
+
+def _neighbour_offsets(reach_cells: float) -> np.ndarray:
+    """(M, 3) int64 cell offsets whose boxes can lie within ``reach_cells`` cells of a point
+    in cell (0, 0, 0)."""
+    k = int(math.ceil(reach_cells))
+    r = np.arange(-k, k + 1)
+    off = np.stack(np.meshgrid(r, r, r, indexing="ij"), axis=-1).reshape(-1, 3)
+    gap = np.maximum(np.abs(off) - 1, 0)  # whole cells between the point's cell and the offset cell
+    return off[(gap**2).sum(1) < reach_cells**2].astype(np.int64)
+
+
+def occupied_distance(grid: OccupancyGrid, points: np.ndarray, backs: np.ndarray, reach: float) -> np.ndarray:
+    """(N,) m: distance from each point (N, 3) m to the nearest occupied cell (its box),
+    ignoring the cells wholly behind the plane through the point with normal ``backs``
+    ((N, 3) or (3,): towards the surface the camera hangs from, e.g. +z under a ceiling,
+    into the wall for a wall mount; a zero vector ignores none); inf when no occupied cell
+    lies within ``reach`` m. Cells outside the grid count as occupied."""
+    pts = np.asarray(points, float).reshape(-1, 3)
+    backs = np.broadcast_to(np.asarray(backs, float), pts.shape)
+    out = np.full(len(pts), np.inf)
+    if not len(pts) or reach <= 0:
+        return out
+    res = float(grid.resolution)
+    off = _neighbour_offsets(reach / res)
+    shape = np.array(grid.shape)
+    for a in range(0, len(pts), CHUNK):
+        p, b = pts[a:a + CHUNK, None, :], backs[a:a + CHUNK, None, :]
+        cells = grid.cell_of(pts[a:a + CHUNK])[:, None, :] + off[None]  # (n, M, 3)
+        lo = grid.origin + cells * res
+        hi = lo + res
+        dist = np.linalg.norm(np.maximum(np.maximum(lo - p, p - hi), 0.0), axis=2)
+        nearest_along_back = np.where(b > 0, lo - p, hi - p) * b  # the box's nearest point towards the surface
+        behind = (nearest_along_back.sum(2) > -1e-9) & np.any(b != 0, axis=2)
+        inside = np.all((cells >= 0) & (cells < shape), axis=2)
+        occ = np.ones(cells.shape[:2], bool)
+        ci = cells[inside]
+        occ[inside] = grid.occupied[ci[:, 0], ci[:, 1], ci[:, 2]]
+        d = np.where(occ & ~behind & (dist < reach), dist, np.inf)
+        out[a:a + CHUNK] = d.min(1)
+    return out
+
+
+def clear_of_occupied(scene: Scene, points: np.ndarray, backs: np.ndarray) -> np.ndarray:
+    """(N,) bool: the points (N, 3) m that keep ``mount_rules.clearance`` from every
+    occupied cell not behind their mount surface (``backs`` as occupied_distance); all
+    True when the clearance is 0."""
+    c = float(scene.spec.mount_rules.clearance)
+    pts = np.asarray(points, float).reshape(-1, 3)
+    if c <= 0:
+        return np.ones(len(pts), bool)
+    return occupied_distance(scene.occupancy, pts, backs, c) >= c - 1e-6

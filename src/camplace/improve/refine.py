@@ -30,7 +30,7 @@ import scipy.sparse as sp
 import shapely
 
 from camplace.cameras.candidates import Candidates, rotation_from_ypr
-from camplace.cameras.mount_rules import restrict_region
+from camplace.cameras.mount_rules import CEILING_BACK, occupied_distance, restrict_region
 from camplace.spec.schema import Mount, SceneSpec, angle_values
 from camplace.problem import gains
 from camplace.problem.model import PlacementProblem
@@ -61,11 +61,13 @@ def angle_step(a) -> float:
 class PoseBox:
     """Where one camera may move: centre pose (x, y, z, yaw, pitch, roll) and half
     ranges (hx, hy, 0, hyaw, hpitch, hroll) in metres / degrees; ``region`` is the mount
-    surface's allowed footprint (shapely geometry) at height z."""
+    surface's allowed footprint (shapely geometry) at height z; ``clearance``: the metres a
+    moved position keeps from every wall and obstacle (``mount_rules.clearance``)."""
 
     centre: np.ndarray
     half: np.ndarray
     region: object
+    clearance: float = 0.0
 
 
 def mount_of(spec: SceneSpec, camera_name: str, z: float) -> Mount | None:
@@ -100,7 +102,7 @@ def pose_box(scene: Scene, candidates: Candidates, i: int, fraction: float = HAL
         region = restrict_region(scene, region)
         if rules.points is not None:
             half[:3] = 0.0
-    return PoseBox(centre, half, region)
+    return PoseBox(centre, half, region, float(rules.clearance))
 
 
 def single_pose_candidates(template: Candidates, camera_id: int, poses: np.ndarray) -> Candidates:
@@ -190,8 +192,11 @@ class RefineResult:
 def _valid_positions(box: PoseBox, occupancy: OccupancyGrid, poses: np.ndarray) -> np.ndarray:
     if len(poses) == 0:
         return np.zeros(0, bool)
-    ok = shapely.contains_xy(box.region, poses[:, 0], poses[:, 1])
-    return ok & ~occupancy.is_occupied(poses[:, :3])
+    ok = shapely.contains_xy(box.region, poses[:, 0], poses[:, 1]) & ~occupancy.is_occupied(poses[:, :3])
+    moved = ok & np.any(np.abs(poses[:, :3] - box.centre[:3]) > 1e-9, axis=1)  # only ceiling-grid cameras move
+    if box.clearance > 0 and moved.any():
+        ok[moved] = occupied_distance(occupancy, poses[moved, :3], CEILING_BACK, box.clearance) >= box.clearance - 1e-6
+    return ok
 
 
 def refine_poses(scene: Scene, vis: Visibility, problem: PlacementProblem, selected: np.ndarray,

@@ -9,8 +9,8 @@ row, and rescores the selection with camplace.workflows.run.placement_metrics, t
 scoring of ``camplace evaluate`` (so a saved placement evaluates to the same metrics).
 Every change is undoable (snapshots of the immutable camera tuple). Positions snap to
 the nearest allowed mount (the grid candidates' positions) unless ``snap`` is false;
-then they must satisfy the mount rules (camplace.cameras.mount_rules) and lie in free
-space. A pose that sees a privacy zone is refused (camplace.visibility.privacy).
+then they must satisfy the mount rules (camplace.cameras.mount_rules), lie in free
+space and keep the mount clearance from walls and obstacles. A pose that sees a privacy zone is refused (camplace.visibility.privacy).
 """
 
 from __future__ import annotations
@@ -23,8 +23,8 @@ import numpy as np
 import scipy.sparse as sp
 import shapely
 
-from camplace.cameras.candidates import Candidates, location_ids_of, rotation_from_ypr
-from camplace.cameras.mount_rules import allowed_xy
+from camplace.cameras.candidates import Candidates, location_ids_of, rotation_from_ypr, surface_back
+from camplace.cameras.mount_rules import allowed_xy, clear_of_occupied
 from camplace.metrics.coverage import Metrics
 from camplace.planner.errors import ApiError
 from camplace.planner.opening import Opened
@@ -251,6 +251,10 @@ class Session:
                            "position")
         if self.scene.occupancy.is_occupied(np.array([[x, y, z]]))[0]:
             raise ApiError(f"position: ({x:.3f}, {y:.3f}, {z:.3f}) lies inside an obstacle", "position")
+        if not clear_of_occupied(self.scene, np.array([[x, y, z]]), surface_back(self.scene, position))[0]:
+            raise ApiError(f"position: ({x:.3f}, {y:.3f}, {z:.3f}) is closer than the mount clearance "
+                           f"({self.scene.spec.mount_rules.clearance:g} m, mount_rules.clearance) to a wall or "
+                           "obstacle; move it away or let it snap", "position")
 
     def check_privacy(self, position: np.ndarray, angles: np.ndarray, lens: int, field: str) -> None:
         """ApiError(field) when the pose sees a point of a privacy zone."""

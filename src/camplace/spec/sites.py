@@ -78,12 +78,15 @@ Polygons = list[Polygon2]
 class MountRules(_Strict):
     """Where cameras may hang: never inside ``forbid`` polygons, only inside ``allow``
     polygons (if given), only at the CSV ``points`` (x,y,z per line; if given);
-    ``max_per_type``: at most this many new cameras of a camera type."""
+    ``max_per_type``: at most this many new cameras of a camera type; ``clearance``: the
+    metres a camera keeps from every wall and obstacle (occupied cell) other than the
+    surface it hangs from (camplace.cameras.mount_rules.clear_of_occupied)."""
 
     forbid: Polygons = []
     allow: Polygons | None = None
     points: str | None = None
     max_per_type: dict[str, Annotated[int, Field(ge=0, strict=True)]] = {}
+    clearance: Annotated[float, Field(ge=0, allow_inf_nan=False)] = 0.1  # m: room for the camera body
 
     @model_validator(mode="after")
     def _simple(self) -> "MountRules":

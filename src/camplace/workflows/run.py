@@ -118,7 +118,8 @@ def prepare_site(scene: str | Path | SceneSpec, progress: Progress | None = None
                       else ""))
     log.extend(site.log if site is not None else [])
     log.append(f"candidates: {cands.info['generated']} generated, {cands.info['dropped_inside_obstacle']} inside "
-               f"obstacles, {vis.info['dropped_blind']} seeing no target, {len(vis.candidates)} kept")
+               f"obstacles, {cands.info.get('dropped_clearance', 0)} within the {cands.info.get('clearance_m', 0):g} m "
+               f"clearance, {vis.info['dropped_blind']} seeing no target, {len(vis.candidates)} kept")
     log.append(f"targets: {len(targets)} ({', '.join(f'{n}: {int((targets.region_ids == r).sum())}' for r, n in enumerate(targets.region_names))})")
     log.append(f"visibility: V {vis.V.shape[0]} x {vis.V.shape[1]}, nnz {vis.V.nnz}")
     if vis.info.get("executor") != "in-process" or "cache" in vis.info:
