@@ -1,138 +1,283 @@
-"""Plan images (PNG/JPG/TIFF, e.g. a scan of a paper plan) -> a scene mapping
-(camplace.scene.importers.import_plan).
+"""Plan images (PNG/JPG/TIFF: CAD exports, scans, coloured sheets) -> a scene mapping and
+what was understood of them (camplace.scene.importers.read_plan).
 
 Scale from ``scale`` (m per pixel) or ``ref`` (two pixel points and their distance in
-m). Wall pixels are the dark ones (Otsu threshold unless ``threshold`` 0..255 is
-given), thinner strokes than ``min_wall_thickness`` m (text, door swings, dimension
-lines) removed by a morphological opening; the wall mask is polygonised (contourpy,
-simplified) and extruded to the wall height. Rooms are the enclosed free regions:
-connected free pixels not touching the image border, separated at door gaps up to
-``door_width`` m wide; they become zones room-1..n (top to bottom, left to right).
+m). Step by step (image_walls, image_rooms, image_ocr):
+
+1. Ink: pixels darker than ``threshold`` in their brightest channel (Otsu unless given;
+   flat colour room fills are light there, and fills darker than the split are split off).
+2. Walls: the ink closed over ``hatch_spacing`` (outlines with a hatch, walls drawn as two
+   lines become solid; broad textured areas such as stair treads are given back), strokes
+   thinner than ``min_wall_thickness`` opened away (text, dimension lines, door swings).
+3. Plans: the drawn wall pieces near each other form a plan; marks off the plans (title
+   block, legend, scale bar, key plan) and text blocks are dropped. Several plans side by
+   side (storeys on one sheet) are ``storeys``; the default is the one with most rooms.
+4. Rooms: door and window gaps up to ``max_opening`` between walls in line are bridged
+   (for the rooms only: the walls keep their openings); the enclosed free regions of at
+   least ``min_room_area`` are the rooms, named by the text OCR reads inside them.
 """
 
 from __future__ import annotations
 
 import math
+from collections import Counter
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 from scipy import ndimage
-from shapely.geometry import Polygon
 
 from camplace.core.errors import InputError
-from camplace.scene.importers import (DEFAULT_CEILING_M, PlanImport, plan_scene, prism_obstacles, room_zones,
-                                      rooms_footprint)
+from camplace.scene.importers import (DEFAULT_CEILING_M, PlanImport, clean_polygons, plan_scene, prism_obstacles,
+                                      room_zones, rooms_footprint)
+from camplace.scene.importers.image_ocr import ocr_engine, read_lines, room_name, text_lines_mask
+from camplace.scene.importers.image_rooms import bridge_openings, free_regions, mask_polygons
+from camplace.scene.importers.image_walls import find_plans, ink_threshold, read_darkness, solid_walls
 
-OPTIONS = ("scale", "ref", "threshold", "min_wall_thickness", "door_width", "min_room_area")
-MAX_PIXELS = 100_000_000
-
-
-def read_gray(path: Path) -> np.ndarray:
-    """(H, W) float64 grey levels 0..255 of an image file."""
-    from PIL import Image, UnidentifiedImageError
-
-    Image.MAX_IMAGE_PIXELS = MAX_PIXELS
-    try:
-        with Image.open(path) as im:
-            return np.asarray(im.convert("L"), np.float64)
-    except (UnidentifiedImageError, OSError, Image.DecompressionBombError) as err:
-        raise InputError(f"{path}: not a readable image ({str(err).splitlines()[0]})") from None
+OPTIONS = ("scale", "ref", "threshold", "storey", "min_wall_thickness", "max_wall_thickness", "hatch_spacing",
+           "max_opening", "min_room_area", "ocr")
+PLAN_GAP_M = 1.0  # wall pieces closer than this belong to one plan
 
 
-def otsu_threshold(gray: np.ndarray) -> float:
-    """The grey level (0..255) that best splits ``gray`` into two classes (Otsu)."""
-    hist = np.bincount(np.clip(gray, 0, 255).astype(np.int64).ravel(), minlength=256).astype(float)
-    w0 = np.cumsum(hist)
-    m0 = np.cumsum(hist * np.arange(256))
-    total, mean = w0[-1], m0[-1]
-    w1 = total - w0
-    with np.errstate(divide="ignore", invalid="ignore"):
-        between = (mean * w0 - total * m0) ** 2 / (w0 * w1)
-    between[~np.isfinite(between)] = -1
-    return float(np.argmax(between)) + 0.5
-
-
-def metres_per_pixel(path: Path, scale: float | None, ref) -> float:
+def metres_per_pixel(path: Path, scale: float | None, ref) -> tuple[float, str]:
+    """(m per pixel, where it came from) of ``scale`` or ``ref``; InputError without either."""
     if scale is not None:
         if not scale > 0:
             raise InputError(f"scale: expected metres per pixel > 0, got {scale}", option="scale")
-        return float(scale)
+        return float(scale), "given"
     if ref is not None:
         x1, y1, x2, y2, dist = (float(v) for v in ref)
         px = math.hypot(x2 - x1, y2 - y1)
         if px <= 0 or not dist > 0:
             raise InputError(f"ref: expected two distinct points and a distance > 0 m, got {list(ref)}", option="ref")
-        return dist / px
+        return dist / px, f"reference: {dist:g} m over {px:.1f} px"
     raise InputError(f"{path}: the plan's scale is unknown; give metres per pixel (scale) or two reference points "
                      "and their distance (ref)", option="scale")
 
 
-def mask_polygons(mask: np.ndarray, s: float, at: tuple[int, int] = (0, 0), image_rows: int | None = None):
-    """Shapely (multi)polygon (m) of the True pixels of ``mask`` (h, w), a window at
-    pixel ``at`` (row, col) of an image of ``image_rows`` rows (default: the mask is the
-    image): row 0 at the top, pixel (r, c) centred at x = (c + 0.5) s, y = (H - r - 0.5) s."""
-    import contourpy
-    import shapely
+@dataclass
+class PlanRooms:
+    """One plan of the sheet: ``box`` (rows, cols slices of the sheet), its ``walls`` and
+    ``bridges`` (bool masks in the box), free-region ``labels`` (int, in the box), the
+    labels that are ``rooms`` and their ``names`` (None: not read) and printed areas."""
 
-    h, w = mask.shape
-    z = np.pad(mask.astype(np.float64), 1)[::-1]  # row 0 = bottom (y up)
-    x = (at[1] + np.arange(w + 2) - 0.5) * s
-    y = ((image_rows or h) - at[0] - h + np.arange(h + 2) - 0.5) * s
-    gen = contourpy.contour_generator(x, y, z, fill_type=contourpy.FillType.OuterOffset, corner_mask=False)
-    points, offsets = gen.filled(0.5, 1.5)
-    polys = []
-    for pts, off in zip(points, offsets):
-        rings = [pts[a:b] for a, b in zip(off[:-1], off[1:]) if b - a >= 4]
-        if rings:
-            polys.append(shapely.make_valid(Polygon(rings[0], rings[1:])))
-    return shapely.unary_union(polys) if polys else Polygon()
+    box: tuple[slice, slice]
+    walls: np.ndarray
+    bridges: np.ndarray
+    labels: np.ndarray
+    rooms: list[int]
+    names: dict[int, str] = field(default_factory=dict)
+    printed: dict[int, float] = field(default_factory=dict)
 
 
-def square_morphology(mask: np.ndarray, px: float, op: str) -> np.ndarray:
-    """Binary ``op`` ('open' or 'close') of ``mask`` by a square of about ``px`` pixels
-    (odd, centred; separable min / max filters, so fast for large squares)."""
-    k = 2 * int(round(px / 2)) + 1
-    m = mask.astype(np.uint8)
-    first, second = (ndimage.minimum_filter, ndimage.maximum_filter) if op == "open" else \
-        (ndimage.maximum_filter, ndimage.minimum_filter)
-    return second(first(m, size=k, mode="nearest"), size=k, mode="nearest").astype(bool)
+@dataclass
+class Sheet:
+    """What was read of the image: scale ``s`` (m/px) and its source, the ink ``threshold``
+    and how it was chosen, the ``plans`` in reading order, the image's ``rows``, the OCR
+    line ('tesseract X' or why not), what was ``skipped`` and the thickest wall (m)."""
+
+    s: float
+    scale_from: str
+    threshold: float
+    threshold_from: str
+    plans: list[PlanRooms]
+    rows: int
+    ocr: str
+    skipped: Counter
+    max_wall: float
 
 
-def import_plan(path: Path, *, name: str | None = None, units: str | None = None, wall_height: float | None = None,
-                ceiling_height: float | None = None, heights=None, coverage: int | None = None,
-                budget: int | None = None, scale: float | None = None, ref=None, threshold: float | None = None,
-                min_wall_thickness: float = 0.05, door_width: float = 1.0, min_room_area: float = 1.0) -> dict:
-    """The scene mapping of a plan image (lengths in m; ``units`` is refused: the scale says it)."""
-    if units is not None:
-        raise InputError("units: a plan image has no units; give its scale (scale or ref)", option="units")
-    gray = read_gray(path)
-    s = metres_per_pixel(path, scale, ref)
-    t = otsu_threshold(gray) if threshold is None else float(threshold)
-    walls = square_morphology(gray < t, min_wall_thickness / s, "open")
-    if walls.sum() == 0:
+def analyse(path: Path, scale=None, ref=None, threshold=None, min_wall_thickness=0.08, max_wall_thickness=0.8,
+            hatch_spacing=0.3, max_opening=1.8, min_room_area=1.0, ocr=True) -> Sheet:
+    """The plans, walls, openings, rooms and room names of a plan image."""
+    dark = read_darkness(path)
+    s, scale_from = metres_per_pixel(path, scale, ref)
+    if threshold is None:
+        t, how = ink_threshold(dark, s, max_wall_thickness)
+    else:
+        if not 0 < float(threshold) <= 255:
+            raise InputError(f"threshold: expected a grey level 0..255, got {threshold}", option="threshold")
+        t, how = float(threshold), "given"
+    ink = dark < t
+    skipped: Counter = Counter()
+    raw = solid_walls(ink, s, hatch_spacing, min_wall_thickness, max_wall_thickness, skipped)
+    if not raw.any():
         raise InputError(f"{path}: no walls found (no dark strokes at least {min_wall_thickness} m thick)")
-    shut = square_morphology(walls, door_width / s, "close") | walls
-    labels, n = ndimage.label(~shut)
-    border = np.unique(np.r_[labels[0], labels[-1], labels[:, 0], labels[:, -1]])
-    sizes = ndimage.sum_labels(np.ones_like(labels), labels, index=np.arange(1, n + 1)) * s * s
-    keep = [k for k in range(1, n + 1) if k not in border and sizes[k - 1] >= min_room_area]
-    if not keep:
+    found = find_plans(raw, ink, s, PLAN_GAP_M, skipped)
+    plans = [_plan_rooms(found.plan_of, k, box, s, max_opening, max_wall_thickness, min_room_area, skipped)
+             for k, box in enumerate(found.plans, 1)]
+    if not any(p.rooms for p in plans):
         raise InputError(f"{path}: no closed room found (no free region of at least {min_room_area} m² "
                          "enclosed by walls)")
+    engine, ocr_line = ocr_engine() if ocr else (None, "off")
+    if engine is not None:
+        _name_rooms(engine, ink, plans)
+    return Sheet(s, scale_from, t, how, plans, dark.shape[0], ocr_line, skipped, max_wall_thickness)
+
+
+def _plan_rooms(plan_of: np.ndarray, k: int, box, s: float, max_opening: float, max_wall: float,
+                min_room_area: float, skipped: Counter) -> PlanRooms:
+    """Plan ``k`` in its box (widened by an opening, paper beyond the sheet's edge):
+    openings bridged, rooms found."""
+    m = int(max_opening / s) + 2
+    walls = np.pad(plan_of == k, m)[box[0].start:box[0].stop + 2 * m, box[1].start:box[1].stop + 2 * m]
+    box = (slice(box[0].start - m, box[0].stop + m), slice(box[1].start - m, box[1].stop + m))
+    bridges = bridge_openings(walls, s, max_opening, max_wall)
+    labels, n, outside = free_regions(walls | bridges)
+    area = np.bincount(labels.ravel(), minlength=n + 1) * s * s
+    inside = ~outside
+    rooms = [int(r) for r in np.flatnonzero(inside & (area >= min_room_area))]
+    small = int(np.count_nonzero(inside & (area < min_room_area) & (area > 0)))
+    if small:
+        skipped[f"enclosed pieces under {min_room_area:g} m² (not rooms)"] += small
+    return PlanRooms(box, walls, bridges, labels, rooms)
+
+
+def _name_rooms(engine, ink: np.ndarray, plans: list[PlanRooms]) -> None:
+    """Room names and printed areas from the text lines inside each room (one OCR call)."""
+    lines, n, hc = text_lines_mask(ink)
+    if n == 0:
+        return
+    boxes = ndimage.find_objects(lines)
+    where: dict[int, tuple[int, int]] = {}
+    for i, plan in enumerate(plans):
+        room_at = np.where(np.isin(plan.labels, plan.rooms), plan.labels, 0)
+        for k, b in enumerate(boxes, 1):
+            if b is None:
+                continue
+            r, c = (b[0].start + b[0].stop) // 2 - plan.box[0].start, (b[1].start + b[1].stop) // 2 - plan.box[1].start
+            if 0 <= r < room_at.shape[0] and 0 <= c < room_at.shape[1] and room_at[r, c]:
+                where[k] = (i, int(room_at[r, c]))
+    found: dict[tuple[int, int], list] = {}
+    for ln in read_lines(engine, ink, lines, sorted(where), hc):
+        k = int(np.max(lines[ln.box[0]:ln.box[2], ln.box[1]:ln.box[3]]))
+        found.setdefault(where[k], []).append(ln)
+    for (i, room), got in found.items():
+        name, area = room_name(got)
+        if name:
+            plans[i].names[room] = name
+        if area is not None:
+            plans[i].printed[room] = area
+
+
+def _polygons(plan: PlanRooms, sheet: Sheet, min_area: float):
+    """(room (name, polygon) list, wall geometry, opening polygons) of a plan (m)."""
+    boxes = ndimage.find_objects(plan.labels)
+    at = (plan.box[0].start, plan.box[1].start)
+    rooms = []
+    for i, k in enumerate(plan.rooms):
+        b = boxes[k - 1]
+        poly = mask_polygons(plan.labels[b] == k, sheet.s, (at[0] + b[0].start, at[1] + b[1].start), sheet.rows)
+        rooms.append((plan.names.get(k, f"room-{i + 1}"), poly.simplify(sheet.s / 2)))
+    walls = mask_polygons(plan.walls, sheet.s, at, sheet.rows).simplify(sheet.s / 2)
+    blab, nb = ndimage.label(plan.bridges)
+    openings = [q for j, b in enumerate(ndimage.find_objects(blab), 1)
+                for q in clean_polygons(mask_polygons(blab[b] == j, sheet.s, (at[0] + b[0].start, at[1] + b[1].start),
+                                                      sheet.rows), min_area=min_area)]
+    return rooms, walls, openings
+
+
+def _storey_rows(sheet: Sheet) -> list[dict]:
+    """PlanImport.storeys: every plan of the sheet with its rooms (name, area m²)."""
+    rows = []
+    for i, plan in enumerate(sheet.plans):
+        area = np.bincount(plan.labels.ravel()) * sheet.s * sheet.s
+        rooms = [[plan.names.get(k, f"room-{j + 1}"), round(float(area[k]), 2)] for j, k in enumerate(plan.rooms)]
+        rows.append({"name": f"plan-{i + 1}", "elevation_m": 0.0, "rooms": rooms, "chosen": False})
+    return rows
+
+
+def default_plan(sheet: Sheet) -> tuple[int, str]:
+    """(index, why) of the plan a user plans first: the most rooms, then the most room area."""
+    score = [(len(p.rooms), float(np.isin(p.labels, p.rooms).sum())) for p in sheet.plans]
+    best = max(range(len(score)), key=lambda i: score[i])
+    if len(score) == 1:
+        return best, "the only plan on the sheet"
+    tied = sum(1 for sc in score if sc[0] == score[best][0]) > 1
+    return best, "most room area of the plans with most rooms" if tied else "most rooms"
+
+
+def plan_import(path: Path, sheet: Sheet, index: int, why: str, *, name=None, wall_height=None,
+                ceiling_height=None, heights=None, coverage=None, budget=None) -> PlanImport:
+    """The scene and summary of plan ``index`` of the sheet."""
+    plan = sheet.plans[index]
+    if not plan.rooms:
+        raise InputError(f"{path}: plan-{index + 1} has no closed room (no free region enclosed by walls)")
+    rooms, walls, openings = _polygons(plan, sheet, sheet.s * sheet.s)
     ceiling = float(ceiling_height or DEFAULT_CEILING_M)
-    wall_geom = mask_polygons(walls, s).simplify(s / 2)
-    boxes = ndimage.find_objects(labels)
-    rooms = [(f"room-{i + 1}", mask_polygons(labels[boxes[k - 1]] == k, s, (boxes[k - 1][0].start,
-                                                                             boxes[k - 1][1].start),
-                                             len(labels)).simplify(s / 2)) for i, k in enumerate(keep)]
-    src = {"file": path.name, "entity": "wall pixels", "threshold": f"{t:g}", "m_per_px": f"{s:g}"}
-    obstacles = prism_obstacles(wall_geom, 0.0, min(float(wall_height or ceiling), ceiling), "wall", src,
-                                tolerance=0)
-    footprint = rooms_footprint([p for _, p in rooms], wall_geom, door_width, str(path))
-    return plan_scene(name or path.stem, footprint, ceiling, obstacles, room_zones(rooms, coverage or 2),
-                      heights=heights, coverage=coverage, budget=budget)
+    src = {"file": path.name, "entity": "wall pixels", "threshold": f"{sheet.threshold:g}", "m_per_px": f"{sheet.s:g}"}
+    skipped = Counter(sheet.skipped)
+    obstacles = prism_obstacles(walls, 0.0, min(float(wall_height or ceiling), ceiling), "wall", src, tolerance=0,
+                                skipped=skipped)
+    footprint = rooms_footprint([p for _, p in rooms], walls, sheet.max_wall, str(path))
+    zones = room_zones(rooms, coverage or 2, skipped=skipped)
+    title = name or (path.stem if len(sheet.plans) == 1 else f"{path.stem} plan-{index + 1}")
+    scene = plan_scene(title, footprint, ceiling, obstacles, zones, heights=heights, coverage=coverage, budget=budget)
+    storeys = _storey_rows(sheet)
+    storeys[index]["chosen"] = True
+    named = len(plan.names)
+    used = {"scale": f"{sheet.s:g} m/px ({sheet.scale_from})",
+            "threshold": f"{sheet.threshold:g} of 255, brightest channel ({sheet.threshold_from})",
+            "plans": f"{len(sheet.plans)} on the sheet; plan-{index + 1} ({why})",
+            "walls": f"{len(obstacles)} wall prisms", "openings": f"{len(openings)} door and window gaps bridged",
+            "ocr": sheet.ocr if not sheet.ocr.startswith("tesseract") else
+            f"{sheet.ocr}: {named} of {len(plan.rooms)} rooms named"}
+    notes = []
+    if len(sheet.plans) > 1:
+        notes.append(f"{len(sheet.plans)} plans side by side on the sheet (" + ", ".join(
+            f"{s['name']}: {len(s['rooms'])} rooms" for s in storeys) + f"): plan-{index + 1} taken ({why}); "
+            "choose another with storey='plan-N', or storey='all' for every plan")
+    if not sheet.ocr.startswith("tesseract") and sheet.ocr != "off":
+        notes.append(f"OCR not available ({sheet.ocr}): rooms are named room-1..{len(plan.rooms)}")
+    area = np.bincount(plan.labels.ravel()) * sheet.s * sheet.s
+    for k, printed in plan.printed.items():
+        label = plan.names.get(k, f"room-{plan.rooms.index(k) + 1}")
+        notes.append(f"room {label}: printed {printed:g} m², measured {area[k]:.2f} m² "
+                     f"({100 * (area[k] - printed) / printed:+.0f} %)")
+    return PlanImport(scene, "image", used=used, skipped=skipped, openings=[
+        [[round(float(x), 4), round(float(y), 4)] for x, y in q.exterior.coords[:-1]] for q in openings],
+        storeys=storeys, notes=notes)
+
+
+def _common(options: dict) -> tuple[dict, dict]:
+    """(analysis options, scene options) of read's keyword options."""
+    if options.get("units") is not None:
+        raise InputError("units: a plan image has no units; give its scale (scale or ref)", option="units")
+    scene_keys = ("name", "wall_height", "ceiling_height", "heights", "coverage", "budget")
+    scene = {k: options[k] for k in scene_keys if k in options}
+    analysis = {k: v for k, v in options.items() if k not in scene_keys and k not in ("units", "storey")}
+    return analysis, scene
 
 
 def read(path: Path, **options) -> PlanImport:
-    """What was understood of the plan (options as import_plan)."""
-    return PlanImport(import_plan(path, **options), "image")
+    """What was understood of the plan image (one plan: ``storey`` 'plan-N', else the default)."""
+    analysis, scene = _common(options)
+    sheet = analyse(path, **analysis)
+    storey = options.get("storey")
+    if storey is None:
+        index, why = default_plan(sheet)
+    else:
+        names = [f"plan-{i + 1}" for i in range(len(sheet.plans))]
+        if storey not in names:
+            raise InputError(f"storey: {path.name} has no plan '{storey}'; it has {', '.join(names)} "
+                             "(or 'all')", option="storey")
+        index, why = names.index(storey), "chosen"
+    return plan_import(path, sheet, index, why, **scene)
+
+
+def read_storeys(path: Path, **options) -> list[tuple[str, PlanImport]]:
+    """(plan-N, what was understood) of every plan on the sheet that has rooms."""
+    analysis, scene = _common(options)
+    sheet = analyse(path, **analysis)
+    return [(f"plan-{i + 1}", plan_import(path, sheet, i, "storey 'all'", **scene))
+            for i, p in enumerate(sheet.plans) if p.rooms]
+
+
+def storey_elevations(path: Path, units=None) -> dict[str, float]:
+    """A sheet says no floor levels: every plan at 0 m."""
+    return {}
+
+
+def import_plan(path: Path, **options) -> dict:
+    """The scene mapping of a plan image (options as read)."""
+    return read(path, **options).scene
