@@ -14,6 +14,7 @@ from pydantic import BeforeValidator, Discriminator, Field, Tag, model_validator
 
 from camplace.spec.basics import (FACES, Box, Face, Finite, Incidence, Point2, Point3, PositiveFloat,  # noqa: F401
                                   PositiveInt, PxPerM, _no_bool, _Strict, polygon_problem, scene_error)
+from camplace.spec.crowd import CrowdSpec, crowd_references
 from camplace.spec.sites import ExistingCamera, MountRules, Polygon2, Zone, site_references
 from camplace.spec.wording import did_you_mean, name_list
 
@@ -307,6 +308,7 @@ class SceneSpec(_Strict):
     zones: list[Zone] = []  # later zones win where they overlap (docs/scene-file.md#zones)
     mount_rules: MountRules = MountRules()
     existing: list[ExistingCamera] | str | None = None  # or a placement.csv path (relative to the scene file)
+    crowd: CrowdSpec | None = None  # people who may block sight lines (issue 28; camplace.spec.crowd)
 
     @model_validator(mode="after")
     def _references(self) -> "SceneSpec":
@@ -362,4 +364,5 @@ class SceneSpec(_Strict):
                 if math.dist(seg[0], seg[1]) <= 1e-9:
                     raise scene_error(f"mounts[{i}].walls[{k}]", "zero-length wall segment (both ends equal)")
         site_references(self, obstacle_names, camera_names)
+        crowd_references(self)
         return self

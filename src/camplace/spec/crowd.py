@@ -1,0 +1,102 @@
+"""The scene key ``crowd:`` (issue 28): people as vertical cylinders that may block sight lines.
+
+A crowd sample puts ``density`` persons per m² of walkable floor (a zone may set its own
+in ``zones``) at random, without overlap, in the walkable free space; ``samples``
+independent crowds from ``seed`` are what a crowd-aware run (``optimise``) averages over,
+``score_samples`` further ones (another random stream: never the same crowds) are what
+the crowd metrics average over. See docs/scene-file.md#crowd.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Annotated, Any
+
+from pydantic import BeforeValidator, Field, StrictBool, ValidationError
+
+from camplace.core.errors import InputError
+from camplace.spec.basics import Finite, PositiveFloat, _no_bool, _Strict, scene_error
+from camplace.spec.wording import did_you_mean, format_error_entry, name_list
+
+Density = Annotated[float, BeforeValidator(_no_bool), Field(ge=0, allow_inf_nan=False)]
+Count = Annotated[int, Field(ge=1, le=4096, strict=True)]
+MAX_COVER = 0.45  # at most this share of the floor under people (random packing jams near 0.55)
+
+
+class CrowdSpec(_Strict):
+    """Persons: cylinders of ``radius`` and ``height`` (m) standing on the floor (z = 0)."""
+
+    density: Density = 0.3  # persons per m² of walkable floor
+    radius: PositiveFloat = 0.25
+    height: PositiveFloat = 1.75
+    zones: dict[str, Density] = {}  # zone name -> its own density
+    samples: Count = 16  # crowds the crowd-aware optimisation averages over
+    score_samples: Count = 32  # held-out crowds the metrics average over
+    seed: Annotated[int, Field(ge=0, strict=True)] = 0
+    optimise: StrictBool = False  # optimise the sample-average crowd cost (a crowd-aware run)
+    report_height: Finite | None = None  # m: where the report draws P(seen by >= 2); default nearest 1.5 m
+
+    def max_density(self) -> float:
+        """Persons per m² above which random non-overlapping placement cannot reach the density."""
+        return MAX_COVER / (math.pi * self.radius ** 2)
+
+    def densities(self) -> list[tuple[str, float]]:
+        """(key path, density) of the default and of every zone."""
+        return [("density", self.density)] + [(f"zones.{k}", v) for k, v in self.zones.items()]
+
+
+def crowd_references(spec) -> None:
+    """``spec.crowd`` (a SceneSpec's) fits the room and names volume zones that exist;
+    scene_error naming the key path otherwise."""
+    c = spec.crowd
+    if c is None:
+        return
+    fp = spec.room.footprint
+    w = max(p[0] for p in fp) - min(p[0] for p in fp)
+    d = max(p[1] for p in fp) - min(p[1] for p in fp)
+    if 2 * c.radius > min(w, d):
+        raise scene_error("crowd.radius", f"{c.radius} m: a person ({2 * c.radius:g} m across) does not fit in the "
+                                          f"room ({w:g} m x {d:g} m); expected a radius below {min(w, d) / 2:g} m")
+    if c.height > spec.room.height:
+        raise scene_error("crowd.height", f"{c.height} m is taller than the room ({spec.room.height} m)")
+    for key, rho in c.densities():
+        if rho > c.max_density():
+            raise scene_error(f"crowd.{key}", f"{rho} persons/m² cannot be placed without overlap at radius "
+                                              f"{c.radius} m; expected at most {c.max_density():.3g}")
+    zones = {z.name: z for z in spec.zones}
+    volume = [n for n, z in zones.items() if not z.is_surface and not z.privacy]
+    for name in c.zones:
+        if name not in zones:
+            raise scene_error(f"crowd.zones.{name}", f"unknown zone '{name}'{did_you_mean(name, list(zones))}; "
+                                                     f"expected one of {name_list(volume)}")
+        if zones[name].is_surface or zones[name].privacy:
+            raise scene_error(f"crowd.zones.{name}", "a crowd density needs a volume zone (with 'polygon'), not a "
+                                                     "privacy or surface zone (nobody stands in a privacy zone)")
+
+
+CROWD_OPTIONS = ("density", "samples", "score_samples", "seed", "optimise")  # run() / evaluate() overrides
+
+
+def crowd_with(spec_crowd: CrowdSpec | None, overrides: dict[str, Any] | None) -> CrowdSpec | None:
+    """The scene's crowd with ``overrides`` ({key: value} of CROWD_OPTIONS; None values
+    ignored) applied; a scene without ``crowd:`` gets the defaults when any override is
+    given. An override the schema refuses is an InputError(option='crowd_<key>')."""
+    given = {k: v for k, v in (overrides or {}).items() if v is not None}
+    for k in given:
+        if k not in CROWD_OPTIONS:
+            raise InputError(f"crowd: unknown option '{k}'{did_you_mean(k, list(CROWD_OPTIONS))}; expected one of "
+                             f"{name_list(list(CROWD_OPTIONS))}", option="crowd")
+    if not given:
+        return spec_crowd
+    base = spec_crowd.model_dump() if spec_crowd is not None else {}
+    try:
+        out = CrowdSpec(**{**base, **given})
+    except ValidationError as err:
+        e = err.errors()[0]
+        key = str(e["loc"][0]) if e["loc"] else next(iter(given))
+        _, msg = format_error_entry(e, CrowdSpec)
+        raise InputError(f"crowd_{key}: {msg}", option=f"crowd_{key}") from None
+    if out.density > out.max_density():
+        raise InputError(f"crowd_density: {out.density} persons/m² cannot be placed without overlap at radius "
+                         f"{out.radius} m; expected at most {out.max_density():.3g}", option="crowd_density")
+    return out
