@@ -10,7 +10,7 @@ from hypothesis import given, settings, strategies as st
 
 from camplace.targets.crowd import Crowds
 from camplace.visibility.crowd import crowd_rows
-from camplace.visibility.executors import Executor
+from camplace.core.executors import Executor
 
 R, H = 0.25, 1.75
 CAM = np.array([[0.0, 0.0, 2.9]])

@@ -249,7 +249,7 @@ def crowd_rows(V: sp.csr_matrix, cam_positions: np.ndarray, target_positions: np
                grid: PeopleGrid | None = None) -> sp.csr_matrix:
     """(S · n, N_p) CSR uint8: rows s · n .. (s + 1) · n - 1 are V_s of V's n rows
     (cam_positions (n, 3), target_positions (N_p, 3) m). ``executor``: as for V
-    (camplace.visibility.executors; default in-process); ``progress("crowd", done, total)``."""
+    (camplace.core.executors; default in-process); ``progress("crowd", done, total)``."""
     from camplace.visibility.engine import chunked_rows
 
     V = sp.csr_matrix(V)
