@@ -204,11 +204,24 @@ def mount_points(scene: Scene, mount: Mount, points: np.ndarray | None) -> tuple
     return p[keep], None if base_yaw is None else base_yaw[keep], counts
 
 
+def lens_settings(cameras: dict[str, CameraModel]) -> tuple[tuple[CameraModel, ...], dict[str, list[int]]]:
+    """(every camera model a candidate may carry: each type's focal settings in type order
+    (camplace.cameras.models.CameraModel.settings); type name -> its indices in that tuple).
+    Without varifocal lenses the tuple is ``cameras.values()``."""
+    cam_list: list[CameraModel] = []
+    index: dict[str, list[int]] = {}
+    for name, cam in cameras.items():
+        settings = cam.settings()
+        index[name] = list(range(len(cam_list), len(cam_list) + len(settings)))
+        cam_list += settings
+    return tuple(cam_list), index
+
+
 def build_candidates(scene: Scene, cameras: dict[str, CameraModel]) -> Candidates:
-    """Every mount of the scene expanded into poses; poses inside an obstacle or closer
-    than ``mount_rules.clearance`` to one are dropped (counted per pose in ``info``)."""
-    cam_list = tuple(cameras.values())
-    cam_index = {c.name: k for k, c in enumerate(cam_list)}
+    """Every mount of the scene expanded into poses, each pose with every focal setting of
+    each camera type the mount carries; poses inside an obstacle or closer than
+    ``mount_rules.clearance`` to one are dropped (counted per pose in ``info``)."""
+    cam_list, cam_index = lens_settings(cameras)
     pos, ang, cid = [], [], []
     rules = scene.spec.mount_rules
     points = explicit_points(scene)
@@ -217,17 +230,19 @@ def build_candidates(scene: Scene, cameras: dict[str, CameraModel]) -> Candidate
         yaws, pitches, rolls = (angle_values(a) for a in (mount.yaw_deg, mount.pitch_deg, mount.roll_deg))
         yy, pp, rr = np.meshgrid(yaws, pitches, rolls, indexing="ij")
         a = np.c_[yy.ravel(), pp.ravel(), rr.ravel()]
+        ks = [k for name in mount.camera_names for k in cam_index[name]]  # camera types x focal settings
         p, base_yaw, counts = mount_points(scene, mount, points)
         ruled_out += counts["ruled_out"]
-        n_inside += counts["inside"] * len(a)
-        n_close += counts["clearance"] * len(a)
-        n_all += (len(p) + counts["inside"] + counts["clearance"]) * len(a)
-        pos.append(np.repeat(p, len(a), axis=0))
+        n_inside += counts["inside"] * len(a) * len(ks)
+        n_close += counts["clearance"] * len(a) * len(ks)
+        n_all += (len(p) + counts["inside"] + counts["clearance"]) * len(a) * len(ks)
         a_all = np.tile(a, (len(p), 1))
         if base_yaw is not None:
             a_all[:, 0] = (a_all[:, 0] + np.repeat(base_yaw, len(a))) % 360.0
-        ang.append(a_all)
-        cid.append(np.full(len(p) * len(a), cam_index[mount.camera], dtype=np.int32))
+        for k in ks:
+            pos.append(np.repeat(p, len(a), axis=0))
+            ang.append(a_all)
+            cid.append(np.full(len(p) * len(a), k, dtype=np.int32))
     positions = np.concatenate(pos) if pos else np.zeros((0, 3))
     angles = np.concatenate(ang) if ang else np.zeros((0, 3))
     camera_ids = np.concatenate(cid) if cid else np.zeros(0, np.int32)

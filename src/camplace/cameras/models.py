@@ -31,14 +31,18 @@ from __future__ import annotations
 
 import functools
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numba
 import numpy as np
 
 from camplace.cameras.calibration import load_calibration
+from camplace.cameras.distortion import (fisheye_theta_d, fisheye_undistort_theta, monotonic_limit,
+                                         opencv_distort, opencv_undistort)
+from camplace.cameras.lenses import Lens
 from camplace.core.errors import InputError
+from camplace.spec.quality import DORI_PX_PER_M, range_density
 
 MODEL_CODES = {"pinhole": 0, "opencv": 1, "fisheye": 2}
 N_PARAMS = 18  # [model, W, H, fx, fy, cx, cy, max_range, d0..d7, limit, reserved]
@@ -46,35 +50,12 @@ LIMIT_INDEX = 16
 N_DISTORTION = {"pinhole": (0,), "opencv": (4, 5, 8), "fisheye": (4,)}
 
 
-# ----------------------------------------------------------------------------- numpy side
-def _opencv_distort(x: np.ndarray, y: np.ndarray, d: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Normalized undistorted (x, y) -> distorted, OpenCV radial-tangential (d: 8 coefficients)."""
-    k1, k2, p1, p2, k3, k4, k5, k6 = d
-    r2 = x * x + y * y
-    radial = (1 + r2 * (k1 + r2 * (k2 + r2 * k3))) / (1 + r2 * (k4 + r2 * (k5 + r2 * k6)))
-    xd = x * radial + 2 * p1 * x * y + p2 * (r2 + 2 * x * x)
-    yd = y * radial + p1 * (r2 + 2 * y * y) + 2 * p2 * x * y
-    return xd, yd
-
-
-def _fisheye_theta_d(theta: np.ndarray, d: np.ndarray) -> np.ndarray:
-    t2 = theta * theta
-    return theta * (1 + t2 * (d[0] + t2 * (d[1] + t2 * (d[2] + t2 * d[3]))))
-
-
-def _monotonic_limit(f, hi: float, n: int = 20000) -> float:
-    """Largest s in (0, hi] such that f is increasing on [0, s] (sampled)."""
-    s = np.linspace(0.0, hi, n + 1)
-    v = f(s)
-    bad = np.nonzero(np.diff(v) <= 0)[0]
-    return float(hi if len(bad) == 0 else s[bad[0]])
-
-
 @dataclass(frozen=True)
 class CameraModel:
     """A lens + sensor. width/height: pixels; fx, fy, cx, cy: pixels; max_range: m;
     distortion: OpenCV-order coefficients (see module doc); max_fov_deg: full cone
-    angle beyond which a fisheye lens sees nothing (None = no limit but the model's)."""
+    angle beyond which a fisheye lens sees nothing (None = no limit but the model's). A lens
+    as sold (issue 27): ``lens`` (cameras.lenses.Lens) set to ``focal_mm``; stream Mbit/s; IR m."""
 
     name: str
     model: str
@@ -88,6 +69,10 @@ class CameraModel:
     distortion: tuple[float, ...] = field(default_factory=tuple)
     cost: float = 1.0
     max_fov_deg: float | None = None
+    focal_mm: float | None = None
+    lens: Lens | None = None
+    bitrate_mbps: float | None = None
+    ir_range_m: float | None = None
 
     def __post_init__(self) -> None:
         if self.model not in MODEL_CODES:
@@ -117,14 +102,14 @@ class CameraModel:
         hx, hy = math.radians(fov_deg[0]) / 2.0, math.radians(fov_deg[1]) / 2.0
         if model == "fisheye":
             # the image edge on each axis sits at the distorted angle of the half field of view
-            fx = (w / 2.0) / float(_fisheye_theta_d(np.array(hx), d))
-            fy = (h / 2.0) / float(_fisheye_theta_d(np.array(hy), d))
+            fx = (w / 2.0) / float(fisheye_theta_d(np.array(hx), d))
+            fy = (h / 2.0) / float(fisheye_theta_d(np.array(hy), d))
             if not distortion:
                 distortion = (0.0, 0.0, 0.0, 0.0)
         else:
             rx, ry = math.tan(hx), math.tan(hy)
-            fx = (w / 2.0) / float(_opencv_distort(np.array(rx), np.array(0.0), d)[0])
-            fy = (h / 2.0) / float(_opencv_distort(np.array(0.0), np.array(ry), d)[1])
+            fx = (w / 2.0) / float(opencv_distort(np.array(rx), np.array(0.0), d)[0])
+            fy = (h / 2.0) / float(opencv_distort(np.array(0.0), np.array(ry), d)[1])
             if model == "opencv" and not distortion:
                 distortion = (0.0, 0.0, 0.0, 0.0, 0.0)
         return cls(name, model, w, h, fx, fy, (w - 1) / 2.0, (h - 1) / 2.0, float(max_range),
@@ -141,6 +126,23 @@ class CameraModel:
             distortion = (0.0,) * 5
         return cls(name, model, int(resolution[0]), int(resolution[1]), float(fx), float(fy), float(cx), float(cy),
                    float(max_range), tuple(float(v) for v in distortion), float(cost), max_fov_deg)
+
+    # ------------------------------------------------------------------ lens settings (issue 27)
+    def at_focal(self, focal_mm: float) -> "CameraModel":
+        """This type set to ``focal_mm`` (clamped to its lens's range): fx = fy = f_mm / pitch,
+        the range recomputed from the lens's density (when the type gives none)."""
+        if self.lens is None:
+            raise InputError(f"camera '{self.name}': focal_mm: this camera type has no lens given as focal_mm "
+                             f"and a pixel pitch")
+        f = self.lens.clamp(focal_mm)
+        fp = self.lens.f_px(f)
+        return replace(self, fx=fp, fy=fp, focal_mm=f, max_range=self.lens.range_at(f, self.max_range))
+
+    def settings(self) -> tuple["CameraModel", ...]:
+        """The focal settings on the candidate grid: one per step of a varifocal lens, else self."""
+        if self.lens is None or not self.lens.varifocal:
+            return (self,)
+        return tuple(self.at_focal(float(f)) for f in self.lens.settings_mm())
 
     # ------------------------------------------------------------------ derived
     @property
@@ -195,7 +197,7 @@ class CameraModel:
         if self.model == "fisheye":
             r = np.hypot(x, y)
             theta = np.arctan2(r, z)
-            td = _fisheye_theta_d(theta, self.dist8)
+            td = fisheye_theta_d(theta, self.dist8)
             scale = np.where(r > 1e-300, td / np.where(r > 1e-300, r, 1.0), 1.0 / np.where(z > 0, z, 1.0))
             xd, yd = x * scale, y * scale
             ok = (theta <= lim) & (np.abs(p).sum(axis=1) > 0)
@@ -204,7 +206,7 @@ class CameraModel:
             zs = np.where(front, z, 1.0)
             xn, yn = x / zs, y / zs
             if self.model == "opencv":
-                xd, yd = _opencv_distort(xn, yn, self.dist8)
+                xd, yd = opencv_distort(xn, yn, self.dist8)
                 ok = front & (xn * xn + yn * yn <= lim * lim)
             else:
                 xd, yd, ok = xn, yn, front
@@ -223,11 +225,11 @@ class CameraModel:
         if self.model == "pinhole":
             d = np.c_[xd, yd, np.ones(len(uv))]
         elif self.model == "opencv":
-            x, y = _opencv_undistort(xd, yd, self.dist8, self.limit)
+            x, y = opencv_undistort(xd, yd, self.dist8, self.limit)
             d = np.c_[x, y, np.ones(len(uv))]
         else:
             rd = np.hypot(xd, yd)
-            theta = _fisheye_undistort_theta(rd, self.dist8, self.limit)
+            theta = fisheye_undistort_theta(rd, self.dist8, self.limit)
             s = np.sin(theta)
             with np.errstate(invalid="ignore", divide="ignore"):
                 cx = np.where(rd > 0, xd / np.where(rd > 0, rd, 1.0), 0.0)
@@ -262,7 +264,7 @@ def _limit_of(model: str, dist: tuple[float, ...], max_fov_deg: float | None, w:
     if model == "pinhole":
         return math.inf
     if model == "fisheye":
-        lim = _monotonic_limit(lambda t: _fisheye_theta_d(t, d), math.pi - 1e-9)
+        lim = monotonic_limit(lambda t: fisheye_theta_d(t, d), math.pi - 1e-9)
         if max_fov_deg is not None:
             lim = min(lim, math.radians(max_fov_deg) / 2.0)
         return lim
@@ -273,46 +275,7 @@ def _limit_of(model: str, dist: tuple[float, ...], max_fov_deg: float | None, w:
     def radial_r(r):
         r2 = r * r
         return r * (1 + r2 * (d[0] + r2 * (d[1] + r2 * d[4]))) / (1 + r2 * (d[5] + r2 * (d[6] + r2 * d[7])))
-    return _monotonic_limit(radial_r, hi)
-
-
-def _opencv_undistort(xd: np.ndarray, yd: np.ndarray, d: np.ndarray, limit: float,
-                      iters: int = 30) -> tuple[np.ndarray, np.ndarray]:
-    """Invert the OpenCV distortion by damped Newton steps (numerical 2x2 Jacobian)."""
-    x, y = xd.copy(), yd.copy()
-    h = 1e-7
-    for _ in range(iters):
-        fx_, fy_ = _opencv_distort(x, y, d)
-        ex, ey = fx_ - xd, fy_ - yd
-        if np.all(np.abs(ex) + np.abs(ey) < 1e-14):
-            break
-        ax, ay = _opencv_distort(x + h, y, d)
-        bx, by = _opencv_distort(x, y + h, d)
-        j11, j21 = (ax - fx_) / h, (ay - fy_) / h
-        j12, j22 = (bx - fx_) / h, (by - fy_) / h
-        det = j11 * j22 - j12 * j21
-        det = np.where(np.abs(det) < 1e-12, 1e-12, det)
-        dx = (j22 * ex - j12 * ey) / det
-        dy = (-j21 * ex + j11 * ey) / det
-        x, y = x - dx, y - dy
-        r = np.hypot(x, y)
-        shrink = np.where(r > limit, limit / np.where(r > 0, r, 1.0), 1.0)
-        x, y = x * shrink, y * shrink
-    return x, y
-
-
-def _fisheye_undistort_theta(rd: np.ndarray, d: np.ndarray, limit: float, iters: int = 30) -> np.ndarray:
-    """theta with theta_d(theta) = rd, by Newton's method, clamped to [0, limit]."""
-    theta = np.clip(rd, 0.0, limit)
-    for _ in range(iters):
-        t2 = theta * theta
-        f = _fisheye_theta_d(theta, d) - rd
-        df = 1 + t2 * (3 * d[0] + t2 * (5 * d[1] + t2 * (7 * d[2] + t2 * 9 * d[3])))
-        step = f / np.where(np.abs(df) < 1e-12, 1e-12, df)
-        theta = np.clip(theta - step, 0.0, limit)
-        if np.all(np.abs(step) < 1e-15):
-            break
-    return theta
+    return monotonic_limit(radial_r, hi)
 
 
 # ----------------------------------------------------------------------------- kernel side
@@ -411,13 +374,39 @@ def px_per_m_nb(params: np.ndarray, x: float, y: float, z: float, nx: float, ny:
 
 
 # ----------------------------------------------------------------------------- scene file side
-def camera_from_spec(spec, base_dir: Path | None = None) -> CameraModel:
+DEFAULT_MAX_RANGE = 5.0  # m: a camera type's range when it gives neither max_range nor a lens (focal_mm)
+DEFAULT_FOCAL_STEPS = 4  # focal settings of a varifocal lens on the candidate grid
+
+
+def cameras_from_spec(spec, base_dir: Path | None = None) -> dict[str, CameraModel]:
+    """The camera types of a SceneSpec by name (lens ranges from spec.quality.range_density)."""
+    return {c.name: camera_from_spec(c, base_dir, range_density(spec)) for c in spec.cameras}
+
+
+def camera_from_spec(spec, base_dir: Path | None = None, range_px_per_m: float | None = None) -> CameraModel:
     """Build a CameraModel from a validated ``cameras[i]`` entry of the scene file
-    (``calibration`` paths are relative to ``base_dir``, the scene file's folder)."""
+    (``calibration`` paths are relative to ``base_dir``, the scene file's folder). A lens
+    given as sold (``focal_mm`` + pixel pitch) is set to its widest focal length; without
+    ``max_range`` its range ends where the axis density falls to ``range_px_per_m``
+    (default: the DORI detect level)."""
+    cam = _camera_model(spec, base_dir, range_px_per_m)
+    return replace(cam, bitrate_mbps=spec.bitrate_mbps, ir_range_m=spec.ir_range_m)
+
+
+def _camera_model(spec, base_dir: Path | None, range_px_per_m: float | None) -> CameraModel:
     where = f"cameras '{spec.name}'"
     model = spec.model
     dist = tuple(spec.distortion or ())
     res = spec.resolution
+    rng = DEFAULT_MAX_RANGE if spec.max_range is None else spec.max_range
+    if spec.focal_mm is not None:
+        lo, hi = spec.focal_range_mm
+        density = None if spec.max_range is not None else (range_px_per_m or DORI_PX_PER_M["detect"])
+        lens = Lens(spec.pixel_pitch_um, lo, hi, spec.focal_steps or DEFAULT_FOCAL_STEPS, density)
+        f = lens.f_px(lo)
+        cam = CameraModel.from_intrinsics(spec.name, model, res, f, f, (res[0] - 1) / 2.0, (res[1] - 1) / 2.0, dist,
+                                          lens.range_at(lo, rng), spec.cost, spec.max_fov_deg)
+        return replace(cam, focal_mm=lo, lens=lens)
     if spec.calibration is not None:
         path = Path(spec.calibration)
         if not path.is_absolute() and base_dir is not None:
@@ -439,9 +428,9 @@ def camera_from_spec(spec, base_dir: Path | None = None) -> CameraModel:
         if res is None:
             raise InputError(f"{where}: resolution: missing (the calibration file {path} gives no image size)")
         return CameraModel.from_intrinsics(spec.name, model, res, cal["fx"], cal["fy"], cal["cx"], cal["cy"], dist,
-                                           spec.max_range, spec.cost, spec.max_fov_deg)
+                                           rng, spec.cost, spec.max_fov_deg)
     if spec.intrinsics is not None:
         k = spec.intrinsics
         return CameraModel.from_intrinsics(spec.name, model, res, k.fx, k.fy, k.cx, k.cy, dist,
-                                           spec.max_range, spec.cost, spec.max_fov_deg)
-    return CameraModel.from_fov(spec.name, model, res, spec.fov_deg, dist, spec.max_range, spec.cost, spec.max_fov_deg)
+                                           rng, spec.cost, spec.max_fov_deg)
+    return CameraModel.from_fov(spec.name, model, res, spec.fov_deg, dist, rng, spec.cost, spec.max_fov_deg)

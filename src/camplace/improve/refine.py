@@ -33,7 +33,7 @@ from camplace.cameras.candidates import Candidates, rotation_from_ypr
 from camplace.cameras.mount_rules import CEILING_BACK, occupied_distance, restrict_region
 from camplace.spec.schema import Mount, SceneSpec, angle_values
 from camplace.problem import gains
-from camplace.problem.model import PlacementProblem
+from camplace.problem.model import PlacementProblem, type_ids_of
 from camplace.scene.build import OccupancyGrid, Scene
 from camplace.solvers.base import Placement
 from camplace.targets.build import Targets
@@ -73,7 +73,7 @@ class PoseBox:
 def mount_of(spec: SceneSpec, camera_name: str, z: float) -> Mount | None:
     """The mount that produces a camera of this type at this height (None if none)."""
     for m in spec.mounts:
-        if m.camera != camera_name:
+        if camera_name not in m.camera_names:
             continue
         kind = getattr(m, "kind", "ceiling_grid")
         mz = float(m.height) if kind == "wall" else spec.room.height - m.offset_below_ceiling
@@ -159,7 +159,8 @@ def append_candidates(vis: Visibility, occupancy: OccupancyGrid, poses: np.ndarr
 def extend_problem(problem: PlacementProblem, vis: Visibility) -> PlacementProblem:
     """The same problem over an extended V (new rows: prices and types from their camera type)."""
     costs = np.array([vis.candidates.cameras[c].cost for c in vis.candidates.camera_ids], np.float64)
-    types = None if problem.type_ids is None else np.asarray(vis.candidates.camera_ids, np.int64)
+    types = None if problem.type_ids is None else type_ids_of(vis.candidates.camera_ids,
+                                                               [c.name for c in vis.candidates.cameras])
     return replace(problem, V=vis.V, location_ids=vis.candidates.location_ids, camera_costs=costs, type_ids=types)
 
 

@@ -208,14 +208,24 @@ def type_arrays(problem: PlacementProblem) -> tuple[np.ndarray, np.ndarray]:
 
 def with_type_limits(problem: PlacementProblem, camera_ids: np.ndarray, camera_names,
                      max_per_type: dict[str, int] | None) -> PlacementProblem:
-    """``problem`` with type_ids = camera_ids (N_g,) (index into camera_names) and
-    type_limits from max_per_type {camera name: at most n cameras} (the scene's
-    mount_rules.max_per_type); unchanged without limits. A name no candidate uses limits nothing."""
+    """``problem`` with type_ids from camera_ids (N_g,) (index into camera_names; see
+    ``type_ids_of``) and type_limits from max_per_type {camera name: at most n cameras}
+    (the scene's mount_rules.max_per_type); unchanged without limits. A name no candidate
+    uses limits nothing."""
     if not max_per_type:
         return problem
     names = list(camera_names)
     limits = {names.index(n): int(v) for n, v in max_per_type.items() if n in names}
-    return replace(problem, type_ids=np.asarray(camera_ids, np.int64), type_limits=limits or None)
+    return replace(problem, type_ids=type_ids_of(camera_ids, names), type_limits=limits or None)
+
+
+def type_ids_of(camera_ids: np.ndarray, camera_names) -> np.ndarray:
+    """(N_g,) int64 camera type of each candidate: the first index in ``camera_names`` of
+    its camera's name, so every focal setting of one type (the same name; issue 27)
+    counts toward that type's limit."""
+    names = list(camera_names)
+    first = np.array([names.index(n) for n in names], np.int64)
+    return first[np.asarray(camera_ids, np.int64)] if len(names) else np.asarray(camera_ids, np.int64)
 
 
 def build_problem(V: sp.csr_matrix, gamma: np.ndarray, weights: np.ndarray | None, budget: int,

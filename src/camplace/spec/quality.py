@@ -44,3 +44,13 @@ def target_min_px(targets) -> np.ndarray:
     if per_region is None or len(per_region) == 0:
         return np.zeros(len(targets.positions), dtype=np.float64)
     return np.asarray(per_region, dtype=np.float64)[targets.region_ids]
+
+
+def range_density(spec) -> float:
+    """The least pixel density (px/m) any required target of a scene (``spec``: a
+    SceneSpec) needs: over the target regions and non-privacy zones with coverage >= 1,
+    their ``min_px_per_m``, or the DORI ``detect`` level (25) for one that sets none.
+    A lens given as sold, without ``max_range``, sees up to where its density falls to this."""
+    need = [px_per_m_value(r.min_px_per_m) or DORI_PX_PER_M["detect"]
+            for r in [*spec.targets, *(z for z in spec.zones if not z.privacy)] if r.coverage > 0]
+    return min(need, default=DORI_PX_PER_M["detect"])

@@ -10,11 +10,12 @@ from __future__ import annotations
 import math
 from typing import Annotated, Any, Literal, Union
 
-from pydantic import BeforeValidator, Discriminator, Field, Tag, model_validator
+from pydantic import Discriminator, Field, Tag, model_validator
 
 from camplace.spec.basics import (FACES, Box, Face, Finite, Incidence, Point2, Point3, PositiveFloat,  # noqa: F401
                                   PositiveInt, PxPerM, _no_bool, _Strict, polygon_problem, scene_error)
 from camplace.spec.crowd import CrowdSpec, crowd_references
+from camplace.spec.lenses import Camera, Intrinsics  # noqa: F401 - the cameras entries
 from camplace.spec.sites import ExistingCamera, MountRules, Polygon2, Zone, site_references
 from camplace.spec.wording import did_you_mean, name_list
 
@@ -204,60 +205,13 @@ class TargetRegion(_Strict):
         return self
 
 
-class Intrinsics(_Strict):
-    """Calibrated pinhole intrinsics (pixels)."""
-
-    fx: PositiveFloat
-    fy: PositiveFloat
-    cx: Finite
-    cy: Finite
-
-
-class Camera(_Strict):
-    """A camera type: give exactly one of ``fov_deg``, ``intrinsics`` or ``calibration``
-    (an OpenCV calibration YAML/JSON file, path relative to the scene file)."""
-
-    name: str = Field(min_length=1)
-    model: Literal["pinhole", "opencv", "fisheye"] = "pinhole"
-    resolution: tuple[PositiveInt, PositiveInt] | None = None
-    fov_deg: tuple[Annotated[float, BeforeValidator(_no_bool), Field(gt=0, le=360)],
-                   Annotated[float, BeforeValidator(_no_bool), Field(gt=0, le=360)]] | None = None
-    intrinsics: Intrinsics | None = None
-    distortion: list[Finite] | None = None
-    calibration: str | None = None
-    max_fov_deg: Annotated[float, BeforeValidator(_no_bool), Field(gt=0, le=360)] | None = None
-    max_range: PositiveFloat = 5.0
-    cost: Annotated[float, Field(ge=0, allow_inf_nan=False)] = 1.0
-
-    @model_validator(mode="after")
-    def _lens(self) -> "Camera":
-        given = [k for k in ("fov_deg", "intrinsics", "calibration") if getattr(self, k) is not None]
-        if len(given) != 1:
-            raise ValueError("give exactly one of 'fov_deg', 'intrinsics', 'calibration'"
-                             + (f" (got {', '.join(given)})" if given else ""))
-        if self.resolution is None and self.calibration is None:
-            raise scene_error("resolution", "required key is missing ([width, height] in pixels)")
-        if self.fov_deg is not None and self.model != "fisheye" and max(self.fov_deg) >= 180:
-            raise scene_error("fov_deg", f"a {self.model} lens sees less than 180 degrees; got {list(self.fov_deg)} "
-                                         "(use model: fisheye for wider lenses)")
-        n = len(self.distortion or [])
-        allowed = {"pinhole": (0,), "opencv": (0, 4, 5, 8), "fisheye": (0, 4)}[self.model]
-        if n not in allowed:
-            what = "no distortion (use model: opencv)" if self.model == "pinhole" else \
-                f"{' or '.join(str(a) for a in allowed if a)} coefficients"
-            raise scene_error("distortion", f"model '{self.model}' takes {what}, got {n}")
-        if self.max_fov_deg is not None and self.model != "fisheye":
-            raise scene_error("max_fov_deg", "belongs to fisheye cameras")
-        return self
-
-
 class Mount(_Strict):
     """``ceiling_grid``: a grid below the ceiling, yaw absolute. ``wall``: along the walls
     (the footprint's edges, or the given ``walls`` segments) at ``height``, facing inward;
     yaw is relative to the inward normal (default -60..60 step 30)."""
 
     kind: Literal["ceiling_grid", "wall"]
-    camera: str
+    camera: str | Annotated[list[str], Field(min_length=1)]  # a camera type, or several (each at every pose)
     spacing: PositiveFloat = 1.0
     offset_below_ceiling: Annotated[float, Field(ge=0, allow_inf_nan=False)] = 0.1
     wall_clearance: Annotated[float, Field(ge=0, allow_inf_nan=False)] = 0.05
@@ -279,6 +233,11 @@ class Mount(_Strict):
         if self.kind == "ceiling_grid" and (self.height is not None or self.walls is not None):
             raise scene_error("height" if self.height is not None else "walls", "belongs to wall mounts")
         return self
+
+    @property
+    def camera_names(self) -> list[str]:
+        """The camera types this mount carries (``camera``: one name or a list)."""
+        return [self.camera] if isinstance(self.camera, str) else list(self.camera)
 
     def yaw_values(self) -> list[float]:
         """Yaw angles (degrees); relative to the inward wall normal for wall mounts."""
@@ -348,9 +307,11 @@ class SceneSpec(_Strict):
                                          "expected at least one region with coverage >= 1")
         camera_names = [c.name for c in self.cameras]
         for i, m in enumerate(self.mounts):
-            if m.camera not in camera_names:
-                raise scene_error(f"mounts[{i}].camera", f"unknown camera '{m.camera}'"
-                                  f"{did_you_mean(m.camera, camera_names)}; expected one of {name_list(camera_names)}")
+            for k, name in enumerate(m.camera_names):
+                if name not in camera_names:
+                    key = f"mounts[{i}].camera" + ("" if isinstance(m.camera, str) else f"[{k}]")
+                    raise scene_error(key, f"unknown camera '{name}'{did_you_mean(name, camera_names)}; "
+                                           f"expected one of {name_list(camera_names)}")
             if m.kind == "wall" and not 0 < (m.height or 0) < H:
                 raise scene_error(f"mounts[{i}].height", f"{m.height} m is outside the room; expected (0, {H}) m")
             off = getattr(m, "offset_below_ceiling", None)

@@ -113,6 +113,7 @@ class ExistingCamera(_Strict):
     yaw_deg: Finite
     pitch_deg: Finite
     roll_deg: Finite = 0.0
+    focal_mm: PositiveFloat | None = None  # a varifocal type's setting (default: its widest); issue 27
 
 
 def walkable_heights(spec) -> list[float]:
@@ -155,3 +156,16 @@ def site_references(spec, obstacle_names: list[str], camera_names: list[str]) ->
         seen[e.id] = i
         if e.camera not in camera_names:
             raise _unknown(f"existing[{i}].camera", "camera", e.camera, camera_names)
+        _focal_in_range(e.focal_mm, next(c for c in spec.cameras if c.name == e.camera), f"existing[{i}].focal_mm")
+
+
+def _focal_in_range(focal_mm: float | None, camera, key: str) -> None:
+    """scene_error naming ``key`` unless ``focal_mm`` (None: nothing to check) lies in the
+    focal range of ``camera`` (a cameras entry given by focal_mm)."""
+    if focal_mm is None:
+        return
+    if camera.focal_mm is None:
+        raise scene_error(key, f"camera '{camera.name}' has no lens given by focal_mm; remove this key")
+    lo, hi = camera.focal_range_mm
+    if not lo - 1e-9 <= focal_mm <= hi + 1e-9:
+        raise scene_error(key, f"{focal_mm} mm is outside the lens's range; expected {lo:g}..{hi:g} mm")

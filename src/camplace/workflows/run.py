@@ -14,7 +14,7 @@ from typing import Callable
 import numpy as np
 
 from camplace.spec.builtin import resolve_scene
-from camplace.cameras.models import CameraModel, camera_from_spec
+from camplace.cameras.models import CameraModel, cameras_from_spec
 from camplace.cameras.candidates import build_candidates
 from camplace.problem.feasibility import check_feasibility
 from camplace.spec.resources import check_resources
@@ -156,7 +156,7 @@ def scene_inputs(scene: str | Path | SceneSpec, progress: Progress | None = None
     _stage(progress, "targets")
     targets = build_targets(sc)
     timings["targets"] = time.perf_counter() - t
-    cameras: dict[str, CameraModel] = {c.name: camera_from_spec(c, base_dir) for c in spec.cameras}
+    cameras: dict[str, CameraModel] = cameras_from_spec(spec, base_dir)
     return sc, targets, cameras, source
 
 
