@@ -61,7 +61,7 @@ def test_pdf_pages_and_text(plan_dir):
     out, _ = plan_dir
     cams = _cameras(out)
     reader = pypdf.PdfReader(out / "plan.pdf")
-    assert len(reader.pages) == 4
+    assert len(reader.pages) == 5
     box = reader.pages[0].mediabox
     assert (round(float(box.width)), round(float(box.height))) == (1191, 842)  # A3 landscape, points
     plan = reader.pages[0].extract_text()
@@ -77,6 +77,7 @@ def test_pdf_pages_and_text(plan_dir):
                f"{c['yaw_deg']:.1f} {c['pitch_deg']:.1f} {c['roll_deg']:.1f} {c['camera']} pinhole")
         assert sum(line.startswith(row) and line.endswith(" new") for line in lines) == 1, row
     assert "coverage" in reader.pages[1].extract_text() and "camera views" in reader.pages[3].extract_text()
+    assert "bill of materials" in reader.pages[4].extract_text()
     assert "date" not in plan  # repeatable: no date in the title block
 
 

@@ -217,6 +217,19 @@ def lens_settings(cameras: dict[str, CameraModel]) -> tuple[tuple[CameraModel, .
     return tuple(cam_list), index
 
 
+def merge_cameras(first: tuple[CameraModel, ...],
+                  second: tuple[CameraModel, ...]) -> tuple[tuple[CameraModel, ...], np.ndarray]:
+    """(``first`` + the models of ``second`` it lacks, (len(second),) int32 index of each of
+    ``second``'s models in that tuple): camera ids of two candidate sets in one tuple."""
+    out = list(first)
+    idx = np.empty(len(second), np.int32)
+    for k, cam in enumerate(second):
+        if cam not in out:
+            out.append(cam)
+        idx[k] = out.index(cam)
+    return tuple(out), idx
+
+
 def build_candidates(scene: Scene, cameras: dict[str, CameraModel]) -> Candidates:
     """Every mount of the scene expanded into poses, each pose with every focal setting of
     each camera type the mount carries; poses inside an obstacle or closer than

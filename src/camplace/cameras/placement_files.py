@@ -13,7 +13,8 @@ from pathlib import Path
 
 import numpy as np
 
-from camplace.cameras.candidates import Candidates, location_ids_of, rotation_from_ypr, ypr_from_rotation
+from camplace.cameras.candidates import (Candidates, location_ids_of, merge_cameras, rotation_from_ypr,
+                                         ypr_from_rotation)
 from camplace.cameras.models import CameraModel
 from camplace.core.errors import InputError
 
@@ -25,7 +26,8 @@ class Poses:
     """Camera poses read from a file. ids: source ids (str); positions: (k, 3) m;
     rotations: (k, 3, 3) world-from-camera; angles_deg: (k, 3) yaw, pitch, roll;
     lenses: camera type names (None: the scene's only camera); intrinsics: per pose the
-    JSON ``intrinsics`` object (+ ``max_range``) or None, used for a lens the scene lacks."""
+    JSON ``intrinsics`` object (+ ``max_range``) or None, used for a lens the scene lacks;
+    focal_mm: per pose the focal length a varifocal type is set to (None: its widest)."""
 
     ids: tuple[str, ...]
     positions: np.ndarray
@@ -34,6 +36,7 @@ class Poses:
     lenses: tuple[str | None, ...]
     source: str = "<poses>"
     intrinsics: tuple[dict | None, ...] = ()
+    focal_mm: tuple[float | None, ...] = ()
 
     def __len__(self) -> int:
         return len(self.positions)
@@ -65,7 +68,7 @@ def read_placement_csv(path: str | Path) -> Poses:
     if missing:
         raise InputError(f"{p}: header lacks column(s) {', '.join(missing)}; expected {','.join(CSV_COLUMNS)}")
     col = {h: k for k, h in enumerate(header)}
-    ids, pos, ang, lenses = [], [], [], []
+    ids, pos, ang, lenses, focal = [], [], [], [], []
     for n, row in enumerate(rows[1:], start=2):
         if len(row) < len(header):
             raise InputError(f"{p}: line {n}: {len(row)} fields, expected {len(header)} ({','.join(header)})")
@@ -74,11 +77,22 @@ def read_placement_csv(path: str | Path) -> Poses:
         ang.append([_number(get[c], f"{p}: line {n}: column '{c}'") for c in ("yaw", "pitch", "roll")])
         ids.append(get.get("id", str(n - 2)) or str(n - 2))
         lenses.append(get.get("lens") or None)
+        focal.append(_focal(get.get("focal_mm"), f"{p}: line {n}: column 'focal_mm'"))
     if not pos:
         raise InputError(f"{p}: no camera rows after the header")
     a = np.asarray(ang, float)
     return Poses(tuple(ids), np.asarray(pos, float), rotation_from_ypr(a[:, 0], a[:, 1], a[:, 2]), a,
-                 tuple(lenses), str(p))
+                 tuple(lenses), str(p), focal_mm=tuple(focal))
+
+
+def _focal(value, where: str) -> float | None:
+    """A focal length (mm, > 0) from a file, or None for an empty / missing value."""
+    if value is None or value == "":
+        return None
+    f = _number(value, where)
+    if f <= 0:
+        raise InputError(f"{where}: expected a focal length > 0 (mm), got {value!r}")
+    return f
 
 
 def _rotation_of(cam: dict, where: str) -> tuple[np.ndarray, np.ndarray]:
@@ -120,7 +134,7 @@ def read_placement_json(path: str | Path) -> Poses:
     cams = data.get("cameras") if isinstance(data, dict) else data
     if not isinstance(cams, list):
         raise InputError(f"{p}: cameras: expected a list of camera objects (placement.json format)")
-    ids, pos, rot, ang, lenses, intrinsics = [], [], [], [], [], []
+    ids, pos, rot, ang, lenses, intrinsics, focal = [], [], [], [], [], [], []
     for k, cam in enumerate(cams):
         where = f"{p}: cameras[{k}]"
         if not isinstance(cam, dict):
@@ -136,6 +150,7 @@ def read_placement_json(path: str | Path) -> Poses:
         ids.append(str(k if cid is None else cid))
         lens = cam.get("camera", cam.get("lens"))
         lenses.append(None if lens is None else str(lens))
+        focal.append(_focal(cam.get("focal_mm"), f"{where}.focal_mm"))
         intr = cam.get("intrinsics")
         if intr is not None and not isinstance(intr, dict):
             raise InputError(f"{where}.intrinsics: expected an object (model, width, height, fx, fy, cx, cy)")
@@ -144,7 +159,7 @@ def read_placement_json(path: str | Path) -> Poses:
     if not cams:
         raise InputError(f"{p}: cameras: the list is empty")
     return Poses(tuple(ids), np.asarray(pos, float), np.asarray(rot, float), np.asarray(ang, float),
-                 tuple(lenses), str(p), tuple(intrinsics))
+                 tuple(lenses), str(p), tuple(intrinsics), tuple(focal))
 
 
 def read_placement(path: str | Path) -> Poses:
@@ -183,8 +198,9 @@ def camera_from_intrinsics(name: str, intr: dict, scene_cameras: list[CameraMode
 
 
 def candidates_from_poses(poses: Poses, cameras: dict[str, CameraModel]) -> Candidates:
-    """One candidate per pose, in file order. A lens is a scene camera by name; a name the
-    scene lacks needs the pose's ``intrinsics`` (JSON), which then define that lens."""
+    """One candidate per pose, in file order. A lens is a scene camera by name (set to the
+    pose's ``focal_mm`` when given: a lens as sold, camplace.cameras.models.CameraModel.at_focal);
+    a name the scene lacks needs the pose's ``intrinsics`` (JSON), which then define that lens."""
     cam_list = list(cameras.values())
     index = {c.name: k for k, c in enumerate(cam_list)}
     scene_names = list(index)
@@ -207,7 +223,23 @@ def candidates_from_poses(poses: Poses, cameras: dict[str, CameraModel]) -> Cand
             ids[k] = index[lens]
         else:
             ids[k] = index[lens]
+        f = poses.focal_mm[k] if k < len(poses.focal_mm) else None
+        if f is not None:
+            ids[k] = _at_focal(cam_list, int(ids[k]), f, f"{poses.source}: camera {poses.ids[k]}: focal_mm")
     cam_list = tuple(cam_list)
     return Candidates(np.ascontiguousarray(poses.positions, float), np.ascontiguousarray(poses.rotations, float),
                       np.asarray(poses.angles_deg, float), ids, location_ids_of(poses.positions), cam_list,
                       {"generated": len(poses), "dropped_inside_obstacle": 0, "source": poses.source})
+
+
+def _at_focal(cam_list: list[CameraModel], k: int, focal_mm: float, where: str) -> int:
+    """Index in ``cam_list`` of camera k set to ``focal_mm`` (appended unless already there)."""
+    cam = cam_list[k]
+    if cam.lens is None:
+        raise InputError(f"{where}: lens '{cam.name}' is not given by focal_mm in the scene; remove the focal length")
+    if not cam.lens.focal_min_mm - 1e-6 <= focal_mm <= cam.lens.focal_max_mm + 1e-6:
+        raise InputError(f"{where}: {focal_mm:g} mm is outside lens '{cam.name}' "
+                         f"({cam.lens.focal_min_mm:g}..{cam.lens.focal_max_mm:g} mm)")
+    merged, idx = merge_cameras(tuple(cam_list), (cam.at_focal(focal_mm),))
+    cam_list[:] = merged
+    return int(idx[0])

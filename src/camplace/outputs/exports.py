@@ -19,6 +19,9 @@ metres, ``rotation`` world-from-camera with OpenCV camera axes, ``intrinsics``):
 The readers (``read_opencv_yaml``, ``read_colmap_text``) return the same fields back,
 including ``position`` and world-from-camera ``rotation``; numbers are written with
 Python's shortest round-trip repr, so a round trip is exact up to float rounding.
+A lens as sold (issue 27) also carries the focal length it is set to: ``focal_length_mm``
+in the OpenCV YAML, a ``# CAMERA_ID k FOCAL_MM f`` comment line in cameras.txt (COLMAP
+skips comments); K holds the intrinsics that follow from it.
 """
 
 from __future__ import annotations
@@ -138,6 +141,8 @@ def opencv_yaml_text(cam: dict) -> str:
              f"distortion_model: \"{_distortion_model(intr)}\"",
              f"image_width: {int(intr['width'])}",
              f"image_height: {int(intr['height'])}"]
+    if cam.get("focal_mm") is not None:  # a lens as sold (issue 27): the focal length it is set to
+        lines.append(f"focal_length_mm: {_num(cam['focal_mm'])}")
     text = "\n".join(lines) + "\n"
     text += _cv_matrix("camera_matrix", intrinsic_matrix(intr))
     text += _cv_matrix("distortion_coefficients", np.asarray(dist, float).reshape(1, -1))
@@ -164,7 +169,7 @@ _CvLoader.add_constructor("tag:yaml.org,2002:opencv-matrix", _construct_cv_matri
 def read_opencv_yaml(path: str | Path) -> dict:
     """Read an OpenCV camera YAML written by ``opencv_yaml_text`` (or by cv2.FileStorage
     with the same keys). Returns K, dist, R, t, width, height, rotation (world-from-
-    camera), position (m), camera_id, camera_name, model."""
+    camera), position (m), camera_id, camera_name, model, focal_mm (None unless written)."""
     p = Path(path)
     text = p.read_text()
     if text.startswith("%YAML"):
@@ -181,6 +186,7 @@ def read_opencv_yaml(path: str | Path) -> dict:
     rot, pos = camera_pose(R, t)
     dist = d.get("distortion_coefficients", np.zeros((1, 0))).ravel()
     return {"camera_id": d.get("camera_id"), "camera_name": d.get("camera_name"), "model": d.get("model", "pinhole"),
+            "focal_mm": None if d.get("focal_length_mm") is None else float(d["focal_length_mm"]),
             "width": int(d["image_width"]), "height": int(d["image_height"]), "K": K, "dist": dist,
             "fx": float(K[0, 0]), "fy": float(K[1, 1]), "cx": float(K[0, 2]), "cy": float(K[1, 2]),
             "R": R, "t": t, "rotation": rot, "position": pos}
@@ -212,6 +218,8 @@ def colmap_texts(cameras: list[dict]) -> tuple[str, str, str]:
         intr = cam["intrinsics"]
         model, dist = _colmap_model(intr)
         params = [intr["fx"], intr["fy"], intr["cx"] + 0.5, intr["cy"] + 0.5, *dist]
+        if cam.get("focal_mm") is not None:  # a comment COLMAP skips; read_colmap_text reads it back
+            cam_lines.append(f"# CAMERA_ID {k} FOCAL_MM {_num(cam['focal_mm'])}")
         cam_lines.append(f"{k} {model} {int(intr['width'])} {int(intr['height'])} " + " ".join(_num(v) for v in params))
         R, t = world_to_camera(cam["rotation"], cam["position"])
         q = rotmat_to_qvec(R)
@@ -227,10 +235,14 @@ def colmap_texts(cameras: list[dict]) -> tuple[str, str, str]:
 def read_colmap_text(folder: str | Path) -> list[dict]:
     """Read cameras.txt + images.txt of a COLMAP text model. One dict per image (file
     order): image_id, name, camera_id, model, width, height, params (COLMAP's), fx, fy,
-    cx, cy (OpenCV pixel convention), dist, qvec, R, t, rotation, position."""
+    cx, cy (OpenCV pixel convention), dist, focal_mm (None unless written), qvec, R, t, rotation, position."""
     folder = Path(folder)
     cams: dict[int, dict] = {}
+    focal: dict[int, float] = {}
     for n, line in enumerate((folder / "cameras.txt").read_text().splitlines(), start=1):
+        f = line.split()
+        if line.startswith("# CAMERA_ID ") and len(f) == 5 and f[3] == "FOCAL_MM":
+            focal[int(f[2])] = float(f[4])
         if not line.strip() or line.startswith("#"):
             continue
         f = line.split()
@@ -239,7 +251,8 @@ def read_colmap_text(folder: str | Path) -> list[dict]:
                              f"with a model of {', '.join(COLMAP_MODELS)}")
         p = [float(v) for v in f[4:]]
         cams[int(f[0])] = {"model": f[1], "width": int(f[2]), "height": int(f[3]), "params": p,
-                           "fx": p[0], "fy": p[1], "cx": p[2] - 0.5, "cy": p[3] - 0.5, "dist": np.asarray(p[4:])}
+                           "fx": p[0], "fy": p[1], "cx": p[2] - 0.5, "cy": p[3] - 0.5, "dist": np.asarray(p[4:]),
+                           "focal_mm": focal.get(int(f[0]))}
     out = []
     lines = (folder / "images.txt").read_text().splitlines()
     data = [(n, ln) for n, ln in enumerate(lines, start=1) if not ln.startswith("#")]

@@ -14,6 +14,7 @@ from pathlib import Path
 
 from camplace.core.files import atomic_write_text
 from camplace.outputs.plan_data import SCHEDULE_HEAD, PlanData, check_paper, plan_data  # noqa: F401 (re-exported)
+from camplace.outputs.plan_bom import bom_figure
 from camplace.outputs.plan_dxf import write_plan_dxf
 from camplace.outputs.plan_pdf import plan_figure, plan_svg, write_plan_pdf
 from camplace.outputs.scene_glb import write_scene_glb
@@ -27,7 +28,7 @@ def write_handover(out_dir: str | Path, data: PlanData) -> tuple[dict[str, Path]
     out = Path(out_dir)
     fig = plan_figure(data)  # sheet 1 drawn once for both files
     svg = plan_svg(data, fig)
-    paths = {"plan.pdf": write_plan_pdf(out / "plan.pdf", data, fig),
+    paths = {"plan.pdf": write_plan_pdf(out / "plan.pdf", data, fig, [bom_figure(data)]),
              "plan.svg": atomic_write_text(out / "plan.svg", svg),
              "plan.dxf": write_plan_dxf(out / "plan.dxf", data),
              "scene.glb": write_scene_glb(out / "scene.glb", data)}

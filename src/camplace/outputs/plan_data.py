@@ -57,6 +57,7 @@ class PlanData:
     dated: str | None = None
     views: list[dict] = field(default_factory=list)  # report_html.camera_views cards (may be fewer than cameras)
     input_from_scene: np.ndarray | None = None  # 4x4: plan.dxf drawn in the input file's frame; None: scene frame
+    models: list = field(default_factory=list)  # camplace.cameras.models.CameraModel per camera (issue 27: BOM sheet)
 
     @property
     def skipped(self) -> int:
@@ -90,6 +91,8 @@ class PlanData:
             x, y, z = c["position"]
             k = c.get("intrinsics", {})
             lens = f"{k.get('model', '')} {k.get('width', '')}x{k.get('height', '')} f {float(k.get('fx', 0)):.0f}"
+            if c.get("focal_mm") is not None:  # a lens as sold (issue 27): the focal length it is set to
+                lens += f" ({float(c['focal_mm']):.1f} mm)"
             dori = "/".join(f"{d[n]:.1f}" for n, _ in reversed(DORI_LEVELS))
             serves = ", ".join(f"{r} ({n})" for r, n in served.items()) or "\u2013"
             rows.append((mark, camera_id(c), f"{x:.2f}", f"{y:.2f}", f"{z:.2f}",
@@ -146,7 +149,7 @@ def plan_data(scene, vis, placement: dict, metrics: dict, selected: np.ndarray, 
     sel = np.sort(np.asarray(selected, np.int64))
     c, t, V = vis.candidates, vis.targets, vis.V
     cams = [c.cameras[int(c.camera_ids[i])] for i in sel]
-    per_type = {cam.name: dori_distances(cam) for cam in cams}
+    per_model = {id(cam): dori_distances(cam) for cam in cams}  # per model: focal settings share a name
     served = []
     for i in sel:
         seen = V.indices[V.indptr[i]:V.indptr[i + 1]]
@@ -156,6 +159,7 @@ def plan_data(scene, vis, placement: dict, metrics: dict, selected: np.ndarray, 
     return PlanData(scene, placement, metrics, list(placement.get("cameras", [])), [f"C{k + 1}" for k in range(len(sel))],
                     viewsheds(scene.occupancy, c, sel, height, step, free_floor(scene, height),
                               budget_s=float("inf") if repeatable else budget_s),
-                    [per_type[cam.name] for cam in cams], [float(cam.cost) for cam in cams], served, t, cov,
+                    [per_model[id(cam)] for cam in cams], [float(cam.cost) for cam in cams], served, t, cov,
                     float(height), check_paper(paper), None if repeatable else time.strftime("%Y-%m-%d %H:%M"),
-                    list(views or []), None if input_from_scene is None else np.asarray(input_from_scene, float))
+                    list(views or []), None if input_from_scene is None else np.asarray(input_from_scene, float),
+                    cams)

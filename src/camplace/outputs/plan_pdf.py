@@ -426,8 +426,9 @@ def _views_mosaic(fig, data: PlanData, views: list[dict]) -> None:
                 f"{marks.get(int(v['id']), '')} (id {v['id']})", fontsize=6, ha="center", va="bottom")
 
 
-def write_plan_pdf(path: str | Path, data: PlanData, plan_fig=None) -> Path:
-    """Write plan.pdf (every page above; ``plan_fig``: sheet 1 when already drawn by plan_figure);
+def write_plan_pdf(path: str | Path, data: PlanData, plan_fig=None, extra_sheets=()) -> Path:
+    """Write plan.pdf (every page above, then ``extra_sheets``, e.g. the bill of materials of
+    camplace.outputs.plan_bom; ``plan_fig``: sheet 1 when already drawn by plan_figure);
     repeatable runs (data.dated None) carry no creation date."""
     from matplotlib import rc_context
     from matplotlib.backends.backend_pdf import PdfPages
@@ -439,7 +440,7 @@ def write_plan_pdf(path: str | Path, data: PlanData, plan_fig=None) -> Path:
     with rc_context(RC):
         with PdfPages(buf, metadata=meta) as buf_pages:  # pages into the in-memory buffer, written atomically below
             for fig in [plan_fig or plan_figure(data), coverage_figure(data), *schedule_figures(data),
-                        views_figure(data)]:
+                        views_figure(data), *extra_sheets]:
                 fig.savefig(buf_pages, format="pdf")
     return atomic_write_bytes(Path(path), buf.getvalue())
 

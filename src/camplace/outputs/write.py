@@ -17,6 +17,7 @@ from camplace.cameras.candidates import Candidates, ypr_from_rotation
 from camplace.core.errors import InputError, Interrupted
 from camplace.core.files import AtomicBatch, atomic_savez, atomic_write_json, atomic_write_text
 from camplace.metrics.coverage import Metrics
+from camplace.outputs.bom import recording_load, selected_models, write_bom
 from camplace.scene.frames import map_poses
 from camplace.solvers.base import Placement
 from camplace.visibility.voxel import Visibility
@@ -40,6 +41,7 @@ def camera_entries(candidates: Candidates, selected: np.ndarray) -> list[dict]:
             "rotation": [[float(v) for v in row] for row in candidates.rotations[i]],
             "camera": cam.name,
             "intrinsics": cam.intrinsics(),
+            **({} if cam.lens is None else {"focal_mm": _round(cam.focal_mm)}),  # a lens as sold (issue 27)
         })
     return out
 
@@ -68,9 +70,12 @@ def cameras_in_frame(cameras: list[dict], T: np.ndarray) -> list[dict]:
 
 
 def placement_dict(scene_name: str, placement: Placement, budget: int, candidates: Candidates,
-                   input_from_scene: np.ndarray | None = None, frame: str = "scene") -> dict:
+                   input_from_scene: np.ndarray | None = None, frame: str = "scene",
+                   retention_days: float | None = None) -> dict:
     """placement.json (docs/output-contract.md). ``input_from_scene`` (4x4, default
-    identity) is written as is; with ``frame='input'`` the cameras' poses are mapped by it."""
+    identity) is written as is; with ``frame='input'`` the cameras' poses are mapped by it.
+    ``recording`` (issue 27) is added when a camera type gives a bitrate or ``retention_days``
+    (the scene's recording.retention_days) is given (camplace.outputs.bom.recording_load)."""
     check_frame(frame)
     T = np.eye(4) if input_from_scene is None else np.asarray(input_from_scene, np.float64)
     cameras = camera_entries(candidates, placement.selected)
@@ -95,6 +100,10 @@ def placement_dict(scene_name: str, placement: Placement, budget: int, candidate
         for c in out["cameras"]:
             c["source_id"] = str(src[c["candidate_id"]])
     mark_existing(out, placement.info)
+    rec = recording_load(out["cameras"], [m.bitrate_mbps for m in selected_models(candidates, placement.selected)],
+                         retention_days)
+    if rec is not None:
+        out["recording"] = rec
     return out
 
 
@@ -115,13 +124,15 @@ def mark_existing(pdict: dict, info: dict) -> None:
 
 
 def placement_csv(cameras: list[dict]) -> str:
-    """The mount list: header id,x,y,z,yaw,pitch,roll,lens (metres, degrees)."""
+    """The mount list: header id,x,y,z,yaw,pitch,roll,lens (metres, degrees), and a
+    focal_mm column when some camera's lens is given as sold (issue 27; empty for the others)."""
     buf = io.StringIO()
     w = csv.writer(buf, lineterminator="\n")
-    w.writerow(["id", "x", "y", "z", "yaw", "pitch", "roll", "lens"])
+    focal = any("focal_mm" in c for c in cameras)
+    w.writerow(["id", "x", "y", "z", "yaw", "pitch", "roll", "lens"] + (["focal_mm"] if focal else []))
     for c in cameras:
         w.writerow([c.get("id", c["candidate_id"]), *c["position"], c["yaw_deg"], c["pitch_deg"], c["roll_deg"],
-                    c["camera"]])
+                    c["camera"]] + ([c.get("focal_mm", "")] if focal else []))
     return buf.getvalue()
 
 
@@ -170,7 +181,8 @@ def write_outputs(out_dir: str | Path, scene_name: str, vis: Visibility, placeme
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     T = getattr(scene, "input_from_scene", None)
-    pdict = placement_dict(scene_name, placement, budget, vis.candidates, T, frame)
+    days = getattr(getattr(getattr(scene, "spec", None), "recording", None), "retention_days", None)
+    pdict = placement_dict(scene_name, placement, budget, vis.candidates, T, frame, days)
     timings = dict(timings)
     # shown in report.html (no "report"); repeatable: 0.0 as in metrics.json, so the page is byte-identical
     report_timings = {k: 0.0 if repeatable else round(float(v), 4) for k, v in timings.items()}
@@ -182,6 +194,8 @@ def write_outputs(out_dir: str | Path, scene_name: str, vis: Visibility, placeme
         }
         timings["report"] = time.perf_counter() - t0
         paths["metrics.json"] = batch.stage_json(out / "metrics.json", _metrics_dict(metrics, timings, repeatable))
+    paths.update(write_bom(out, pdict["cameras"], [m.cost for m in selected_models(vis.candidates,
+                                                                                   placement.selected)]))
     if not report:
         return paths
     if plan:
@@ -190,7 +204,8 @@ def write_outputs(out_dir: str | Path, scene_name: str, vis: Visibility, placeme
         paper = check_paper(paper)
     try:
         # the report's pictures and mount table are drawn in the scene frame; exports follow ``frame``
-        shown = pdict if frame == "scene" else placement_dict(scene_name, placement, budget, vis.candidates, T)
+        shown = pdict if frame == "scene" else placement_dict(scene_name, placement, budget, vis.candidates, T,
+                                                              retention_days=days)
         paths.update(_write_report_set(out, vis, placement, shown, metrics, report_timings, scene, repeatable,
                                        paper if plan else None, T if frame == "input" else None))
         if frame != "scene" and "colmap/images.txt" in paths:

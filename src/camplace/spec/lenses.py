@@ -114,3 +114,9 @@ class Camera(_Strict):
         if self.pixel_um is not None:
             return float(self.pixel_um)
         return float(self.sensor_width_mm) * 1000.0 / float(self.resolution[0])
+
+
+class Recording(_Strict):
+    """``recording``: how long the recorder keeps video (the storage figure of the bill of materials)."""
+
+    retention_days: PositiveFloat

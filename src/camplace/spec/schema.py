@@ -15,7 +15,7 @@ from pydantic import Discriminator, Field, Tag, model_validator
 from camplace.spec.basics import (FACES, Box, Face, Finite, Incidence, Point2, Point3, PositiveFloat,  # noqa: F401
                                   PositiveInt, PxPerM, _no_bool, _Strict, polygon_problem, scene_error)
 from camplace.spec.crowd import CrowdSpec, crowd_references
-from camplace.spec.lenses import Camera, Intrinsics  # noqa: F401 - the cameras entries
+from camplace.spec.lenses import Camera, Intrinsics, Recording  # noqa: F401 - the cameras entries
 from camplace.spec.sites import ExistingCamera, MountRules, Polygon2, Zone, site_references
 from camplace.spec.wording import did_you_mean, name_list
 
@@ -268,6 +268,7 @@ class SceneSpec(_Strict):
     mount_rules: MountRules = MountRules()
     existing: list[ExistingCamera] | str | None = None  # or a placement.csv path (relative to the scene file)
     crowd: CrowdSpec | None = None  # people who may block sight lines (issue 28; camplace.spec.crowd)
+    recording: Recording | None = None  # retention for the recording load (issue 27)
 
     @model_validator(mode="after")
     def _references(self) -> "SceneSpec":

@@ -40,11 +40,12 @@ class PrivacyGuard:
             return np.zeros(0, bool)
         return np.diff(self.seen_points(candidates, executor, cache_dir).indptr) > 0
 
-    def __call__(self, poses: np.ndarray, camera_ids: np.ndarray) -> np.ndarray:
+    def __call__(self, poses: np.ndarray, camera_ids: np.ndarray, cameras: tuple | None = None) -> np.ndarray:
+        """``camera_ids`` index ``cameras`` (default: the guard's own, e.g. a refined focal setting's tuple)."""
         poses = np.atleast_2d(np.asarray(poses, float))
         c = Candidates(poses[:, :3].copy(), rotation_from_ypr(poses[:, 3], poses[:, 4], poses[:, 5]),
-                       poses[:, 3:].copy(), np.asarray(camera_ids, np.int32), np.arange(len(poses), dtype=np.int64),
-                       self.cameras)
+                       poses[:, 3:6].copy(), np.asarray(camera_ids, np.int32), np.arange(len(poses), dtype=np.int64),
+                       self.cameras if cameras is None else tuple(cameras))
         return ~self.sees(c)
 
 

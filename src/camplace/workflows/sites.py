@@ -23,7 +23,7 @@ from pathlib import Path
 import numpy as np
 import scipy.sparse as sp
 
-from camplace.cameras.candidates import Candidates, location_ids_of, rotation_from_ypr
+from camplace.cameras.candidates import Candidates, lens_settings, location_ids_of, merge_cameras, rotation_from_ypr
 from camplace.cameras.models import CameraModel
 from camplace.cameras.placement_files import Poses, candidates_from_poses, read_placement
 from camplace.metrics.coverage import Metrics
@@ -61,7 +61,7 @@ def scene_existing(sc: Scene) -> Poses | None:
     ang = np.array([[e.yaw_deg, e.pitch_deg, e.roll_deg] for e in ex], float)
     return Poses(tuple(e.id for e in ex), np.array([e.position for e in ex], float),
                  rotation_from_ypr(ang[:, 0], ang[:, 1], ang[:, 2]), ang, tuple(e.camera for e in ex),
-                 f"{sc.spec.name}: existing")
+                 f"{sc.spec.name}: existing", focal_mm=tuple(e.focal_mm for e in ex))
 
 
 def _position_keys(positions: np.ndarray) -> list[tuple]:
@@ -75,10 +75,12 @@ def merge_poses(first: Poses | None, second: Poses | None) -> Poses | None:
     have = set(_position_keys(first.positions))
     new = [k for k, key in enumerate(_position_keys(second.positions)) if key not in have]
     intr = lambda p: list(p.intrinsics) or [None] * len(p)  # noqa: E731
+    focal = lambda p: list(p.focal_mm) or [None] * len(p)  # noqa: E731
     return Poses(first.ids + tuple(second.ids[k] for k in new), np.r_[first.positions, second.positions[new]],
                  np.r_[first.rotations, second.rotations[new]], np.r_[first.angles_deg, second.angles_deg[new]],
                  first.lenses + tuple(second.lenses[k] for k in new), f"{first.source} + {second.source}",
-                 tuple(intr(first)) + tuple(intr(second)[k] for k in new))
+                 tuple(intr(first)) + tuple(intr(second)[k] for k in new),
+                 tuple(focal(first)) + tuple(focal(second)[k] for k in new))
 
 
 @dataclass
@@ -148,12 +150,12 @@ class Site:
         first = vis.V.shape[0]
         rows = np.arange(first, first + self.n_existing, dtype=np.int64)
         loc = (int(c.location_ids.max()) + 1 if len(c) else 0) + location_ids_of(e.positions)
-        cams = e.cameras if e.cameras[:len(c.cameras)] == c.cameras else c.cameras
+        cams, remap = merge_cameras(c.cameras, e.cameras)  # focal settings may differ (issue 27)
         ang = np.array(e.angles_deg, float)
         ang[:, 0] %= 360.0
         merged = replace(c, positions=np.r_[c.positions, e.positions], rotations=np.r_[c.rotations, e.rotations],
                          angles_deg=np.r_[c.angles_deg, ang],
-                         camera_ids=np.r_[c.camera_ids, e.camera_ids].astype(np.int32),
+                         camera_ids=np.r_[c.camera_ids, remap[e.camera_ids]].astype(np.int32),
                          location_ids=np.r_[c.location_ids, loc], cameras=cams)
         V = sp.vstack([vis.V, self.V.astype(vis.V.dtype)], format="csr")
         V.sort_indices()
@@ -189,7 +191,7 @@ class Site:
 def privacy_guard(sc: Scene, cameras: dict[str, CameraModel] | tuple, engine: VisibilityEngine) -> PrivacyGuard | None:
     """The privacy guard of a scene (its privacy zones' points raycast by ``engine``), or None."""
     pts = privacy_targets(sc)
-    cams = tuple(cameras.values()) if isinstance(cameras, dict) else tuple(cameras)
+    cams = lens_settings(cameras)[0] if isinstance(cameras, dict) else tuple(cameras)  # as build_candidates
     return None if pts is None else PrivacyGuard(engine, sc.occupancy, pts, cams)
 
 
