@@ -230,6 +230,21 @@ def merge_cameras(first: tuple[CameraModel, ...],
     return tuple(out), idx
 
 
+def focal_models(cameras: tuple[CameraModel, ...], camera_ids: np.ndarray,
+                 focal_mm: np.ndarray) -> tuple[tuple[CameraModel, ...], np.ndarray]:
+    """(``cameras`` + the focal settings it lacks, (K,) int32 ids): each pose's camera
+    ``camera_ids[k]`` set to ``focal_mm[k]`` (CameraModel.at_focal; a camera without a
+    lens as sold, or already at that focal length, keeps its id)."""
+    ids = np.asarray(camera_ids, np.int32).copy()
+    todo = [k for k, (c, f) in enumerate(zip(ids, np.asarray(focal_mm, float)))
+            if cameras[c].lens is not None and f != cameras[c].focal_mm]
+    if not todo:
+        return tuple(cameras), ids
+    cams, idx = merge_cameras(tuple(cameras), tuple(cameras[ids[k]].at_focal(float(focal_mm[k])) for k in todo))
+    ids[todo] = idx
+    return cams, ids
+
+
 def build_candidates(scene: Scene, cameras: dict[str, CameraModel]) -> Candidates:
     """Every mount of the scene expanded into poses, each pose with every focal setting of
     each camera type the mount carries; poses inside an obstacle or closer than

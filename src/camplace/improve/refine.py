@@ -2,7 +2,8 @@
 
 After the discrete solve, each selected camera is moved continuously - its position on
 its mount surface within half a grid spacing of its grid point, yaw / pitch / roll within
-half an angle step - by a derivative-free compass (pattern) search. Each poll raycasts
+half an angle step, a varifocal lens's focal length within the lens's range (issue 27) -
+by a derivative-free compass (pattern) search. Each poll raycasts
 only the camera that moves (one small ``visibility_block`` call for the <= 10 trial
 poses of one poll), against the scene occupancy and targets. The coverage of the other
 cameras is kept, so a trial costs one raycast and an O(row) cost delta:
@@ -29,7 +30,7 @@ import numpy as np
 import scipy.sparse as sp
 import shapely
 
-from camplace.cameras.candidates import Candidates, rotation_from_ypr
+from camplace.cameras.candidates import Candidates, focal_models, rotation_from_ypr
 from camplace.cameras.mount_rules import CEILING_BACK, occupied_distance, restrict_region
 from camplace.spec.schema import Mount, SceneSpec, angle_values
 from camplace.problem import gains
@@ -44,6 +45,7 @@ Progress = Callable[[str, int, int], None]
 # (camplace.visibility.privacy.PrivacyGuard: the pose sees no privacy point)
 PoseGuard = Callable[[np.ndarray, np.ndarray], np.ndarray]
 HALF = 0.499  # stay strictly inside half a step so neighbouring grid points never meet
+FOCAL = 6  # column of the focal length (mm) in a refined pose (x, y, z, yaw, pitch, roll, focal_mm); issue 27
 
 
 # --------------------------------------------------------------------------- helpers
@@ -106,32 +108,51 @@ def pose_box(scene: Scene, candidates: Candidates, i: int, fraction: float = HAL
 
 
 def single_pose_candidates(template: Candidates, camera_id: int, poses: np.ndarray) -> Candidates:
-    """Candidates for trial poses (K, 6) x, y, z, yaw, pitch, roll of one camera type."""
+    """Candidates for trial poses (K, 6) x, y, z, yaw, pitch, roll of one camera type, or
+    (K, 7) with the focal length (mm) a lens as sold is set to (camplace.cameras.candidates.focal_models)."""
     poses = np.atleast_2d(np.asarray(poses, float))
     rot = rotation_from_ypr(poses[:, 3], poses[:, 4], poses[:, 5])
-    return Candidates(poses[:, :3].copy(), rot, poses[:, 3:].copy(), np.full(len(poses), camera_id, np.int32),
-                      np.arange(len(poses), dtype=np.int64), template.cameras)
+    cams, ids = template.cameras, np.full(len(poses), camera_id, np.int32)
+    if poses.shape[1] > FOCAL:
+        cams, ids = focal_models(cams, ids, poses[:, FOCAL])
+    return Candidates(poses[:, :3].copy(), rot, poses[:, 3:FOCAL].copy(), ids, np.arange(len(poses), dtype=np.int64),
+                      cams)
 
 
 def raycast_poses(occupancy: OccupancyGrid, targets: Targets, template: Candidates, camera_id: int,
                   poses: np.ndarray) -> sp.csr_matrix:
-    """V rows (K, N_p) of trial poses (K, 6), raycast afresh."""
+    """V rows (K, N_p) of trial poses (K, 6) or (K, 7) (single_pose_candidates), raycast afresh."""
     c = single_pose_candidates(template, camera_id, poses)
     return visibility_block(occupancy, targets, c, 0, len(c))
 
 
+def focal_box(camera, fraction: float = HALF) -> np.ndarray:
+    """(4,) focal length (mm) of a camera in refinement: current value, first step half, lowest,
+    highest. A varifocal lens moves within its whole range, starting with ``fraction`` of its
+    grid's mean focal step; any other camera keeps its focal length (half 0)."""
+    lens, f = camera.lens, float(camera.focal_mm or 0.0)
+    if lens is None or not lens.varifocal:
+        return np.array([f, 0.0, f, f])
+    step = (lens.focal_max_mm - lens.focal_min_mm) / max(lens.steps - 1, 1)
+    return np.array([f, step * fraction, lens.focal_min_mm, lens.focal_max_mm])
+
+
 def append_candidates(vis: Visibility, occupancy: OccupancyGrid, poses: np.ndarray,
                       camera_ids: np.ndarray) -> tuple[Visibility, np.ndarray]:
-    """Raycast new poses (K, 6) and append them to V as rows; returns the new Visibility and
+    """Raycast new poses (K, 6), or (K, 7) with a focal length (mm; camplace.cameras.candidates.focal_models
+    adds its camera settings), and append them to V as rows; returns the new Visibility and
     the row ids (K,) of the new poses. Location rule: a position equal (to 1 mm) to an
     existing one reuses that location id, a new position is a new location."""
     poses = np.atleast_2d(np.asarray(poses, float))
     cands = vis.candidates
     camera_ids = np.asarray(camera_ids, np.int32)
+    cams = cands.cameras
+    if poses.shape[1] > FOCAL and len(poses):
+        cams, camera_ids = focal_models(cams, camera_ids, poses[:, FOCAL])
     rot = rotation_from_ypr(poses[:, 3], poses[:, 4], poses[:, 5])
-    angles = poses[:, 3:].copy()
+    angles = poses[:, 3:FOCAL].copy()
     angles[:, 0] %= 360.0
-    new = Candidates(poses[:, :3].copy(), rot, angles, camera_ids, np.zeros(len(poses), np.int64), cands.cameras)
+    new = Candidates(poses[:, :3].copy(), rot, angles, camera_ids, np.zeros(len(poses), np.int64), cams)
     rows = visibility_block(occupancy, vis.targets, new, 0, len(new)) if len(new) else \
         sp.csr_matrix((0, vis.V.shape[1]), dtype=np.uint8)
     key_of = {tuple(k): int(l) for k, l in zip(np.round(cands.positions * 1000).astype(np.int64).tolist(),
@@ -148,7 +169,7 @@ def append_candidates(vis: Visibility, occupancy: OccupancyGrid, poses: np.ndarr
                      rotations=np.r_[cands.rotations, new.rotations],
                      angles_deg=np.r_[cands.angles_deg, new.angles_deg],
                      camera_ids=np.r_[cands.camera_ids, camera_ids].astype(np.int32),
-                     location_ids=np.r_[cands.location_ids, loc])
+                     location_ids=np.r_[cands.location_ids, loc], cameras=cams)
     V = sp.vstack([vis.V, rows.astype(np.uint8)], format="csr")
     V.sort_indices()
     info = dict(vis.info, appended=int(vis.info.get("appended", 0)) + len(poses))
@@ -193,8 +214,11 @@ class RefineResult:
 def _valid_positions(box: PoseBox, occupancy: OccupancyGrid, poses: np.ndarray) -> np.ndarray:
     if len(poses) == 0:
         return np.zeros(0, bool)
-    ok = shapely.contains_xy(box.region, poses[:, 0], poses[:, 1]) & ~occupancy.is_occupied(poses[:, :3])
-    moved = ok & np.any(np.abs(poses[:, :3] - box.centre[:3]) > 1e-9, axis=1)  # only ceiling-grid cameras move
+    moved = np.any(np.abs(poses[:, :3] - box.centre[:3]) > 1e-9, axis=1)  # only ceiling-grid cameras move
+    # a camera that stays at its grid position only turns (or zooms): that position is valid as is (a wall
+    # camera sits on the boundary of the region, which contains_xy would refuse)
+    ok = ~moved | (shapely.contains_xy(box.region, poses[:, 0], poses[:, 1]) & ~occupancy.is_occupied(poses[:, :3]))
+    moved &= ok
     if box.clearance > 0 and moved.any():
         ok[moved] = occupied_distance(occupancy, poses[moved, :3], CEILING_BACK, box.clearance) >= box.clearance - 1e-6
     return ok
@@ -206,16 +230,18 @@ def refine_poses(scene: Scene, vis: Visibility, problem: PlacementProblem, selec
                  guard: PoseGuard | None = None) -> tuple[np.ndarray, np.ndarray, list[sp.csr_matrix], dict]:
     """Compass search over each selected camera's pose (see module doc).
 
-    Returns (poses (k, 6) x, y, z, yaw, pitch, roll; moved (k,) bool; rows: the k V rows
-    of the final poses; info). Step sizes start at half the box half-range and halve
-    ``levels`` times; a sweep visits every camera once; sweeps repeat while one helps.
+    Returns (poses (k, 7) x, y, z, yaw, pitch, roll, focal_mm; moved (k,) bool; rows: the k
+    V rows of the final poses; info). Step sizes start at half the box half-range and halve
+    ``levels`` times; a sweep visits every camera once; sweeps repeat while one helps. A
+    varifocal lens's focal length is one more variable (``focal_box``; issue 27).
     ``guard`` rejects trial poses before they are raycast (e.g. poses that see a privacy zone)."""
     t0 = time.perf_counter()
     deadline = None if time_limit_s is None else t0 + float(time_limit_s)
     sel = np.asarray(selected, np.int64)
     cands = vis.candidates
     boxes = [pose_box(scene, cands, int(i)) for i in sel]
-    poses = np.array([b.centre for b in boxes], float).reshape(len(sel), 6)
+    fbox = np.array([focal_box(cands.cameras[int(cands.camera_ids[i])]) for i in sel]).reshape(len(sel), 4)
+    poses = np.c_[np.array([b.centre for b in boxes], float).reshape(len(sel), 6), fbox[:, 0]]
     rows = [vis.V[int(i)] for i in sel]
     moved = np.zeros(len(sel), bool)
     cov = problem.coverage(sel)
@@ -230,7 +256,9 @@ def refine_poses(scene: Scene, vis: Visibility, problem: PlacementProblem, selec
                 break
             box = boxes[k]
             cid = int(cands.camera_ids[i])
-            dims = np.flatnonzero(box.half > 0)
+            half = np.r_[box.half, fbox[k, 1]]
+            lo, hi = np.r_[box.centre - box.half, fbox[k, 2]], np.r_[box.centre + box.half, fbox[k, 3]]
+            dims = np.flatnonzero(half > 0)
             if len(dims) == 0:
                 continue
             r = rows[k]
@@ -238,7 +266,7 @@ def refine_poses(scene: Scene, vis: Visibility, problem: PlacementProblem, selec
             cov_o[r.indices] -= 1
             g = target_gains(problem, cov_o)
             cur = float(g[r.indices].sum())
-            step = box.half / 2.0
+            step = half / 2.0
             for _ in range(levels):
                 while True:
                     if deadline is not None and time.perf_counter() > deadline:
@@ -247,8 +275,7 @@ def refine_poses(scene: Scene, vis: Visibility, problem: PlacementProblem, selec
                     for d in dims:
                         for sgn in (1.0, -1.0):
                             p = poses[k].copy()
-                            p[d] = np.clip(p[d] + sgn * step[d], box.centre[d] - box.half[d],
-                                           box.centre[d] + box.half[d])
+                            p[d] = np.clip(p[d] + sgn * step[d], lo[d], hi[d])
                             if abs(p[d] - poses[k, d]) > 1e-9:
                                 trial.append(p)
                     if not trial:
@@ -256,7 +283,7 @@ def refine_poses(scene: Scene, vis: Visibility, problem: PlacementProblem, selec
                     trial = np.array(trial)
                     trial = trial[_valid_positions(box, scene.occupancy, trial)]
                     if guard is not None and len(trial):
-                        trial = trial[guard(trial, np.full(len(trial), cid, np.int32))]
+                        trial = trial[_guarded(guard, cands, cid, trial)]
                     if len(trial) == 0:
                         break
                     R = raycast_poses(scene.occupancy, vis.targets, cands, cid, trial)
@@ -280,6 +307,14 @@ def refine_poses(scene: Scene, vis: Visibility, problem: PlacementProblem, selec
     info = {"trials": trials, "accepted_moves": accepted, "sweeps": sweeps, "stopped": stopped,
             "seconds": time.perf_counter() - t0}
     return poses, moved, rows, info
+
+
+def _guarded(guard: PoseGuard, cands: Candidates, cid: int, trial: np.ndarray) -> np.ndarray:
+    """guard(poses (K, 6), camera ids) of trial poses (K, 7); with the cameras tuple when a trial
+    changes a focal length (camplace.visibility.privacy.PrivacyGuard takes it)."""
+    cams, ids = focal_models(cands.cameras, np.full(len(trial), cid, np.int32), trial[:, FOCAL])
+    return guard(trial[:, :FOCAL], ids) if len(cams) == len(cands.cameras) else guard(trial[:, :FOCAL], ids,
+                                                                                       cameras=cams)
 
 
 def refine_placement(scene: Scene, vis: Visibility, problem: PlacementProblem, placement: Placement,
