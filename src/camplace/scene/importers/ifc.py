@@ -1,220 +1,129 @@
 """BIM models (IFC, read by ifcopenshell) -> an editable scene mapping of one storey.
 
-The storey's floor level (its Elevation) is z = 0; its ceiling is the lowest slab,
-roof or ceiling covering above it (else the next storey's elevation, else its spaces'
-tops). Every element body (ifcopenshell.geom, world coordinates, metres whatever the
-file's units) is cut to that z range and written as stacked ``prism:`` obstacles, one
-per distinct cross-section between the element's vertex heights (exact for walls with
-door and window holes, columns, slabs, extruded furniture); an element with more than
-MAX_BANDS levels (a stair, a curved chair) becomes one prism of its plan outline over
-its height. Doors are open unless ``doors='closed'``; windows occlude unless
-``glass='transparent'``. Each IfcSpace becomes a zone named by its LongName (or Name);
-the footprint is the union of the storey's spaces with the walls between them closed
-(else the storey's slab outline). See docs/plans.md (IFC).
+The storey's floor level is z = 0 (its placement; a file without storeys: the level its
+doors and walls stand on); its ceiling is the lowest slab, roof or ceiling covering above
+it (else the next storey's elevation, else its spaces' tops, else its walls'). Every
+element body (ifcopenshell.geom, world coordinates, metres whatever the file's units) is
+cut to that z range and written as stacked ``prism:`` obstacles, one per distinct
+cross-section between the element's vertex heights (exact for walls with door and window
+holes, columns, slabs, extruded furniture); an element with more than MAX_BANDS levels
+(a stair, a curved chair) becomes one prism of its plan outline over its height. Doors are
+open unless ``doors='closed'``; windows occlude unless ``glass='transparent'``. Each
+IfcSpace becomes a zone named by its LongName (or Name); the footprint is the union of the
+storey's spaces with the walls between them closed (else its floor slabs, else the outline
+of its walls); separate blocks are joined by thin seams filled by ``outside`` obstacles.
+Elements outside the footprint (trees, site objects) are left out. See docs/plans.md (IFC).
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from collections import Counter
+from dataclasses import replace
 from pathlib import Path
 
-import numpy as np
 import shapely
-from shapely.geometry import Polygon
 
 from camplace.core.errors import InputError
-from camplace.scene.importers import (UNITS_M, PlanImport, footprint_of, plan_scene, polygons_of, prism_obstacles, room_zones,
+from camplace.scene.importers import (UNITS_M, PlanImport, clean_polygons, plan_scene, prism_obstacles, room_zones,
                                       validated)
-from camplace.scene.importers.ifc_geometry import Element, clip_z, element_shapes, plan_shape, z_bands
+from camplace.scene.importers.ifc_geometry import Element, element_shapes, plan_hull, plan_shape, z_bands
+from camplace.scene.importers.ifc_model import (Storey, Structure, length_scale, occupiable, open_model, room_labels,
+                                                structure, unit_words)
+from camplace.scene.importers.ifc_storey import (CEILINGS, FLOOR_MAKERS, FLOOR_TOL_M, WALLS, StoreyRooms,
+                                                 ceiling_of, choose_storeys, floor_level, storey_footprint)
 
 OPTIONS = ("storey", "doors", "glass", "max_wall_gap")
-OCCLUDERS = ("IfcBuildingElement", "IfcBuiltElement", "IfcFurnishingElement")  # IFC2X3/IFC4, IFC4X3, furniture
-NOT_OCCLUDING = ("IfcDoor", "IfcWindow")  # unless doors='closed' / glass='opaque'
-CEILINGS = ("IfcSlab", "IfcRoof", "IfcCovering")
-MIN_CEILING_M = 1.5  # a slab lower than this above the floor is a step or a landing, not the ceiling
+OCCLUDERS = ("IfcElement",)  # walls, slabs, columns, stairs, furniture, proxies, equipment... (IFC2X3 to IFC4X3)
+NOT_ELEMENTS = ("IfcFeatureElement", "IfcVirtualElement", "IfcElementComponent")  # openings, virtual, fasteners
+NOT_FLOORS = ("ROOF", "LANDING")  # slab types that are never a storey's floor
 
 
-@dataclass(frozen=True)
-class Storey:
-    """An IfcBuildingStorey: its name, elevation (m) and the entity."""
-
-    name: str
-    elevation: float
-    entity: object
-
-
-def open_model(path: Path):
-    """The ifcopenshell model of ``path``; InputError naming the file when it is not IFC."""
-    import ifcopenshell
-
-    with open(path, "rb") as f:
-        head = f.read(64)
-    if not head.lstrip().startswith(b"ISO-10303-21"):
-        raise InputError(f"{path}: not an IFC file (an IFC STEP file starts with 'ISO-10303-21;')")
-    try:
-        return ifcopenshell.open(str(path))
-    except Exception as err:  # ifcopenshell raises its own kinds for broken files
-        msg = str(err).splitlines()[0] if str(err) else type(err).__name__
-        raise InputError(f"{path}: not a readable IFC file ({msg[:120]})") from None
-
-
-def length_scale(model) -> float:
-    """Metres per length unit of the file (IfcUnitAssignment: mm 0.001, m 1, ft 0.3048)."""
-    import ifcopenshell.util.unit
-
-    return float(ifcopenshell.util.unit.calculate_unit_scale(model))
-
-
-def storeys(model, scale: float) -> list[Storey]:
-    """The file's storeys, lowest first (elevation in m: Elevation, else the placement's z)."""
-    import ifcopenshell.util.placement
-
+def _entities(model, classes) -> list:
     out = []
-    for st in model.by_type("IfcBuildingStorey"):
-        elev = st.Elevation
-        if elev is None and st.ObjectPlacement is not None:
-            elev = ifcopenshell.util.placement.get_local_placement(st.ObjectPlacement)[2, 3]
-        out.append(Storey(st.Name or f"#{st.id()}", float(elev or 0.0) * scale, st))
-    return sorted(out, key=lambda s: s.elevation)
-
-
-def storey_of(element):
-    """The IfcBuildingStorey an element is contained in or part of (None when none is)."""
-    import ifcopenshell.util.element as ue
-
-    x, seen = element, 0
-    while x is not None and seen < 32:
-        if x.is_a("IfcBuildingStorey"):
-            return x
-        x = ue.get_container(x) or ue.get_aggregate(x)
-        seen += 1
-    return None
-
-
-def _by_storey(model, elements: list[Element]) -> dict[int, list[Element]]:
-    """Element shapes grouped by their storey's entity id (0: in no storey)."""
-    out: dict[int, list[Element]] = {}
-    for e in elements:
-        st = storey_of(model.by_guid(e.guid))
-        out.setdefault(st.id() if st is not None else 0, []).append(e)
+    for cls in classes:
+        try:
+            out += model.by_type(cls)
+        except RuntimeError:  # the class is not in this schema version
+            continue
     return out
 
 
-def _union(elements: list[Element]):
-    return shapely.union_all([plan_shape(e) for e in elements]) if elements else Polygon()
+def _occluder_entities(model) -> list:
+    """Every element that may block a sight line or be a floor or ceiling (not openings)."""
+    skip = {e.id() for e in _entities(model, NOT_ELEMENTS)}
+    return [e for e in _entities(model, OCCLUDERS) if e.id() not in skip]
 
 
-def choose_storeys(path: Path, all_storeys: list[Storey], spaces: dict, slabs: dict, storey: str | None
-                   ) -> list[Storey]:
-    """The storeys to import: the one named ``storey``, every one with spaces ('all'), or the one
-    with the largest floor area (its spaces' area, else its slabs')."""
-    if not all_storeys:
-        raise InputError(f"{path}: the file has no IfcBuildingStorey")
-    if storey == "all":  # every storey with rooms (a roof or a site level without IfcSpace is no floor to plan)
-        return [s for s in all_storeys if spaces.get(s.entity.id())] or all_storeys
-    if storey is not None:
-        hit = [s for s in all_storeys if s.name == storey]
-        if not hit:
-            raise InputError(f"{path}: no storey named '{storey}'; its storeys are "
-                             f"{', '.join(repr(s.name) for s in all_storeys)}", option="storey")
-        return hit[:1]
-
-    def area(s: Storey) -> tuple[float, float]:
-        return _union(spaces.get(s.entity.id(), [])).area, _union(slabs.get(s.entity.id(), [])).area
-
-    return [max(all_storeys, key=area)]
+def _space_storey(s: Structure, el: Element) -> int:
+    """The storey key of a space: its relations, else (assigned to the building) the highest
+    storey whose floor lies at most FLOOR_TOL_M above the space's bottom."""
+    key = s.storey_key(el.eid)
+    if key or s.synthetic:
+        return key or (s.storeys[0].key if len(s.storeys) == 1 else 0)
+    under = [st for st in s.storeys if st.elevation <= el.z_range[0] + FLOOR_TOL_M]
+    return max(under, key=lambda st: st.elevation).key if under else s.storeys[0].key
 
 
-def ceiling_of(st: Storey, nxt: Storey | None, ceilings: list[Element], spaces: list[Element]) -> float:
-    """The storey's clear height (m above its floor): the lowest slab / roof / ceiling
-    covering bottom over its spaces at least MIN_CEILING_M up, else the next storey's
-    elevation, else the top of its spaces."""
-    area = _union(spaces)
-    tops = []
-    for e in ceilings:
-        z = e.z_range[0] - st.elevation
-        if z >= MIN_CEILING_M and (nxt is None or e.z_range[0] <= nxt.elevation + 1e-6):
-            if area.is_empty or plan_shape(e).intersection(area).area > 0.25 * area.area:
-                tops.append(z)
-    if tops:
-        return min(tops)
-    if nxt is not None:
-        return nxt.elevation - st.elevation
-    if spaces:
-        return max(e.z_range[1] for e in spaces) - st.elevation
-    return 3.0
+def _storey_rooms(model, s: Structure, spaces: list[Element]) -> tuple[dict, dict, dict]:
+    """(storey key -> StoreyRooms, space id -> storey key, space id -> zone name)."""
+    where = {e.eid: _space_storey(s, e) for e in spaces}
+    ents = {e.eid: model.by_id(e.eid) for e in spaces}
+    labels: dict[int, str] = {}
+    for key in set(where.values()):
+        labels.update(room_labels([ents[i] for i, k in where.items() if k == key]))
+    counts = Counter(s.storey_key(e.id()) for e in _occluder_entities(model))
+    rooms = {st.key: StoreyRooms([(labels[e.eid], plan_shape(e).area, occupiable(ents[e.eid], labels[e.eid]))
+                                  for e in spaces if where[e.eid] == st.key], counts.get(st.key, 0))
+             for st in s.storeys}
+    return rooms, where, labels
 
 
-def closed_footprint(parts, gap: float) -> Polygon | None:
-    """The union of ``parts`` (shapely, m) with gaps up to ``gap`` m (walls) closed, as one
-    polygon without holes; None when it stays in pieces."""
-    d = gap / 2
-    union = shapely.union_all([p for p in parts if not p.is_empty]) if parts else Polygon()
-    closed = union.buffer(d, join_style="mitre").buffer(-d, join_style="mitre")
-    polys = polygons_of(shapely.make_valid(closed))
-    if len(polys) != 1:
-        return None
-    return footprint_of(polys, "footprint")
-
-
-def _occluders(model, doors: str, glass: str) -> list:
-    """The element entities that block sight lines, by the door and glass options."""
-    skip = set()
-    if doors == "open":
-        skip.add("IfcDoor")
-    if glass == "transparent":
-        skip.add("IfcWindow")
-    out = []
-    for cls in OCCLUDERS:
-        try:
-            found = model.by_type(cls)
-        except RuntimeError:  # the class is not in this schema version
-            continue
-        out += [e for e in found if e.is_a() not in skip and not (e.is_a("IfcCovering") and e.PredefinedType in
-                                                                   ("CEILING", "FLOORING"))]
-    return list({e.id(): e for e in out}.values())
-
-
-def element_prisms(el: Element, source: str, name: str) -> list[dict]:
-    """The prisms of one element cut to the storey (z relative to the floor level)."""
+def _element_prisms(el: Element, floor: float, top: float, source: str, name: str,
+                    skipped: Counter) -> list[dict]:
+    """The prisms of one element cut to floor..top (world z), z relative to the floor."""
     src = {"file": source, "class": el.ifc_class, "GlobalId": el.guid}
-    bands = z_bands(el)
-    if bands is None:
-        lo, hi = el.z_range
-        bands = [(lo, hi, plan_shape(el))]
+    bands = z_bands(el, floor, top) or []
     out = []
     for k, (z0, z1, shape) in enumerate(bands):
         prefix = name if len(bands) == 1 else f"{name}-z{k + 1}"
-        out += prism_obstacles(shape, z0, z1, prefix, src)
+        out += prism_obstacles(shape, z0 - floor, z1 - floor, prefix, src, skipped=skipped)
     return out
 
 
-def _storey_scene(path: Path, st: Storey, height: float, spaces: list[Element], slabs: list[Element],
-                  occluders: list[Element], opts: dict) -> dict:
-    """The scene mapping of one storey (element z already relative to its floor)."""
-    footprint = closed_footprint([plan_shape(e) for e in spaces], opts["max_wall_gap"])
-    if footprint is None:
-        footprint = closed_footprint([plan_shape(e) for e in slabs], opts["max_wall_gap"])
-    if footprint is None:
-        raise InputError(f"{path}: storey '{st.name}' has no spaces or floor slab to make a footprint of",
-                         option="storey")
-    obstacles, names = [], {}
-    for el in occluders:
+def _obstacles(elements: list[Element], floor: float, top: float, footprint, source: str,
+               skipped: Counter) -> tuple[list[dict], Counter]:
+    """The prisms of the elements that reach into floor..top and touch the footprint, and the
+    count of elements per class that gave some."""
+    obstacles, names, used = [], Counter(), Counter()
+    box = footprint.buffer(0.05)
+    for el in elements:
+        lo, hi = el.z_range
+        if min(hi, top) - max(lo, floor) < 0.01:
+            continue
+        hull = plan_hull(el, floor, top)  # cheap first; the exact plan only for what straddles the footprint
+        if not hull.intersects(box) or not hull.within(box) and not plan_shape(el, floor, top).intersects(box):
+            skipped[f"outside the footprint: {el.ifc_class}"] += 1
+            continue
         cls = el.ifc_class.removeprefix("Ifc")
         base = el.name if el.name.startswith(cls) else f"{cls} {el.name or el.guid}"
-        names[base] = names.get(base, 0) + 1
-        obstacles += element_prisms(el, path.name, base if names[base] == 1 else f"{base} ({names[base]})")
-    rooms = [(opts["labels"].get(e.guid) or e.name or e.guid, plan_shape(e)) for e in spaces]
-    zones = room_zones(rooms, opts["coverage"] if opts["coverage"] is not None else 2)
-    name = opts["name"] or (f"{path.stem} {st.name}" if opts["several"] else path.stem)
-    return plan_scene(name, footprint, height, obstacles, zones, heights=opts["heights"], coverage=opts["coverage"],
-                      budget=opts["budget"])
+        names[base] += 1
+        got = _element_prisms(el, floor, top, source, base if names[base] == 1 else f"{base} ({names[base]})", skipped)
+        if got:
+            used[el.ifc_class] += 1
+        else:
+            skipped[f"no prism: {el.ifc_class}"] += 1
+        obstacles += got
+    return obstacles, used
 
 
-def _relative(elements: list[Element], dz: float, factor: float) -> list[Element]:
-    """Elements scaled by ``factor`` (a units override) and moved down by dz (m)."""
-    return [Element(e.guid, e.ifc_class, e.name, e.vertices * factor - np.array([0.0, 0.0, dz]), e.faces)
-            for e in elements]
+def _openings(elements: list[Element], floor: float, top: float) -> list[list[list[float]]]:
+    """Plan rings (m, the storey's frame) of the doors and windows reaching into floor..top."""
+    out = []
+    for el in elements:
+        if el.ifc_class in ("IfcDoor", "IfcWindow") and min(el.z_range[1], top) - max(el.z_range[0], floor) > 0.01:
+            for poly in clean_polygons(plan_shape(el), tolerance=0.005, holes=False):
+                out.append([[round(float(x), 3), round(float(y), 3)] for x, y in list(poly.exterior.coords)[:-1]])
+    return out
 
 
 def _check(doors: str, glass: str, max_wall_gap: float, units: str | None, wall_height) -> None:
@@ -231,71 +140,153 @@ def _check(doors: str, glass: str, max_wall_gap: float, units: str | None, wall_
                          option="wall_height")
 
 
-def import_storeys(path: str | Path, *, storey: str | None = None, doors: str = "open", glass: str = "opaque",
-                   max_wall_gap: float = 0.6, name: str | None = None, units: str | None = None,
-                   wall_height: float | None = None, ceiling_height: float | None = None, heights=None,
-                   coverage: int | None = None, budget: int | None = None) -> list[tuple[str, dict]]:
-    """(storey name, scene mapping) of each storey imported: the one named ``storey``,
-    every storey for 'all', else the one with the largest floor area. ``units``
-    overrides the file's length unit; ``max_wall_gap`` (m): the thickest wall between
-    two spaces that the footprint closes over."""
+class _Model:
+    """An opened IFC file: its structure, unit factor and the bodies tessellated so far."""
+
+    def __init__(self, path: Path, units: str | None):
+        self.path, self.model = path, open_model(path)
+        scale = length_scale(self.model)
+        self.factor = UNITS_M[units] / scale if units is not None else 1.0
+        self.units = (f"{units} (units option; the file says {unit_words(self.model, scale)})" if units is not None
+                      else unit_words(self.model, scale))
+        self.s = structure(self.model, scale * self.factor)
+
+    def shapes(self, entities: list, skipped: Counter) -> list[Element]:
+        """The bodies of ``entities`` (units applied); those without one are counted in
+        ``skipped`` (an aggregate whose parts have bodies is not)."""
+        got = [e.moved(0.0, self.factor) if self.factor != 1.0 else e for e in element_shapes(self.model, entities)]
+        have = {e.eid for e in got}
+        wholes = set(self.s.parent.values())
+        for e in entities:
+            if e.id() not in have and e.id() not in wholes:
+                skipped[f"no body: {e.is_a()}"] += 1
+        return got
+
+    def with_floors(self, elements: list[Element]) -> None:
+        """A file without storeys: each stand-in storey's floor from its elements (floor_level)."""
+        if self.s.synthetic:
+            self.s.storeys = [replace(st, elevation=floor_level(
+                [e for e in elements if self.s.storey_key(e.eid) in (st.key, 0)])) for st in self.s.storeys]
+
+
+def import_storeys(path: str | Path, **options) -> list[tuple[str, dict]]:
+    """(storey name, scene mapping) of each storey imported (options as read_storeys)."""
+    return [(name, got.scene) for name, got in read_storeys(path, **options)]
+
+
+def read_storeys(path: str | Path, *, storey: str | None = None, doors: str = "open", glass: str = "opaque",
+                 max_wall_gap: float = 0.6, name: str | None = None, units: str | None = None,
+                 wall_height: float | None = None, ceiling_height: float | None = None, heights=None,
+                 coverage: int | None = None, budget: int | None = None) -> list[tuple[str, PlanImport]]:
+    """(storey name, what was understood) of each storey imported: the one named ``storey``,
+    every storey with rooms for 'all', else the one a user plans (choose_storeys).
+    ``units`` overrides the file's length unit; ``max_wall_gap`` (m): the thickest wall
+    between two spaces that the footprint closes over."""
     p = Path(path)
     _check(doors, glass, max_wall_gap, units, wall_height)
-    model = open_model(p)
-    scale = length_scale(model)
-    factor = UNITS_M[units] / scale if units is not None else 1.0
-    all_storeys = storeys(model, scale * factor)
-    space_ents = list(model.by_type("IfcSpace"))
-    labels = {e.GlobalId: e.LongName for e in space_ents if getattr(e, "LongName", None)}
-    firsts = _relative(element_shapes(model, space_ents + [e for c in CEILINGS for e in model.by_type(c)]), 0.0,
-                       factor)
-    spaces = _by_storey(model, [e for e in firsts if e.ifc_class == "IfcSpace"])
-    ceilings = [e for e in firsts if e.ifc_class != "IfcSpace" and not (
-        e.ifc_class == "IfcCovering" and model.by_guid(e.guid).PredefinedType == "FLOORING")]
-    slabs = _by_storey(model, [e for e in ceilings if e.ifc_class == "IfcSlab"])
-    chosen = choose_storeys(p, all_storeys, spaces, slabs, storey)
-    occluders = _by_storey(model, _relative(element_shapes(model, _occluders(model, doors, glass)), 0.0, factor))
-    opts = dict(max_wall_gap=max_wall_gap, labels=labels, name=name, heights=heights, coverage=coverage,
-                budget=budget, several=len(chosen) > 1)
+    m = _Model(p, units)
+    s, skipped = m.s, Counter()
+    spaces = m.shapes(list(m.model.by_type("IfcSpace")), skipped)
+    rooms, where, labels = _storey_rooms(m.model, s, spaces)
+    chosen, why = choose_storeys(s, rooms, storey, p)
+    near = {k for st in chosen for k in (st.key, getattr(s.below(st), "key", None)) if k is not None} | {0}
+    above = {s.above(st).key for st in chosen if s.above(st) is not None}
+    ents = [e for e in _occluder_entities(m.model) if s.synthetic or s.storey_key(e.id()) in near
+            or (s.storey_key(e.id()) in above and e.is_a() in CEILINGS)]
+    elements = m.shapes(ents, skipped)
+    m.with_floors(elements)
+    chosen = [next(x for x in s.storeys if x.key == st.key) for st in chosen]
+    kinds = {e.id(): (e.is_a(), str(getattr(e, "PredefinedType", "") or "")) for e in ents}
+    opts = dict(doors=doors, glass=glass, gap=max_wall_gap, name=name, heights=heights, coverage=coverage,
+                budget=budget, ceiling=ceiling_height, several=len(chosen) > 1, why=why)
     out = []
     for st in chosen:
-        k = all_storeys.index(st)
-        nxt = all_storeys[k + 1] if k + 1 < len(all_storeys) else None
-        below = all_storeys[k - 1] if k > 0 else None
-        own = spaces.get(st.entity.id(), [])
-        h = ceiling_height if ceiling_height is not None else ceiling_of(st, nxt, ceilings, own)
-        near = [e for sid, els in occluders.items() if sid in (0, st.entity.id(), below and below.entity.id())
-                for e in els]
-        cut = [c for c in (clip_z(e, st.elevation, st.elevation + h) for e in near) if c is not None]
-        data = _storey_scene(p, st, h, _relative(own, st.elevation, 1.0),
-                             _relative(slabs.get(st.entity.id(), []), st.elevation, 1.0),
-                             _relative(cut, st.elevation, 1.0), opts)
-        out.append((st.name, validated(data, f"{p} (storey '{st.name}')")))
+        own = [e for e in spaces if where[e.eid] == st.key]
+        got = _storey(m, st, own, elements, kinds, labels, Counter(skipped), opts)
+        got.storeys = [{"name": x.name, "elevation_m": round(x.elevation, 4), "chosen": x.key == st.key,
+                        "rooms": [[n, round(a, 2)] for n, a, _ in rooms.get(x.key, StoreyRooms([], 0)).rooms]}
+                       for x in s.storeys]
+        out.append((st.name, got))
     return out
+
+
+def _storey(m: _Model, st: Storey, spaces: list[Element], elements: list[Element], kinds: dict, labels: dict,
+            skipped: Counter, opts: dict) -> PlanImport:
+    """What was understood of one storey (its scene with the floor at z = 0)."""
+    s, p = m.s, m.path
+    below, up = s.below(st), s.above(st)
+    keys = {st.key, 0} | ({below.key} if below else set())
+    mine = [e for e in elements if s.synthetic or s.storey_key(e.eid) in keys]
+    floor = st.elevation
+    ceilings = [e for e in elements if e.ifc_class in CEILINGS and kinds[e.eid][1] != "FLOORING"
+                and (s.synthetic or s.storey_key(e.eid) in keys | ({up.key} if up else set()))]
+    walls = [e for e in mine if e.ifc_class in WALLS]
+    height, h_from = ((opts["ceiling"], "ceiling_height option") if opts["ceiling"] is not None else
+                      ceiling_of(floor, up.elevation if up else None, ceilings, spaces, walls))
+    top = floor + height
+    floors = [e for e in mine if (e.ifc_class == "IfcSlab" and kinds[e.eid][1] not in NOT_FLOORS
+                                  or kinds[e.eid] == ("IfcCovering", "FLOORING"))
+              and abs(e.z_range[1] - floor) <= FLOOR_TOL_M]
+    where = f"{p}: storey '{st.name}'" if not s.synthetic else f"{p}: the building '{st.name}'"
+    fp = storey_footprint(spaces, floors, walls, floor, height, opts["gap"], where)
+    skip = {"IfcDoor"} if opts["doors"] == "open" else set()
+    skip |= {"IfcWindow"} if opts["glass"] == "transparent" else set()
+    lying = {e.eid for e in floors}  # floor slabs and finishes: the floor itself, not obstacles
+    blockers = [e for e in mine if e.ifc_class not in skip and e.eid not in lying and not (
+        e.ifc_class == "IfcCovering" and kinds[e.eid][1] in ("CEILING", "FLOORING"))]
+    obstacles, used = _obstacles(blockers, floor, top, fp.polygon, p.name, skipped)
+    obstacles += prism_obstacles(fp.seams, 0.0, height, "outside", {"file": p.name, "class": "outside"},
+                                 skipped=skipped)
+    inside = [e for e in spaces if plan_shape(e).intersection(fp.polygon).area > 0.5 * plan_shape(e).area]
+    skipped["IfcSpace outside the footprint"] += len(spaces) - len(inside)
+    coverage = opts["coverage"] if opts["coverage"] is not None else 2
+    zones = room_zones([(labels[e.eid], plan_shape(e)) for e in inside] or [(st.name, fp.polygon)], coverage,
+                       skipped=skipped)
+    name = opts["name"] or (f"{p.stem} {st.name}" if opts["several"] else p.stem)
+    data = plan_scene(name, fp.polygon, height, obstacles, zones, heights=opts["heights"], coverage=opts["coverage"],
+                      budget=opts["budget"])
+    got = PlanImport(validated(data, f"{p} (storey '{st.name}')"), "ifc")
+    got.skipped = Counter({k: v for k, v in skipped.items() if v})
+    got.openings = _openings(mine, floor, top)
+    got.notes = [opts["why"]] + ([f"the building's floor is taken at z = {floor:.2f} m (where most of its doors and "
+                                  "walls stand); elements below it (footings) are left out"] if s.synthetic else [])
+    if fp.pieces > 1:
+        got.notes.append(f"the rooms form {fp.pieces} separate pieces (blocks, or rooms parted by walls thicker than "
+                         f"{opts['gap']:g} m): joined by {fp.pieces - 1} thin seam(s) filled by 'outside' obstacles "
+                         "(no target or camera there)")
+    n_doors = sum(e.ifc_class == "IfcDoor" for e in mine if min(e.z_range[1], top) - max(e.z_range[0], floor) > 0.01)
+    n_glass = sum(e.ifc_class == "IfcWindow" for e in mine if min(e.z_range[1], top) - max(e.z_range[0], floor) > 0.01)
+    got.used = {
+        "units": m.units,
+        "storey": f"{st.name} (floor at {floor:+.2f} m from its {st.level}; {len(inside)} room{'s' * (len(inside) != 1)})",
+        "ceiling": f"{height:.2f} m ({h_from})",
+        "footprint": f"{fp.polygon.area:.1f} m² from {fp.how}",
+        "rooms": (f"{len(inside)} IfcSpace, zones named by LongName (else Name)" if inside else
+                  f"no IfcSpace: one zone '{zones[0]['name']}' over the footprint"),
+        "elements": ", ".join(f"{c} {n}" for c, n in sorted(used.items(), key=lambda t: (-t[1], t[0]))),
+        "doors": f"{opts['doors']}: {n_doors} IfcDoor " + ("left out (open)" if opts["doors"] == "open" else "block"),
+        "glass": f"{opts['glass']}: {n_glass} IfcWindow " + ("occlude" if opts["glass"] == "opaque" else "left out"),
+    }
+    return got
 
 
 def storey_elevations(path: str | Path, units: str | None = None) -> dict[str, float]:
     """Storey name -> floor elevation (m; ``units`` overrides the file's length unit)."""
-    model = open_model(Path(path))
-    scale = length_scale(model)
-    factor = UNITS_M[units] / scale if units is not None else 1.0
-    return {s.name: s.elevation for s in storeys(model, scale * factor)}
+    m = _Model(Path(path), units)
+    if m.s.synthetic:
+        m.with_floors(m.shapes(_entities(m.model, [c for cs in FLOOR_MAKERS for c in cs]), Counter()))
+    return {st.name: st.elevation for st in m.s.storeys}
 
 
 def import_plan(path: str | Path, **options) -> dict:
-    """The scene mapping of one storey of an IFC file (options: see import_storeys;
-    storey 'all' belongs to import_storeys, which gives one scene per storey)."""
-    if options.get("storey") == "all":
-        raise InputError(f"{path}: storey 'all' gives one scene per storey; import them with import_storeys",
-                         option="storey")
-    return import_storeys(path, **options)[0][1]
-
-
-def read_storeys(path: str | Path, **options) -> list[tuple[str, PlanImport]]:
-    """(storey name, what was understood) of each storey imported (options as import_storeys)."""
-    return [(name, PlanImport(data, "ifc")) for name, data in import_storeys(path, **options)]
+    """The scene mapping of one storey of an IFC file (options: see read_storeys; storey
+    'all' belongs to import_storeys, which gives one scene per storey)."""
+    return read(path, **options).scene
 
 
 def read(path: str | Path, **options) -> PlanImport:
-    """What was understood of one storey of an IFC file (options as import_plan)."""
-    return PlanImport(import_plan(path, **options), "ifc")
+    """What was understood of one storey of an IFC file (options as read_storeys)."""
+    if options.get("storey") == "all":
+        raise InputError(f"{path}: storey 'all' gives one scene per storey; import them with import_storeys",
+                         option="storey")
+    return read_storeys(path, **options)[0][1]

@@ -1,11 +1,11 @@
 """Element geometry of an IFC model (ifcopenshell.geom, world coordinates, metres) and the
-plan shapes derived from it: triangles clipped to a z range, xy footprints (shapely) and
-extruded z bands (prisms) of piecewise-prismatic elements such as walls with openings.
+plan shapes derived from it: xy footprints (shapely), cross-sections at a height and the
+extruded z bands (prisms) of piecewise-prismatic elements such as walls with openings,
+cut to a storey's z range. Pure numpy + shapely past the tessellation (no mesh library).
 """
 
 from __future__ import annotations
 
-import os
 from dataclasses import dataclass
 
 import numpy as np
@@ -14,37 +14,59 @@ from shapely.geometry import Polygon
 
 from camplace.scene.importers import polygons_of
 
-MIN_EXTENT_M = 0.01  # an element clipped to less than this (z) lies outside the storey
-MAX_BANDS = 12  # more distinct z levels than this: not a prism stack (a mesh instead)
+MIN_EXTENT_M = 0.01  # an element cut to less than this (z) lies outside the storey
+MAX_BANDS = 12  # more distinct z levels than this: not a prism stack (one conservative prism instead)
+# ifcopenshell's CGAL kernel with OpenCASCADE for what it cannot do: 3-6x faster than the default on
+# Revit models (mapped furniture, walls with openings), the same plans (docs/plans.md, measured time)
+KERNEL = "hybrid-cgal-simple-opencascade"
 
 
 @dataclass(frozen=True)
 class Element:
-    """One IFC element's body. vertices: (V, 3) float64 m (world); faces: (F, 3) int64."""
+    """One IFC element's body. vertices: (V, 3) float64 m (world); faces: (F, 3) int64;
+    ``eid``: the entity's id in the file (0 when unknown)."""
 
     guid: str
     ifc_class: str
     name: str
     vertices: np.ndarray
     faces: np.ndarray
+    eid: int = 0
 
     @property
     def z_range(self) -> tuple[float, float]:
         return float(self.vertices[:, 2].min()), float(self.vertices[:, 2].max())
 
+    def moved(self, dz: float = 0.0, factor: float = 1.0) -> "Element":
+        """The element scaled by ``factor`` about the origin, then moved down by ``dz`` m."""
+        return Element(self.guid, self.ifc_class, self.name, self.vertices * factor - np.array([0.0, 0.0, dz]),
+                       self.faces, self.eid)
+
+
+def _iterator(settings, model, elements: list):
+    """ifcopenshell's geometry iterator over ``elements`` with KERNEL (the default kernel
+    where this ifcopenshell has no such choice)."""
+    import ifcopenshell.geom
+
+    try:
+        return ifcopenshell.geom.iterator(settings, model, 1, include=elements, geometry_library=KERNEL)
+    except (TypeError, ValueError, RuntimeError):
+        return ifcopenshell.geom.iterator(settings, model, 1, include=elements)
+
 
 def element_shapes(model, elements: list) -> list[Element]:
     """The triangulated bodies of ``elements`` (entity instances of ``model``) in world
-    coordinates (metres, whatever the file's units); elements without a body are left out.
-    Openings are cut from their hosts (walls get their door and window holes); in file order."""
+    coordinates (metres, whatever the file's units), in file order; elements without a
+    body are left out. Openings are cut from their hosts (walls get their door and window
+    holes). One thread: the iterator's threads made it slower on 2 cores (docs/plans.md)."""
     import ifcopenshell.geom
 
     if not elements:
         return []
     settings = ifcopenshell.geom.settings()
     settings.set("use-world-coords", True)
-    it = ifcopenshell.geom.iterator(settings, model, min(os.cpu_count() or 1, 8), include=elements)
-    out: list[tuple[int, Element]] = []
+    it = _iterator(settings, model, elements)
+    out: list[Element] = []
     if not it.initialize():
         return []
     while True:
@@ -52,52 +74,62 @@ def element_shapes(model, elements: list) -> list[Element]:
         v = np.asarray(sh.geometry.verts, float).reshape(-1, 3)
         f = np.asarray(sh.geometry.faces, np.int64).reshape(-1, 3)
         if len(f):
-            out.append((sh.id, Element(sh.guid, sh.type, sh.name or "", v, f)))
+            out.append(Element(sh.guid, sh.type, sh.name or "", v, f, int(sh.id)))
         if not it.next():
             break
-    return [e for _, e in sorted(out, key=lambda t: t[0])]  # file order, whatever the threads did
+    return sorted(out, key=lambda e: e.eid)
 
 
-def clip_z(el: Element, zmin: float, zmax: float) -> Element | None:
-    """The element cut to zmin <= z <= zmax (left open at the cuts: the grid's floor and
-    ceiling close it); None when less than MIN_EXTENT_M of it is left."""
-    lo, hi = el.z_range
-    if min(hi, zmax) - max(lo, zmin) < MIN_EXTENT_M:
-        return None
-    if lo >= zmin and hi <= zmax:
-        return el
-    import trimesh
-
-    m = trimesh.Trimesh(el.vertices, el.faces, process=False)
-    for origin, normal in (((0, 0, zmin), (0, 0, 1)), ((0, 0, zmax), (0, 0, -1))):
-        m = m.slice_plane(origin, normal, cap=False)  # capping needs extra libraries (and prints)
-        if m is None or len(m.faces) == 0:
-            return None
-    return Element(el.guid, el.ifc_class, el.name, np.asarray(m.vertices, float), np.asarray(m.faces, np.int64))
-
-
-def plan_shape(el: Element, min_nz: float = 0.1):
-    """The element projected to xy (shapely, m²): the union of its non-vertical triangles."""
+def plan_shape(el: Element, zmin: float = -np.inf, zmax: float = np.inf, min_nz: float = 0.1):
+    """The element projected to xy (shapely, m²): the union of its non-vertical triangles
+    that reach into zmin <= z <= zmax (whole triangles: conservative at the cuts)."""
     tri = el.vertices[el.faces]
     n = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
     area2 = np.linalg.norm(n, axis=1)
     keep = (area2 > 1e-12) & (np.abs(n[:, 2]) > min_nz * np.maximum(area2, 1e-300))
+    if np.isfinite(zmin) or np.isfinite(zmax):
+        keep &= (tri[:, :, 2].max(1) >= zmin - 1e-6) & (tri[:, :, 2].min(1) <= zmax + 1e-6)
     if not keep.any():
         return Polygon()
     polys = shapely.polygons(tri[keep][:, :, :2])
     return shapely.union_all(shapely.make_valid(polys))
 
 
+def plan_hull(el: Element, zmin: float = -np.inf, zmax: float = np.inf):
+    """The convex hull (shapely, xy m) of the element's triangles that reach into zmin..zmax
+    (a cheap, conservative stand-in for plan_shape)."""
+    tri = el.vertices[el.faces]
+    keep = (tri[:, :, 2].max(1) >= zmin - 1e-6) & (tri[:, :, 2].min(1) <= zmax + 1e-6)
+    return shapely.multipoints(tri[keep].reshape(-1, 3)[:, :2]).convex_hull if keep.any() else Polygon()
+
+
+def plane_segments(el: Element, z: float) -> np.ndarray:
+    """(S, 2, 2) xy segments (m) where the plane at height z cuts the element's triangles
+    (z should not be one of its vertex heights)."""
+    tri = el.vertices[el.faces]
+    d = tri[:, :, 2] - z
+    up = d > 0
+    cut = up.any(1) & ~up.all(1)
+    tri, d, up = tri[cut], d[cut], up[cut]
+    if not len(tri):
+        return np.zeros((0, 2, 2))
+    changes, points = [], []
+    for a, b in ((0, 1), (1, 2), (2, 0)):
+        changes.append(up[:, a] != up[:, b])
+        t = d[:, a] / np.where(changes[-1], d[:, a] - d[:, b], 1.0)
+        points.append(tri[:, a, :2] + t[:, None] * (tri[:, b, :2] - tri[:, a, :2]))
+    ch, pts = np.stack(changes, 1), np.stack(points, 1)  # (S, 3), (S, 3, 2)
+    first_two = np.argsort(~ch, axis=1, kind="stable")[:, :2]  # the two edges that cross
+    return np.take_along_axis(pts, first_two[:, :, None], axis=1)
+
+
 def section(el: Element, z: float):
     """The element's cross-section at height z (shapely): the closed outlines cut by the
-    plane z, even-odd filled (holes stay holes)."""
-    import trimesh
-
-    m = trimesh.Trimesh(el.vertices, el.faces, process=False)
-    seg = trimesh.intersections.mesh_plane(m, (0, 0, 1), (0, 0, z))
+    plane z, even-odd filled (holes stay holes); empty for an open surface."""
+    seg = plane_segments(el, z)
     if len(seg) == 0:
         return Polygon()
-    lines = shapely.linestrings(np.round(seg[:, :, :2], 6))
+    lines = shapely.linestrings(np.round(seg, 6))
     faces = polygons_of(shapely.polygonize(list(shapely.get_parts(shapely.union_all(lines)))))
     out = Polygon()
     for f in faces:
@@ -105,29 +137,30 @@ def section(el: Element, z: float):
     return out
 
 
-def z_bands(el: Element, tol: float = 1e-3) -> list[tuple[float, float, object]] | None:
-    """The element as a stack of prisms: (zmin, zmax, xy section) per band between its
-    distinct vertex heights, equal neighbours merged; None when it has more than
-    MAX_BANDS levels (not piecewise prismatic enough; keep it a mesh)."""
-    levels = np.unique(np.round(el.vertices[:, 2] / tol) * tol)
-    if len(levels) < 2 or len(levels) > MAX_BANDS + 1:
+def z_bands(el: Element, zmin: float = -np.inf, zmax: float = np.inf, tol: float = 1e-3
+            ) -> list[tuple[float, float, object]] | None:
+    """The element cut to zmin..zmax as a stack of prisms: (z0, z1, xy section) per band
+    between its distinct vertex heights, equal neighbours merged. More than MAX_BANDS
+    levels, or no closed section (an open surface model): one band of its plan outline
+    over its height (conservative). None when less than MIN_EXTENT_M of it lies in range."""
+    lo, hi = el.z_range
+    lo, hi = max(lo, zmin), min(hi, zmax)
+    if hi - lo < MIN_EXTENT_M:
         return None
+    levels = np.unique(np.round(el.vertices[:, 2] / tol) * tol)
+    levels = np.concatenate([[lo], levels[(levels > lo + tol) & (levels < hi - tol)], [hi]])
     bands: list[tuple[float, float, object]] = []
-    for z0, z1 in zip(levels[:-1], levels[1:]):
-        s = section(el, 0.5 * (z0 + z1))
-        if s.is_empty:
-            continue
-        if bands and abs(bands[-1][1] - z0) < tol and bands[-1][2].symmetric_difference(s).area < 1e-6:
-            bands[-1] = (bands[-1][0], float(z1), bands[-1][2])
-        else:
-            bands.append((float(z0), float(z1), s))
+    if len(levels) <= MAX_BANDS + 1:
+        for z0, z1 in zip(levels[:-1], levels[1:]):
+            s = section(el, 0.5 * (z0 + z1))
+            if s.is_empty:
+                continue
+            if bands and abs(bands[-1][1] - z0) < tol and bands[-1][2].symmetric_difference(s).area < 1e-6:
+                bands[-1] = (bands[-1][0], float(z1), bands[-1][2])
+            else:
+                bands.append((float(z0), float(z1), s))
+    if not bands:
+        shape = plan_shape(el, lo, hi)
+        return [(float(lo), float(hi), shape)] if not shape.is_empty else None
     return bands
 
-
-def merged_mesh(elements: list[Element]) -> tuple[np.ndarray, np.ndarray]:
-    """All elements as one triangle list: (V, 3) float64 vertices, (F, 3) int64 faces."""
-    if not elements:
-        return np.zeros((0, 3)), np.zeros((0, 3), np.int64)
-    offs = np.cumsum([0] + [len(e.vertices) for e in elements[:-1]])
-    return (np.concatenate([e.vertices for e in elements]),
-            np.concatenate([e.faces + o for e, o in zip(elements, offs)]).astype(np.int64))

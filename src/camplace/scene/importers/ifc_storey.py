@@ -1,0 +1,181 @@
+"""One storey of an IFC model from its element bodies (world z, metres): the default storey,
+the floor level of a building without storeys, the ceiling, and the footprint (spaces,
+else floor slabs, else walls; separate blocks joined into one simple polygon by thin seams
+that an ``outside`` obstacle fills).
+"""
+
+from __future__ import annotations
+
+from collections import Counter
+from dataclasses import dataclass
+
+import shapely
+from shapely.geometry import LineString, Polygon
+
+from camplace.core.errors import InputError
+from camplace.scene.importers import DEFAULT_CEILING_M, footprint_of, polygons_of, walls_outline
+from camplace.scene.importers.ifc_geometry import Element, plan_shape
+from camplace.scene.importers.ifc_model import Storey, Structure
+
+MIN_CEILING_M = 1.5  # a slab lower than this above the floor is a step or a landing, not the ceiling
+FLOOR_TOL_M = 0.3  # a slab whose top lies this close to the floor level is the floor
+MIN_PIECE_M2 = 1.0  # a piece of the footprint smaller than this is dropped
+SEAM_M = 0.1  # width of the seam that joins two separate blocks into one footprint
+CEILINGS = ("IfcSlab", "IfcRoof", "IfcCovering")
+WALLS = ("IfcWall", "IfcWallStandardCase", "IfcWallElementedCase", "IfcCurtainWall")
+FLOOR_MAKERS = (("IfcDoor",), WALLS + ("IfcColumn",))  # what stands on the floor, best witness first
+
+
+@dataclass
+class Footprint:
+    """A storey's footprint (one simple polygon, m, world xy), the seams that joined its
+    pieces (shapely, m²; filled by an obstacle), and how it was found (for the summary)."""
+
+    polygon: Polygon
+    seams: object
+    pieces: int
+    how: str
+
+
+@dataclass(frozen=True)
+class StoreyRooms:
+    """What the default choice weighs: a storey's rooms [(name, m², occupiable)] and its element count."""
+
+    rooms: list[tuple[str, float, bool]]
+    elements: int
+
+    @property
+    def occupiable(self) -> tuple[int, float]:
+        got = [a for _, a, ok in self.rooms if ok]
+        return len(got), sum(got)
+
+
+def _describe(st: Storey, r: StoreyRooms) -> str:
+    n, area = r.occupiable
+    if n:
+        return f"'{st.name}' {n} room{'s' * (n != 1)}, {area:.1f} m²"
+    why = " (a roof or foundation level)" if st.roof_or_foundation else ""
+    return f"'{st.name}' {'no rooms' if not r.rooms else 'no room to plan'}{why}"
+
+
+def choose_storeys(s: Structure, rooms: dict[int, StoreyRooms], storey: str | None, path) -> tuple[list[Storey], str]:
+    """The storeys to import and a note saying why: the one named ``storey``; for 'all' every
+    storey with a room to plan (else every storey not named a roof or foundation level);
+    by default the one a user plans: not a roof or foundation level, the most rooms to
+    plan (occupiable IfcSpaces: not external, not a roof), then the most floor area, then
+    the most elements."""
+    if storey not in (None, "all"):
+        return [s.by_name(path, storey)], f"storey '{storey}' as asked"
+    if s.synthetic:
+        return list(s.storeys), ("the file has no IfcBuildingStorey: " + ", ".join(
+            f"the building '{st.name}'" for st in s.storeys) + " as one storey")
+    empty = StoreyRooms([], 0)
+    if storey == "all":
+        with_rooms = [st for st in s.storeys if rooms.get(st.key, empty).occupiable[0]]
+        plain = [st for st in s.storeys if not st.roof_or_foundation and rooms.get(st.key, empty).elements]
+        picked = with_rooms or plain or list(s.storeys)
+        left = [st for st in s.storeys if st not in picked]
+        why = "the storeys with rooms to plan" if with_rooms else "the storeys with elements"
+        return picked, why + (f"; left out: {'; '.join(_describe(x, rooms.get(x.key, empty)) for x in left)}"
+                              if left else "")
+
+    def key(st: Storey):
+        r = rooms.get(st.key, empty)
+        return (not st.roof_or_foundation, *r.occupiable, r.elements)
+
+    best = max(s.storeys, key=key)
+    others = [x for x in s.storeys if x is not best]
+    note = (f"default storey {_describe(best, rooms.get(best.key, empty))}: the most rooms to plan, then floor area"
+            + (f"; the others: {'; '.join(_describe(x, rooms.get(x.key, empty)) for x in others)}" if others else "")
+            + " (pick another with the storey option)")
+    return [best], note
+
+
+def floor_level(elements: list[Element]) -> float:
+    """The floor (m, world z) of a building without storeys: the height most of its doors
+    stand on (else its walls and columns; ties: the higher, above the footings)."""
+    for classes in FLOOR_MAKERS:
+        zs = Counter(round(e.z_range[0], 2) + 0.0 for e in elements if e.ifc_class in classes)
+        if zs:
+            top = max(zs.values())
+            return float(max(z for z, n in zs.items() if n == top))
+    return float(min((e.z_range[0] for e in elements), default=0.0))
+
+
+def ceiling_of(floor: float, nxt: float | None, ceilings: list[Element], spaces: list[Element],
+               walls: list[Element]) -> tuple[float, str]:
+    """The storey's clear height (m above ``floor``) and where it came from: the lowest
+    underside of the slabs / roofs / ceiling coverings at one level (5 cm) that together cover a
+    quarter of its spaces, at least
+    MIN_CEILING_M up, else the next storey's elevation ``nxt``, else the top of its spaces,
+    else the height most of its walls reach, else DEFAULT_CEILING_M."""
+    area = shapely.union_all([plan_shape(e) for e in spaces]) if spaces else Polygon()
+    levels: dict[float, list[Element]] = {}
+    for e in ceilings:
+        z = e.z_range[0] - floor
+        if z >= MIN_CEILING_M and (nxt is None or e.z_range[0] <= nxt + 1e-6):
+            levels.setdefault(round(z / 0.05) * 0.05, []).append(e)
+    for z in sorted(levels):  # the lowest level whose elements together cover a quarter of the spaces
+        els = levels[z]
+        if area.is_empty or shapely.union_all([plan_shape(e) for e in els]).intersection(area).area > 0.25 * area.area:
+            return min(e.z_range[0] for e in els) - floor, f"{els[0].ifc_class} underside"
+    if nxt is not None:
+        return nxt - floor, "next storey's elevation"
+    if spaces:
+        return max(e.z_range[1] for e in spaces) - floor, "top of the spaces"
+    tops = Counter(round(e.z_range[1] - floor, 2) for e in walls if e.z_range[1] - floor >= MIN_CEILING_M)
+    if tops:
+        return float(tops.most_common(1)[0][0]), "height of most walls"
+    return DEFAULT_CEILING_M, "default"
+
+
+def _pieces(parts: list, gap: float) -> list[Polygon]:
+    """The outlines (no holes) of the union of ``parts`` with gaps up to ``gap`` m (walls)
+    closed, pieces under MIN_PIECE_M2 dropped; largest first."""
+    d = gap / 2
+    union = shapely.union_all([p for p in parts if not p.is_empty]) if parts else Polygon()
+    closed = shapely.make_valid(union.buffer(d, join_style="mitre").buffer(-d, join_style="mitre"))
+    out = [Polygon(q.exterior) for q in polygons_of(closed)]
+    return sorted([q for q in out if q.area >= MIN_PIECE_M2], key=lambda q: -q.area)
+
+
+def join_pieces(pieces: list[Polygon], width: float = SEAM_M) -> tuple[Polygon, object]:
+    """One simple polygon over separate ``pieces`` (largest first) and the seams (shapely)
+    added to join them: each piece in turn is joined to the nearest one already joined by
+    a strip ``width`` m wide along the shortest line between them."""
+    joined, seams, rest = pieces[0], [], list(pieces[1:])
+    while rest:
+        k = min(range(len(rest)), key=lambda i: joined.distance(rest[i]))
+        piece = rest.pop(k)
+        (x0, y0), (x1, y1) = shapely.shortest_line(joined, piece).coords
+        d = ((x1 - x0) ** 2 + (y1 - y0) ** 2) ** 0.5
+        if d > 1e-9:
+            ux, uy = (x1 - x0) / d * width, (y1 - y0) / d * width  # reach `width` into both pieces
+            seam = LineString([(x0 - ux, y0 - uy), (x1 + ux, y1 + uy)]).buffer(width / 2, cap_style="flat")
+            seams.append(seam)
+        joined = shapely.union_all([joined, piece] + seams[-1:])
+        joined = max(polygons_of(shapely.make_valid(joined)), key=lambda q: q.area)
+    union = shapely.union_all(pieces)
+    outline = footprint_of([joined], "footprint")
+    return outline, shapely.union_all(seams).intersection(outline).difference(union) if seams else Polygon()
+
+
+def storey_footprint(spaces: list[Element], floors: list[Element], walls: list[Element], floor: float,
+                     height: float, gap: float, where: str) -> Footprint:
+    """The footprint of a storey: its spaces merged across the walls between them (gaps up
+    to ``gap`` m); else its floor slabs (top within FLOOR_TOL_M of ``floor``); else the
+    outline of its walls above the floor (walls_outline). Separate pieces are joined by
+    seams. InputError naming ``where`` when the storey has none of these."""
+    for found, how in ((spaces, "IfcSpace"), (floors, "floor slab")):
+        pieces = _pieces([plan_shape(e) for e in found], gap)
+        if pieces:
+            polygon, seams = join_pieces(pieces)
+            n = len(pieces)
+            return Footprint(polygon, seams, n, f"{len(found)} {how}{'s' * (len(found) != 1)}, walls between "
+                             f"closed (≤ {gap:g} m)" + (f"; {n} pieces joined by seams" if n > 1 else ""))
+    shapes = [plan_shape(e, floor + 0.05, floor + height) for e in walls]
+    shapes = [q for q in shapes if not q.is_empty]
+    if shapes:
+        return Footprint(walls_outline(shapely.union_all(shapes)), Polygon(), 1,
+                         f"outline of {len(shapes)} walls above the floor (no IfcSpace, no floor slab)")
+    raise InputError(f"{where} has no spaces, floor slab or walls to make a footprint of", option="storey")
