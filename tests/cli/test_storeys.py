@@ -63,6 +63,8 @@ def test_run_storey_all_plans_each_storey_into_its_own_folder(building, tmp_path
         building_z = r["elevation_m"] + z  # within that storey's slice of the building, not the other's
         assert ((building_z > r["elevation_m"]) & (building_z < r["elevation_m"] + r["height_m"])).all()
         assert set(metrics["regions"]) >= {"Office", "Lab"}
+        svg = (folder / "preview.svg").read_text()  # issue 25: each storey's picture names its rooms
+        assert (folder / "preview.png").stat().st_size > 0 and "Office" in svg and "Lab" in svg
 
 
 def test_scene_import_storey_all_writes_one_scene_per_storey(building, tmp_path, monkeypatch, capsys):
@@ -70,9 +72,12 @@ def test_scene_import_storey_all_writes_one_scene_per_storey(building, tmp_path,
     code, text = run_cli(["scene", "import", building, "--storey", "all", "--out", out], monkeypatch, capsys)
     assert code == 0, text
     text = text.replace("\n", "")  # the console wraps long lines
-    assert sorted(p.name for p in tmp_path.iterdir()) == ["site-first-floor.yaml", "site-ground-floor.yaml"]
+    assert sorted(p.name for p in tmp_path.iterdir()) == sorted(
+        f"site-{slug}{ext}" for slug in ("first-floor", "ground-floor") for ext in (".yaml", ".preview.png",
+                                                                                    ".preview.svg"))
     for slug, floor in (("ground-floor", "Ground Floor"), ("first-floor", "First Floor")):
         assert f"site-{slug}.yaml" in text and floor in text
+        assert "Office" in (tmp_path / f"site-{slug}.preview.svg").read_text()
         data = yaml.safe_load((tmp_path / f"site-{slug}.yaml").read_text())
         assert [z["name"] for z in data["zones"]] == ["Office", "Lab"] and data["name"].endswith(floor)
         zs = np.array([o["prism"]["z"] for o in data["obstacles"]])

@@ -19,6 +19,7 @@ from camplace.cli.space import (CEILING_OPT, REF_OPT, SCALE_OPT, STOREY_OPT, UNI
                                  DOORS_OPT, GLASS_OPT, LAYER_HEIGHT_OPT, WALL_LAYERS_OPT,
                                  ImportOptions, describe_import, plan_import_options, scene_data_from_file, scene_yaml,
                                  space_kind)
+from camplace.cli.plan_preview import preview_of, run_extra, show_summary
 from camplace.cli.summary import write_and_summarise
 from camplace.core.errors import InputError
 
@@ -26,9 +27,10 @@ from camplace.core.errors import InputError
 def run_pipeline(scene, budget: Optional[int], solver: Optional[str], out: Optional[Path],
                  time_limit: Optional[float] = None, require_feasible: bool = False,
                  max_memory_gb: Optional[float] = None, repeatable: bool = False, frame: str = "scene",
-                 plan: bool = True, paper: str = "A3", **options) -> None:
+                 plan: bool = True, paper: str = "A3", preview=None, **options) -> None:
     """camplace.workflows.run.run with progress bars and Ctrl-C handling; writes the outputs
-    into ``out`` (default camplace-out/<scene>, poses in ``frame``) and prints the summary."""
+    into ``out`` (default camplace-out/<scene>, poses in ``frame``; a plan's ``preview``
+    as preview.png / preview.svg) and prints the summary."""
     from camplace.outputs.plan_data import check_paper
     from camplace.outputs.write import check_frame
     from camplace.workflows.run import run
@@ -45,7 +47,7 @@ def run_pipeline(scene, budget: Optional[int], solver: Optional[str], out: Optio
                          time_limit_s=time_limit, should_stop=stop, require_feasible=require_feasible,
                          max_memory_bytes=memory_bytes(max_memory_gb), **options)
         out_dir = out or Path("camplace-out") / result.scene.name
-        write_and_summarise(result, out_dir, repeatable, frame, plan, paper)
+        write_and_summarise(result, out_dir, repeatable, frame, plan, paper, extra=run_extra(preview, out_dir))
     if stop():
         console.print(f"[yellow]interrupted: wrote the best placement found so far (status "
                       f"'{result.placement.status}') to {escape(str(out_dir))}[/yellow]")
@@ -67,18 +69,19 @@ def _exit_if_solver_left_running(code: int) -> None:
 
 def scene_from_space_file(path: Path, budget: Optional[int], save_scene: Optional[Path] = None,
                           opts: ImportOptions = ImportOptions()):
-    """A parsed scene from a space file with the import defaults (``save_scene``: also
-    write it as YAML, for the deprecated ``run --cloud FILE --save-scene``)."""
+    """(parsed scene, plan preview or None) from a space file with the import defaults
+    (``save_scene``: also write it as YAML, for the deprecated ``run --cloud FILE --save-scene``)."""
     from camplace.core.files import atomic_write_text
     from camplace.spec.loading import parse_scene
 
     data, rep, _ = scene_data_from_file(path, opts, budget)
-    if not state["quiet"]:
+    preview = preview_of(rep, path.name)  # a plan: the import summary printed, the picture for the run folder
+    if preview is None and not state["quiet"]:
         console.print(f"[dim]{escape(describe_import(rep))}[/dim]")
     if save_scene is not None:
         atomic_write_text(save_scene, scene_yaml(data, "camplace run --cloud"))
         console.print(f"[dim]wrote {escape(str(save_scene))}[/dim]")
-    return parse_scene(data, str(path))
+    return parse_scene(data, str(path)), preview
 
 
 REFINE_OPT = typer.Option(None, "--refine/--grid-only",
@@ -186,7 +189,7 @@ def run_cmd(scene: Optional[str] = typer.Argument(None, help="Scene YAML file, b
             raise InputError("run: give either a scene or --cloud, not both")
         console.print("[yellow]warning: --cloud is deprecated; give the scan as the scene (camplace run SCAN) and "
                       "write the scene with camplace scene import[/yellow]")
-        scene = scene_from_space_file(cloud, budget, save_scene)
+        scene, _ = scene_from_space_file(cloud, budget, save_scene)
     elif scene is None:
         raise InputError("run: give a scene (YAML file, built-in name or space file)")
     elif save_scene is not None:
@@ -195,13 +198,13 @@ def run_cmd(scene: Optional[str] = typer.Argument(None, help="Scene YAML file, b
                                wall_height=wall_height, ceiling_height=ceiling_height, scale=scale, ref=ref,
                                storey=storey, wall_layers=wall_layers, layer_height=layer_height, doors=doors,
                                glass=glass)
-    storeys = None
+    storeys = preview = None
     if storey == "all":  # every storey of an IFC file, each into its own folder
         from camplace.cli.scene_import import storey_scenes
 
         storeys = (Path(scene), storey_scenes(Path(scene), plan, budget))
     elif isinstance(scene, str) and space_kind(scene) is not None:
-        scene = scene_from_space_file(Path(scene), budget, opts=plan)
+        scene, preview = scene_from_space_file(Path(scene), budget, opts=plan)
     refine = refine_default(refine, robust=robust, certify=certify, well_triangulated=well_triangulated)
     solver, time_limit = certify_solver(certify, solver, time_limit)
     run = run_pipeline if storeys is None else run_storeys(*storeys)
@@ -213,7 +216,7 @@ def run_cmd(scene: Optional[str] = typer.Argument(None, help="Scene YAML file, b
                  **({"coverage_gap": coverage_gap} if coverage_gap is not None else {}),
                  **beyond_grid_options(refine, refine_time, adaptive, robust, money_budget, tri_angle),
                  **({"well_triangulated": True} if well_triangulated else {}),
-                 **({"keep": keep} if keep is not None else {}))
+                 **({"keep": keep} if keep is not None else {}), preview=preview)
 
 
 
@@ -223,16 +226,17 @@ def run_storeys(path: Path, scenes: list):
     from camplace.spec.loading import parse_scene
     from camplace.workflows.storeys import storey_row, storeys_summary
 
-    def run(_scene, budget, solver, out, *args, **options) -> None:
+    def run(_scene, budget, solver, out, *args, preview=None, **options) -> None:
         out_dir = out or Path("camplace-out") / path.stem
         rows = []
-        for name, slug, data, elev in scenes:
+        for name, slug, data, elev, storey_preview in scenes:
             if not state["quiet"]:
                 console.print(f"[bold]storey '{escape(name)}'[/bold] (floor at {elev:g} m) -> "
                               f"{escape(str(out_dir / slug))}")
+            show_summary(storey_preview.summary, f"{path.name}, storey '{name}'")
             try:
                 run_pipeline(parse_scene(data, f"{path} (storey '{name}')"), budget, solver, out_dir / slug, *args,
-                             **options)
+                             preview=storey_preview, **options)
             except typer.Exit:  # interrupted: that storey's best placement is written; summarise the ones done
                 rows.append(storey_row(name, out_dir / slug, elev, data["room"]["height"]))
                 storeys_summary(out_dir, path.name, rows)

@@ -3,6 +3,7 @@
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
 from typing import Optional
 
@@ -10,6 +11,7 @@ import typer
 from rich.markup import escape
 
 from camplace.cli.common import console, state
+from camplace.cli.plan_preview import json_part, preview_of, show_summary, write_files
 from camplace.cli.space import (CEILING_OPT, REF_OPT, SCALE_OPT, STOREY_OPT, UNITS_OPT, WALL_HEIGHT_OPT,
                                  DOORS_OPT, GLASS_OPT, LAYER_HEIGHT_OPT, WALL_LAYERS_OPT,
                                  ImportOptions, describe_import, scene_data_from_file, scene_yaml)
@@ -63,30 +65,43 @@ def import_cmd(file: Path = typer.Argument(..., help="A scan (PLY, PCD, XYZ/CSV,
         _write_storeys(file, opts, budget, out)
         return
     data, rep, _ = scene_data_from_file(file, opts, budget)
-    if not state["quiet"]:
+    preview = preview_of(rep, file.name)  # rendered before anything is written
+    if preview is None and not state["quiet"]:
         console.print(f"[dim]{escape(describe_import(rep))}[/dim]")
     atomic_write_text(out, scene_yaml(data, f"camplace scene import {file.name}"))
-    if state["quiet"]:
+    pictures = write_files(preview, preview_base(out)) if preview is not None else []
+    if state["json"]:
+        typer.echo(json.dumps({"scene": str(out), **(json_part(preview, pictures) if preview else {})}, indent=2))
+    elif state["quiet"]:
         typer.echo(str(out))
     else:
         console.print(f"wrote {escape(str(out))}: edit it, then camplace run {escape(str(out))}")
+        if pictures:
+            console.print(f"wrote {escape(str(pictures[0]))} (and .svg): what was understood; look at it first")
 
 
-def storey_scenes(path: Path, opts: ImportOptions, budget: Optional[int]) -> list[tuple[str, str, dict, float]]:
-    """(storey, slug, scene mapping, floor elevation m) of every storey of an IFC plan
-    (--storey all), each checked by the scene schema; nothing is written."""
+def preview_base(out: Path) -> Path:
+    """site.yaml -> site.preview (the preview's .png / .svg beside the scene file)."""
+    return out.with_name(f"{out.stem}.preview")
+
+
+def storey_scenes(path: Path, opts: ImportOptions, budget: Optional[int]) -> list[tuple[str, str, dict, float, object]]:
+    """(storey, slug, scene mapping, floor elevation m, preview) of every storey of an IFC
+    plan (--storey all), each checked by the scene schema, each with its preview picture
+    (camplace.outputs.plan_preview.Preview); nothing is written or printed."""
     from camplace.cli.space import space_kind
-    from camplace.scene.importers import import_storey_plans, validated
+    from camplace.outputs.plan_preview import render_preview
+    from camplace.scene.importers import read_storey_plans, validated
     from camplace.workflows.storeys import storey_slugs
 
     if space_kind(path) != "plan":
         raise InputError(f"--storey: 'all' belongs to IFC files, not to {path}")
     if not path.is_file():
         raise InputError(f"{path}: file not found" if not path.exists() else f"{path}: is a folder, expected a file")
-    found = import_storey_plans(path, **opts.plan_kwargs(budget))
+    found = read_storey_plans(path, **opts.plan_kwargs(budget))
     slugs = storey_slugs([name for name, _, _ in found])
-    return [(name, slug, validated(data, f"{path} (storey '{name}')"), elev)
-            for (name, data, elev), slug in zip(found, slugs)]
+    return [(name, slug, validated(got.scene, f"{path} (storey '{name}')"), elev,
+             render_preview(got, f"{path.name}, storey '{name}'")) for (name, got, elev), slug in zip(found, slugs)]
 
 
 def _write_storeys(file: Path, opts: ImportOptions, budget: Optional[int], out: Path) -> None:
@@ -95,14 +110,21 @@ def _write_storeys(file: Path, opts: ImportOptions, budget: Optional[int], out: 
     from camplace.core.files import atomic_write_text
 
     scenes = storey_scenes(file, opts, budget)
-    paths = []
-    for name, slug, data, elev in scenes:
+    paths, docs = [], []
+    for name, slug, data, elev, preview in scenes:
         path = out.with_name(f"{out.stem}-{slug}{out.suffix}")
         paths.append(atomic_write_text(path, scene_yaml(data, f"camplace scene import {file.name} --storey all: "
                                                               f"storey '{name}', floor at {elev:g} m")))
-    for (name, _, data, elev), path in zip(scenes, paths):
+        docs.append({"storey": name, "scene": str(path),
+                     **json_part(preview, write_files(preview, preview_base(path)))})
+    if state["json"]:
+        typer.echo(json.dumps({"storeys": docs}, indent=2))
+        return
+    for (name, _, data, elev, preview), path in zip(scenes, paths):
+        show_summary(preview.summary, f"{file.name}, storey '{name}'")
         if state["quiet"]:
             typer.echo(str(path))
         else:
-            console.print(f"wrote {escape(str(path))}: storey '{escape(name)}' (floor at {elev:g} m = z 0, "
-                          f"{len(data['zones'])} rooms, {len(data['obstacles'])} obstacles)")
+            console.print(f"wrote {escape(str(path))} and {escape(preview_base(path).name)}.png/.svg: storey "
+                          f"'{escape(name)}' (floor at {elev:g} m = z 0, {len(data['zones'])} rooms, "
+                          f"{len(data['obstacles'])} obstacles)")

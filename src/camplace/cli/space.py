@@ -242,13 +242,15 @@ def scene_data_from_file(path: str | Path, opts: ImportOptions, budget: int | No
 
 
 def _plan_data(p: Path, opts: ImportOptions, budget: int | None) -> tuple[dict, dict, str]:
-    """(scene mapping, report, 'plan') of a plan file, checked by the scene schema."""
+    """(scene mapping, report, 'plan') of a plan file, checked by the scene schema; the
+    report's 'plan' is what the importer understood (camplace.scene.importers.PlanImport)."""
     from shapely.geometry import Polygon
 
-    from camplace.scene.importers import import_plan, plan_kind, validated
+    from camplace.scene.importers import plan_kind, read_plan, validated
 
-    data = validated(import_plan(p, **opts.plan_kwargs(budget)), str(p))
-    rep = {"source": "plan", "format": plan_kind(p), "walls": sum("prism" in o for o in data["obstacles"]),
+    got = read_plan(p, **opts.plan_kwargs(budget))
+    data = validated(got.scene, str(p))
+    rep = {"source": "plan", "plan": got, "format": plan_kind(p), "walls": sum("prism" in o for o in data["obstacles"]),
            "obstacles": len(data["obstacles"]), "zones": [z["name"] for z in data.get("zones", [])],
            "floor_area_m2": round(Polygon(data["room"]["footprint"]).area, 2), "height_m": data["room"]["height"]}
     return data, rep, "plan"

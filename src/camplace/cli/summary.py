@@ -15,15 +15,16 @@ from rich.table import Table
 from camplace.cli.common import console, state
 
 
-def json_summary(result, out_dir: Path, paths: dict) -> dict:
+def json_summary(result, out_dir: Path, paths: dict, plan: dict | None = None) -> dict:
     """The --json summary: the placement's headline figures, every metrics.json figure as
-    written, and where the files are."""
+    written, where the files are, and a plan's import summary (``plan``, when given)."""
     p = result.placement
     metrics = json.loads(Path(paths["metrics.json"]).read_text())
     return {"scene": result.scene.name, "solver": p.solver, "status": p.status, "budget": int(result.problem.budget),
             "n_cameras": int(len(p.selected)), "objective": float(p.objective),
             "bound": None if p.bound is None else float(p.bound), "gap": p.gap, **metrics,
-            "out_dir": str(out_dir), "files": {k: str(v) for k, v in sorted(paths.items())}}
+            "out_dir": str(out_dir), "files": {k: str(v) for k, v in sorted(paths.items())},
+            **({"plan": plan} if plan is not None else {})}
 
 
 def _show_log(result, paths: dict, out_dir: Path) -> None:
@@ -67,13 +68,16 @@ def _table(result, out_dir: Path, paths: dict) -> Table:
     t.add_row("outputs", str(out_dir))
     if "report.html" in paths:
         t.add_row("report", str(paths["report.html"]))
+    if "preview.png" in paths:
+        t.add_row("plan preview", str(paths["preview.png"]))
     return t
 
 
 def write_and_summarise(result, out_dir: Path, repeatable: bool = False, frame: str = "scene", plan: bool = True,
-                        paper: str = "A3") -> None:
+                        paper: str = "A3", extra: dict | None = None) -> None:
     """Write every output of ``result`` into ``out_dir`` (poses in ``frame``; the plan set on
-    ``paper`` unless not ``plan``) and print the summary."""
+    ``paper`` unless not ``plan``) and print the summary; ``extra``: files written besides
+    ({'files': {name: path}, 'plan': a plan's import summary}, camplace.cli.plan_preview.run_extra)."""
     from camplace.outputs.write import write_outputs
 
     p = result.placement
@@ -82,9 +86,10 @@ def write_and_summarise(result, out_dir: Path, repeatable: bool = False, frame: 
                           result.timings_s, repeatable=repeatable, scene=result.scene, frame=frame, plan=plan,
                           paper=paper)
     result.timings_s["report"] = time.perf_counter() - t0
+    paths.update((extra or {}).get("files", {}))
     _show_log(result, paths, out_dir)
     if state["json"]:
-        typer.echo(json.dumps(json_summary(result, out_dir, paths), indent=2))
+        typer.echo(json.dumps(json_summary(result, out_dir, paths, (extra or {}).get("plan")), indent=2))
     elif state["quiet"]:
         typer.echo(str(out_dir))
     else:
