@@ -175,8 +175,9 @@ def room_labels(rooms: list[tuple[str, float, Polygon]], m_per_pt: float) -> lis
 
 def _side_lines(plan, summary: dict, walls_by_label: dict, colours: dict, labels: list[RoomLabel],
                 title: str) -> list[tuple[str, str, object]]:
-    """The side column as (style, text, swatch) lines: style 'title', 'head', 'text' or
-    'swatch' (swatch: a fill colour, ('outline', colour) or ('marker', colour))."""
+    """The side column as (style, text, swatch) lines: style 'title', 'head', 'text',
+    'swatch' (swatch: a fill colour, ('outline', colour) or ('marker', colour)) or 'scale'
+    (swatch: the bar's length in inches; added by draw_preview)."""
     s = summary
     L: list[tuple[str, str, object]] = [("title", title, None)]
     L.append(("text", f"{plan.kind.upper()} plan: footprint {s['footprint_m2']} m\u00b2, ceiling {s['ceiling_m']} m",
@@ -227,10 +228,10 @@ def plan_bounds(footprint: np.ndarray, shapes: list, openings: list) -> tuple[np
     return allp.min(0) - MARGIN_M, allp.max(0) + MARGIN_M
 
 
-def _scale_bar(ax, x0: float, y0: float, extent: float, m_per_pt: float) -> None:
-    length = max([v for v in (1, 2, 5, 10, 20, 50, 100, 200) if v <= extent / 4] or [1])
-    ax.plot([x0, x0 + length], [y0, y0], color="#000000", lw=2.0, solid_capstyle="butt", zorder=7)
-    ax.text(x0 + length / 2, y0 + 4 * m_per_pt, f"{length} m", ha="center", va="bottom", fontsize=FONT_PT, zorder=7)
+def scale_bar_m(px_per_m: float, max_in: float = 1.8) -> float:
+    """The longest round length (m) whose bar at the plan's scale fits ``max_in`` inches."""
+    fits = [v for v in (0.5, 1, 2, 5, 10, 20, 50, 100, 200, 500) if v * px_per_m / DPI <= max_in]
+    return float(fits[-1] if fits else 0.5)
 
 
 def draw_preview(plan, scene, mounts: np.ndarray, summary: dict, title: str):
@@ -254,6 +255,8 @@ def draw_preview(plan, scene, mounts: np.ndarray, summary: dict, title: str):
         by_label[w.label] = by_label.get(w.label, 0) + 1
     colours = label_colours(by_label)
     side = _side_lines(plan, summary, by_label, colours, labels, title)
+    bar = scale_bar_m(px_per_m)
+    side.insert(2, ("scale", f"{bar:g} m on the plan", bar * px_per_m / DPI))
     line_in = LINE_PT / 72.0
     top, bottom, left = 0.35, 0.45, 0.55  # inches around the plan
     avail = max(plan_h, 4.0)
@@ -303,7 +306,6 @@ def draw_preview(plan, scene, mounts: np.ndarray, summary: dict, title: str):
         ax.text(*lab.anchor, lab.text, fontsize=lab.size, ha="center", va="center", zorder=6, linespacing=1.1,
                 color="#1a1a1a", weight="bold" if lab.key is not None else "normal",
                 bbox={"boxstyle": "round,pad=0.12", "fc": "white", "ec": "none", "alpha": 0.75})
-    _scale_bar(ax, lo[0] + 0.2 * MARGIN_M, lo[1] + 0.35 * MARGIN_M, ext.max(), m_per_pt)
     x_side = left + plan_w + 0.3
     per_col = max(1, math.ceil(len(side) / cols))
     for n, (style, text, swatch) in enumerate(side):
@@ -311,7 +313,11 @@ def draw_preview(plan, scene, mounts: np.ndarray, summary: dict, title: str):
         x = (x_side + col * SIDE_IN) / fig_w
         y = (fig_h - top - (row + 0.8) * line_in) / fig_h
         tx = x
-        if style == "swatch":
+        if style == "scale":  # a bar as long as `text` metres on the plan
+            fig.add_artist(Rectangle((x, y - 0.025 / fig_h), swatch / fig_w, 0.05 / fig_h, transform=fig.transFigure,
+                                     fc="#000000", ec="none"))
+            tx = x + (swatch + 0.08) / fig_w
+        elif style == "swatch":
             sw, sh = 0.22 / fig_w, 0.09 / fig_h
             if isinstance(swatch, tuple) and swatch[0] == "marker":
                 fig.text(x + sw / 2, y, "+", color=swatch[1], fontsize=FONT_PT + 2, ha="center", va="center")
