@@ -49,6 +49,7 @@ FOOTPRINT_FILL, OUTSIDE_FILL = "#ffffff", "#e9e9e9"
 OPENING_FILL, OPENING_EDGE = "#fbb4d9", "#c51b7d"
 MOUNT_COLOUR = "#08519c"
 ROOM_FILLS = ("#fbe3c1", "#d5ecd4", "#d6e4f2", "#f3d9e8", "#fff3b0", "#dcd3ec", "#cdebe6", "#f6d5c8")
+PREVIEW_GRID_BYTES = 64 * 1024**2  # a larger occupancy grid is built coarser for the picture
 RC = {"svg.fonttype": "none", "svg.hashsalt": "camplace", "font.size": FONT_PT}
 
 
@@ -335,14 +336,23 @@ def draw_preview(plan, scene, mounts: np.ndarray, summary: dict, title: str):
 def preview_figure(plan, title: str, scene=None):
     """(Figure, summary) of a PlanImport: its scene mapping built into a Scene (unless
     ``scene`` is given), the surviving mount positions found, the picture drawn."""
-    from camplace.scene.build import build_scene
+    from camplace.scene.build import build_scene, estimate_grid_bytes
     from camplace.spec.loading import parse_scene
 
+    coarse = None
     if scene is None:
-        scene = build_scene(parse_scene(plan.scene, title), source=title)
+        spec = parse_scene(plan.scene, title)
+        need = estimate_grid_bytes(spec)
+        if need > PREVIEW_GRID_BYTES:  # a huge plan: the picture's mount grid on coarser cells, never a refusal
+            coarse = round(spec.occupancy_resolution * (need / PREVIEW_GRID_BYTES) ** (1 / 3) + 5e-4, 3)
+            spec = spec.model_copy(update={"occupancy_resolution": coarse})
+        scene = build_scene(spec, source=title)
     mounts, dropped = mount_grid(scene)
     summary = plan_summary(plan, len(mounts), {k: v for k, v in dropped.items() if k != "ruled_out" or v},
                            float(scene.spec.mount_rules.clearance))
+    if coarse is not None:
+        summary["notes"].append(f"preview: mount grid found on {coarse:g} m occupancy cells (a large plan); the run "
+                                f"uses occupancy_resolution {plan.scene.get('occupancy_resolution', 0.05):g} m")
     return draw_preview(plan, scene, mounts, summary, title), summary
 
 
@@ -353,7 +363,7 @@ def render_preview(plan, title: str, scene=None) -> Preview:
     with matplotlib.rc_context(RC):
         fig, summary = preview_figure(plan, title, scene)
         png, svg = io.BytesIO(), io.BytesIO()
-        fig.savefig(png, format="png", dpi=DPI, metadata={"Software": None})
+        fig.savefig(png, format="png", dpi=DPI, metadata={"Software": None}, pil_kwargs={"compress_level": 3})
         fig.savefig(svg, format="svg", metadata={"Date": None})
     return Preview(png.getvalue(), svg.getvalue(), summary)
 
