@@ -18,6 +18,7 @@ from rich.console import Console
 from rich.markup import escape
 from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
 
+from camplace.cli.crowd import FLAGS as CROWD_FLAGS
 from camplace.core.errors import CamplaceError, InputError
 
 console = Console(stderr=True)
@@ -40,6 +41,7 @@ FLAGS = {
     "units": "--units", "wall_height": "--wall-height", "ceiling_height": "--ceiling-height", "scale": "--scale",
     "ref": "--ref", "storey": "--storey", "wall_layers": "--wall-layers", "furniture_heights": "--layer-height",
     "doors": "--doors", "glass": "--glass",
+    **CROWD_FLAGS,
 }
 
 

@@ -7,6 +7,7 @@ from typing import Optional
 
 import typer
 
+from camplace.cli import crowd
 from camplace.cli.common import (FRAME_OPT, MAX_MEMORY_OPT, NO_PLAN_OPT, PAPER_OPT, REPEATABLE_OPT, SCHEDULER_OPT,
                                  WORKERS_OPT, RichProgress, check_options, memory_bytes, progress_bars, repeatable_requested)
 from camplace.cli.summary import write_and_summarise
@@ -23,6 +24,9 @@ def evaluate_cmd(scene: str = typer.Argument(..., help="Scene YAML file or built
                                            "written ones: scene (levelled, z up) or input (the scene's scanned / "
                                            "meshed file's own frame)."),
                  no_plan: bool = NO_PLAN_OPT, paper: str = PAPER_OPT,
+                 crowd_density: Optional[float] = crowd.DENSITY_OPT,
+                 crowd_score_samples: Optional[int] = crowd.SCORE_SAMPLES_OPT,
+                 crowd_seed: Optional[int] = crowd.SEED_OPT,
                  strict: bool = typer.Option(False, "--strict", help="Exit 1 when a camera sees a privacy zone "
                                              "(the outputs are written and the cameras named either way).")) -> None:
     """Score a given placement on a scene with the same metrics as a run.
@@ -32,7 +36,8 @@ def evaluate_cmd(scene: str = typer.Argument(..., help="Scene YAML file or built
     placement.csv, report.html, figures and exports. With --frame input the placement's
     poses are in the input file's frame (mapped into the scene before raycasting) and the
     written poses are too. Cameras that see a privacy zone of the scene are named
-    (metrics.json ``privacy``); with --strict they make the exit code 1."""
+    (metrics.json ``privacy``); with --strict they make the exit code 1. A scene with a
+    crowd (or --crowd-density) adds the placement's metrics in held-out crowds."""
     from camplace.workflows.evaluate import evaluate
 
     from camplace.outputs.plan_data import check_paper
@@ -42,7 +47,8 @@ def evaluate_cmd(scene: str = typer.Argument(..., help="Scene YAML file or built
     repeatable = repeatable_requested(repeatable)
     with progress_bars() as prog:
         result = evaluate(scene, placement, progress=RichProgress(prog), workers=workers, scheduler=scheduler or None,
-                          max_memory_bytes=memory_bytes(max_memory_gb), frame=frame)
+                          max_memory_bytes=memory_bytes(max_memory_gb), frame=frame,
+                          crowd=crowd.crowd_overrides(crowd_density, score_samples=crowd_score_samples, seed=crowd_seed))
     write_and_summarise(result, out or Path("camplace-out") / f"{result.scene.name}-evaluated", repeatable, frame,
                         not no_plan, paper)
     privacy = result.metrics.privacy or {}

@@ -11,6 +11,7 @@ from typing import Optional
 import typer
 from rich.markup import escape
 
+from camplace.cli import crowd
 from camplace.cli.common import (CACHE_OPT, FRAME_OPT, MAX_MEMORY_OPT, NO_CACHE_OPT, NO_PLAN_OPT, PAPER_OPT,
                                  REPEATABLE_OPT, SCHEDULER_OPT,
                                  TIME_LIMIT_OPT, WORKERS_OPT, RichProgress, StopFlag, certify_solver, check_options,
@@ -168,6 +169,9 @@ def run_cmd(scene: Optional[str] = typer.Argument(None, help="Scene YAML file, b
             ref: Optional[str] = REF_OPT, storey: Optional[str] = STOREY_OPT,
             wall_layers: Optional[str] = WALL_LAYERS_OPT, layer_height: Optional[list[str]] = LAYER_HEIGHT_OPT,
             doors: Optional[str] = DOORS_OPT, glass: Optional[str] = GLASS_OPT,
+            crowd_density: Optional[float] = crowd.DENSITY_OPT, crowd_samples: Optional[int] = crowd.SAMPLES_OPT,
+            crowd_score_samples: Optional[int] = crowd.SCORE_SAMPLES_OPT, crowd_seed: Optional[int] = crowd.SEED_OPT,
+            crowd_aware: bool = crowd.AWARE_OPT,
             cloud: Optional[Path] = typer.Option(None, "--cloud", hidden=True,
                                                  help="Deprecated: give the scan as SCENE (camplace run SCAN)."),
             save_scene: Optional[Path] = typer.Option(None, "--save-scene", hidden=True,
@@ -216,7 +220,9 @@ def run_cmd(scene: Optional[str] = typer.Argument(None, help="Scene YAML file, b
                  **({"coverage_gap": coverage_gap} if coverage_gap is not None else {}),
                  **beyond_grid_options(refine, refine_time, adaptive, robust, money_budget, tri_angle),
                  **({"well_triangulated": True} if well_triangulated else {}),
-                 **({"keep": keep} if keep is not None else {}), preview=preview)
+                 **({"keep": keep} if keep is not None else {}), preview=preview,
+                 **({"crowd": c} if (c := crowd.crowd_overrides(crowd_density, crowd_samples, crowd_score_samples,
+                                                                crowd_seed, crowd_aware)) else {}))
 
 
 

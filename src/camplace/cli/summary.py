@@ -64,6 +64,8 @@ def _table(result, out_dir: Path, paths: dict) -> Table:
     for name, r in m.regions.items():
         t.add_row(f"  region {name}", f"{r['targets']} targets, gap {r['coverage_gap']:.4f}, "
                                      f"non-tri {r['non_triangulatable_pct']:.1f} %")
+    for label, value in crowd_rows(m):
+        t.add_row(label, value)
     t.add_row("timings (s)", ", ".join(f"{k} {v:.2f}" for k, v in result.timings_s.items()))
     t.add_row("outputs", str(out_dir))
     if "report.html" in paths:
@@ -71,6 +73,24 @@ def _table(result, out_dir: Path, paths: dict) -> Table:
     if "preview.png" in paths:
         t.add_row("plan preview", str(paths["preview.png"]))
     return t
+
+
+def crowd_rows(m) -> list[tuple[str, str]]:
+    """The summary's rows about the crowd (none without one): mean ± std over the held-out samples."""
+    c = m.crowd.to_dict() if getattr(m, "crowd", None) is not None else None
+    if c is None:
+        return []
+    pm = lambda d, nd, unit="": f"{d['mean']:.{nd}f}{unit} ± {d['std']:.{nd}f}"  # noqa: E731
+    head = (f"{c['samples']} held-out crowds of {c['persons']['mean']:.0f} people ({c['density']:g} /m²"
+            + (", optimised for" if c.get("optimised") else "") + ")")
+    rows = [("in a crowd", head), ("  crowd coverage gap", pm(c["coverage_gap"], 4)),
+            ("  seen by ≥ Γ in the crowd", pm(c["seen_by_gamma_pct"], 1, " %")),
+            ("  triangulatable in the crowd", pm(c["triangulatable_pct"], 1, " %"))]
+    for name, r in c.get("regions", {}).items():
+        rows.append((f"    region {name}", f"gap {r['coverage_gap']['mean']:.4f}, seen ≥ Γ "
+                                             f"{r['seen_by_gamma_pct']['mean']:.1f} %, triangulatable "
+                                             f"{r['triangulatable_pct']['mean']:.1f} %"))
+    return rows
 
 
 def write_and_summarise(result, out_dir: Path, repeatable: bool = False, frame: str = "scene", plan: bool = True,

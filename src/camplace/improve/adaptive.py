@@ -20,7 +20,7 @@ from typing import Callable
 import numpy as np
 
 from camplace.problem.model import PlacementProblem
-from camplace.improve.refine import PoseGuard, append_candidates, extend_problem, pose_box, _valid_positions
+from camplace.improve.refine import PoseGuard, RowMap, append_candidates, extend_problem, pose_box, _valid_positions
 from camplace.scene.build import Scene
 from camplace.solvers.base import Placement, deadline
 from camplace.solvers.local_search import NominalObjective, swap_search
@@ -92,7 +92,7 @@ class AdaptiveResult:
 def adaptive_rounds(scene: Scene, vis: Visibility, problem: PlacementProblem, placement: Placement,
                     rounds: int = 3, time_limit_s: float | None = 120.0, solver: str | None = None,
                     solver_time_s: float = 10.0, progress: Progress | None = None,
-                    guard: PoseGuard | None = None) -> AdaptiveResult:
+                    guard: PoseGuard | None = None, row_map: RowMap | None = None) -> AdaptiveResult:
     """Up to ``rounds`` rounds of finer candidates around the current selection, each
     solved again warm-started; stops early when a round does not lower the cost.
     ``guard``: see camplace.improve.refine.refine_poses."""
@@ -111,7 +111,7 @@ def adaptive_rounds(scene: Scene, vis: Visibility, problem: PlacementProblem, pl
         if len(poses) == 0:
             break
         new_vis, _ = append_candidates(cur_vis, scene.occupancy, poses, cids)
-        new_prob = extend_problem(cur_prob, new_vis)
+        new_prob = extend_problem(cur_prob, new_vis, row_map)
         left = None if time_limit_s is None else max(1.0, time_limit_s - (time.perf_counter() - t0))
         new_sel, info = swap_descent(new_prob, cur_sel, time_limit_s=left)
         if solver:

@@ -44,6 +44,10 @@ Progress = Callable[[str, int, int], None]
 # A pose guard: (poses (K, 6) x, y, z, yaw, pitch, roll; camera ids (K,)) -> (K,) bool, True = allowed
 # (camplace.visibility.privacy.PrivacyGuard: the pose sees no privacy point)
 PoseGuard = Callable[[np.ndarray, np.ndarray], np.ndarray]
+# A row map: (camera positions (K, 3) m, raycast V rows (K, N_p)) -> the problem's rows of those
+# poses (K, N_p') (None: the raycast rows themselves; a crowd-aware run: the rows thinned by
+# the same crowd samples and stacked, camplace.workflows.crowd)
+RowMap = Callable[[np.ndarray, sp.csr_matrix], sp.csr_matrix]
 HALF = 0.499  # stay strictly inside half a step so neighbouring grid points never meet
 FOCAL = 6  # column of the focal length (mm) in a refined pose (x, y, z, yaw, pitch, roll, focal_mm); issue 27
 
@@ -177,12 +181,17 @@ def append_candidates(vis: Visibility, occupancy: OccupancyGrid, poses: np.ndarr
     return Visibility(V, merged, vis.targets, vis.mode, info), np.arange(first, first + len(poses), dtype=np.int64)
 
 
-def extend_problem(problem: PlacementProblem, vis: Visibility) -> PlacementProblem:
-    """The same problem over an extended V (new rows: prices and types from their camera type)."""
+def extend_problem(problem: PlacementProblem, vis: Visibility, row_map: RowMap | None = None) -> PlacementProblem:
+    """The same problem over an extended V (new rows: prices and types from their camera type;
+    with ``row_map``, the problem's rows of the appended poses come through it)."""
+    V = vis.V
+    if row_map is not None:
+        n = problem.n_candidates
+        V = sp.vstack([problem.V, row_map(vis.candidates.positions[n:], vis.V[n:])], format="csr")
     costs = np.array([vis.candidates.cameras[c].cost for c in vis.candidates.camera_ids], np.float64)
     types = None if problem.type_ids is None else type_ids_of(vis.candidates.camera_ids,
                                                                [c.name for c in vis.candidates.cameras])
-    return replace(problem, V=vis.V, location_ids=vis.candidates.location_ids, camera_costs=costs, type_ids=types)
+    return replace(problem, V=V, location_ids=vis.candidates.location_ids, camera_costs=costs, type_ids=types)
 
 
 def target_gains(problem: PlacementProblem, cov_other: np.ndarray) -> np.ndarray:
@@ -227,7 +236,8 @@ def _valid_positions(box: PoseBox, occupancy: OccupancyGrid, poses: np.ndarray) 
 def refine_poses(scene: Scene, vis: Visibility, problem: PlacementProblem, selected: np.ndarray,
                  time_limit_s: float | None = 60.0, levels: int = 4, max_sweeps: int = 50,
                  progress: Progress | None = None,
-                 guard: PoseGuard | None = None) -> tuple[np.ndarray, np.ndarray, list[sp.csr_matrix], dict]:
+                 guard: PoseGuard | None = None,
+                 row_map: RowMap | None = None) -> tuple[np.ndarray, np.ndarray, list[sp.csr_matrix], dict]:
     """Compass search over each selected camera's pose (see module doc).
 
     Returns (poses (k, 7) x, y, z, yaw, pitch, roll, focal_mm; moved (k,) bool; rows: the k
@@ -242,7 +252,7 @@ def refine_poses(scene: Scene, vis: Visibility, problem: PlacementProblem, selec
     boxes = [pose_box(scene, cands, int(i)) for i in sel]
     fbox = np.array([focal_box(cands.cameras[int(cands.camera_ids[i])]) for i in sel]).reshape(len(sel), 4)
     poses = np.c_[np.array([b.centre for b in boxes], float).reshape(len(sel), 6), fbox[:, 0]]
-    rows = [vis.V[int(i)] for i in sel]
+    rows = [problem.V[int(i)] for i in sel]
     moved = np.zeros(len(sel), bool)
     cov = problem.coverage(sel)
     trials = accepted = sweeps = 0
@@ -287,6 +297,8 @@ def refine_poses(scene: Scene, vis: Visibility, problem: PlacementProblem, selec
                     if len(trial) == 0:
                         break
                     R = raycast_poses(scene.occupancy, vis.targets, cands, cid, trial)
+                    if row_map is not None:  # scored as the problem's rows (e.g. on the same crowd samples)
+                        R = row_map(trial[:, :3], R)
                     trials += len(trial)
                     s = _row_sums(R, g)
                     b = int(np.argmax(s))
@@ -329,7 +341,7 @@ def refine_placement(scene: Scene, vis: Visibility, problem: PlacementProblem, p
     grid_cost = problem.cost(sel)
     poses, moved, _, info = refine_poses(scene, vis, problem, sel, time_limit_s, progress=progress, **search_options)
     vis2, new_ids = append_candidates(vis, scene.occupancy, poses[moved], vis.candidates.camera_ids[sel[moved]])
-    prob2 = extend_problem(problem, vis2)
+    prob2 = extend_problem(problem, vis2, search_options.get("row_map"))
     final = sel.copy()
     final[moved] = new_ids
     final = np.sort(final)

@@ -7,6 +7,7 @@ targets seen by fewer than 2 selected cameras; both overall and per target regio
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
@@ -25,6 +26,7 @@ class Metrics:
     privacy: dict | None = None  # privacy zones: cameras that see one (camplace.visibility.privacy.privacy_report)
     existing: dict | None = None  # existing / kept cameras (camplace.workflows.sites)
     grid_cost: float | None = None  # a refined / adaptive run's cost of its grid placement (issue 17)
+    crowd: Any = None  # camplace.metrics.crowd.CrowdMetrics: the placement in held-out crowds (issue 28)
 
     def to_dict(self) -> dict:
         out = {"cost": self.cost, **({} if self.grid_cost is None else {"grid_cost": self.grid_cost}),
@@ -37,10 +39,12 @@ class Metrics:
         for key in ("privacy", "existing"):  # issue 17: only when the scene has privacy zones / existing cameras
             if getattr(self, key) is not None:
                 out[key] = getattr(self, key)
+        if self.crowd is not None:  # issue 28: only when the scene has a crowd
+            out["crowd"] = self.crowd.to_dict()
         return out
 
 
-def _figures(gamma: np.ndarray, weights: np.ndarray, cov: np.ndarray) -> dict:
+def target_figures(gamma: np.ndarray, weights: np.ndarray, cov: np.ndarray) -> dict:
     cost = shortfall_cost(gamma, weights, cov)
     g = gamma.astype(np.float64)
     norm = float(np.dot(weights, g * g))
@@ -60,12 +64,12 @@ def compute_metrics(problem: PlacementProblem, selected: np.ndarray, region_ids:
     well_triangulated: optional (N_p,) bool from camplace.metrics.triangulation (adds the
     ``well_triangulated_pct`` figures, overall and per region)."""
     cov = problem.coverage(selected)
-    top = _figures(problem.gamma, problem.weights, cov)
+    top = target_figures(problem.gamma, problem.weights, cov)
     regions: dict[str, dict] = {}
     if region_ids is not None:
         for r, name in enumerate(region_names):
             m = region_ids == r
-            fig = _figures(problem.gamma[m], problem.weights[m], cov[m])
+            fig = target_figures(problem.gamma[m], problem.weights[m], cov[m])
             fig["targets"] = int(m.sum())
             if well_triangulated is not None:
                 fig["well_triangulated_pct"] = 100.0 * float(np.mean(well_triangulated[m])) if m.any() else 0.0

@@ -165,18 +165,16 @@ def segment_blocked(ax, ay, az, bx, by, bz, xy, items, ptr, x0, y0, g, nx, ny, r
     return False
 
 
-@numba.njit(cache=True, parallel=True)
-def _keep_mask(indptr, indices, row0, row1, order, group_ptr, n_parts, n_p, cams, tgts, xy, items, ptr, x0, y0, g,
-               nx, ny, r, h):  # pragma: no cover - compiled
-    """(nnz of rows [row0, row1),) bool: which entries of those rows of V survive one sample.
-    The rows come in groups of one camera position (rows order[group_ptr[k]:group_ptr[k + 1]],
-    offsets from row0): each (position, target) segment is tested once for the whole group
-    (``slot``: a per-part scratch of n_p ints, -1 where the target is not yet tested)."""
-    base = indptr[row0]
-    keep = np.ones(indptr[row1] - base, np.bool_)
+@numba.njit(cache=True)
+def _keep_parts(keep, base, indptr, indices, row0, order, group_ptr, parts, n_parts, n_p, cams, tgts, xy, items,
+                ptr, x0, y0, g, nx, ny, r, h):  # pragma: no cover - compiled
+    """Fill ``keep`` (entries from ``base``) for the position groups k = part, part + n_parts, ...
+    of each part in ``parts``: each (position, target) segment tested once for the whole
+    group (rows order[group_ptr[k]:group_ptr[k + 1]] + row0); ``slot``: n_p ints, -1 where
+    the target is not yet tested."""
     n_groups = group_ptr.shape[0] - 1
-    for part in numba.prange(n_parts):
-        slot = np.full(n_p, -1, np.int32)
+    slot = np.full(n_p, -1, np.int32)
+    for part in parts:
         for k in range(part, n_groups, n_parts):
             rows = order[group_ptr[k]:group_ptr[k + 1]] + row0
             total = 0
@@ -202,7 +200,18 @@ def _keep_mask(indptr, indices, row0, row1, order, group_ptr, n_parts, n_p, cams
                     keep[e - base] = not blocked[q]
             for q in range(m):
                 slot[seen[q]] = -1
-    return keep
+
+
+@numba.njit(cache=True, parallel=True)
+def _keep_parallel(keep, base, indptr, indices, row0, order, group_ptr, n_parts, n_p, cams, tgts, xy, items, ptr,
+                   x0, y0, g, nx, ny, r, h):  # pragma: no cover - compiled
+    """_keep_parts with the parts spread over numba's threads."""
+    for part in numba.prange(n_parts):
+        _keep_parts(keep, base, indptr, indices, row0, order, group_ptr, np.array([part]), n_parts, n_p, cams,
+                    tgts, xy, items, ptr, x0, y0, g, nx, ny, r, h)
+
+
+SERIAL_BELOW = 50_000  # entries: smaller blocks (a placement's rows) run on one thread, no parallel launch
 
 
 def position_groups(positions: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -227,10 +236,15 @@ def sample_rows(V: sp.csr_matrix, cam_positions: np.ndarray, target_positions: n
         return indptr[row0:row1 + 1] - lo, indices[lo:hi].copy()
     cams = np.ascontiguousarray(cam_positions, np.float64)
     order, group_ptr = position_groups(cams[row0:row1])
-    n_parts = min(len(group_ptr) - 1, 4 * numba.get_num_threads())
-    keep = _keep_mask(indptr, indices, row0, row1, order, group_ptr, n_parts, int(V.shape[1]), cams,
-                      np.ascontiguousarray(target_positions, np.float64), grid.xy, grid.items, grid.cell_ptr[s],
-                      grid.x0, grid.y0, grid.cell, grid.nx, grid.ny, grid.radius, grid.height)
+    n_parts = max(1, min(len(group_ptr) - 1, 4 * numba.get_num_threads()))
+    keep = np.ones(hi - lo, np.bool_)
+    args = (indptr, indices, row0, order, group_ptr)
+    rest = (int(V.shape[1]), cams, np.ascontiguousarray(target_positions, np.float64), grid.xy, grid.items,
+            grid.cell_ptr[s], grid.x0, grid.y0, grid.cell, grid.nx, grid.ny, grid.radius, grid.height)
+    if hi - lo < SERIAL_BELOW:
+        _keep_parts(keep, lo, *args, np.zeros(1, np.int64), 1, *rest)
+    else:
+        _keep_parallel(keep, lo, *args, n_parts, *rest)
     rows = np.repeat(np.arange(row1 - row0), np.diff(indptr[row0:row1 + 1]))
     out_ptr = np.r_[0, np.cumsum(np.bincount(rows[keep], minlength=row1 - row0))].astype(np.int64)
     return out_ptr, indices[lo:hi][keep]

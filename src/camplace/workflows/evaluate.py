@@ -51,13 +51,15 @@ def poses_in_frame(poses: Poses, T: np.ndarray) -> Poses:
 
 def evaluate(scene: str | Path | SceneSpec, placement: str | Path | Poses, progress=None, *,
              max_memory_bytes: int | None = None, workers: int = 1, scheduler: str | None = None,
-             frame: str = "scene"):
+             frame: str = "scene", crowd: dict | None = None):
     """Score a placement file (or Poses) on a scene -> camplace.workflows.run.RunResult.
 
     Every pose is raycast afresh (no cache) and selected; the Placement has solver
     'file', status 'feasible', budget = number of poses, bound None. ``frame``: the
     poses' frame, 'scene' (default) or 'input' (the scene's input file: they are mapped
-    into the scene frame by the inverse of Scene.input_from_scene, camplace.scene.frames)."""
+    into the scene frame by the inverse of Scene.input_from_scene, camplace.scene.frames).
+    With a crowd (the scene's ``crowd:``, ``crowd`` overrides its keys) metrics.json gets
+    ``crowd``: the placement in held-out crowds (camplace.workflows.crowd)."""
     from camplace.outputs.write import check_frame
     from camplace.scene.frames import invert
     from camplace.core.executors import make_executor
@@ -66,12 +68,15 @@ def evaluate(scene: str | Path | SceneSpec, placement: str | Path | Poses, progr
     from camplace.visibility.engine import compute_visibility
     from camplace.visibility.privacy import privacy_report
     from camplace.visibility.voxel import VoxelEngine
+    from camplace.spec.crowd import crowd_with
+    from camplace.workflows.crowd import crowd_scores
     from camplace.workflows.sites import privacy_guard
 
     timings: dict[str, float] = {}
     check_frame(frame)
     poses = placement if isinstance(placement, Poses) else read_placement(placement)
     sc, targets, cameras, _ = scene_inputs(scene, progress, timings, max_memory_bytes)
+    crowd_spec = crowd_with(sc.spec.crowd, crowd)
     if frame == "input":
         poses = poses_in_frame(poses, invert(sc.input_from_scene))
     t = time.perf_counter()
@@ -108,4 +113,6 @@ def evaluate(scene: str | Path | SceneSpec, placement: str | Path | Poses, progr
                        f"{', '.join(metrics.privacy['camera_ids'])}")
     pl = Placement(selected, cost, None, "feasible", "file", 0.0,
                    {"source": poses.source, "source_ids": list(poses.ids)})
+    if crowd_spec is not None:  # issue 28: the placement in held-out crowds
+        metrics = replace(metrics, crowd=crowd_scores(sc, vis, pl, crowd_spec, log=log))
     return RunResult(sc, vis, problem, pl, metrics, timings, log)

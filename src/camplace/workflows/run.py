@@ -28,6 +28,8 @@ from camplace.targets.build import Targets, build_targets
 from camplace.core.executors import make_executor
 from camplace.visibility.engine import Visibility, compute_visibility, drop_blind_candidates
 from camplace.visibility.registry import get_engine
+from camplace.spec.crowd import crowd_with
+from camplace.workflows.crowd import crowd_scores, crowd_stage
 from camplace.workflows.sites import Site, site_of
 
 Progress = Callable[[str, int, int], None]
@@ -267,7 +269,8 @@ def improve_placement(sc: Scene, vis: Visibility, problem: PlacementProblem, pla
                       refine: bool = False, refine_time_s: float = 60.0, adaptive: int = 0, robust: int = 0,
                       time_limit_s: float | None = None, should_stop: Callable[[], bool] | None = None,
                       progress: Progress | None = None, log: list | None = None,
-                      guard=None, timings: dict | None = None) -> tuple[Visibility, PlacementProblem, Placement]:
+                      guard=None, timings: dict | None = None,
+                      row_map=None) -> tuple[Visibility, PlacementProblem, Placement]:
     """Beyond the grid (issue 10), after the discrete solve: ``robust`` = 1 minimises the
     worst case over single camera failures (camplace.solvers.robust: swap/tabu heuristic, then the
     scenario MIP, exact on small V, as a large-neighbourhood search on large V); ``adaptive`` rounds of
@@ -275,7 +278,8 @@ def improve_placement(sc: Scene, vis: Visibility, problem: PlacementProblem, pla
     (camplace.improve.refine). Adaptive and refine append rows to V, so the returned visibility /
     problem replace the grid ones (the placement stays a selection of V rows). time_limit_s
     caps the robust search (default 60 s) and the adaptive rounds (default 120 s). ``guard``
-    (camplace.improve.refine.PoseGuard, e.g. the privacy guard) rejects new poses. Each
+    (camplace.improve.refine.PoseGuard, e.g. the privacy guard) rejects new poses; ``row_map``
+    (camplace.improve.refine.RowMap) turns their raycast rows into the problem's. Each
     step's wall-clock seconds go to ``timings`` (``robust``, ``adaptive``, ``refine``): they
     are metrics.json figures, never placement.json ones."""
     log = [] if log is None else log
@@ -301,7 +305,7 @@ def improve_placement(sc: Scene, vis: Visibility, problem: PlacementProblem, pla
 
         t = time.perf_counter()
         ar = adaptive_rounds(sc, vis, problem, placement, rounds=adaptive, time_limit_s=time_limit_s or 120.0,
-                             progress=progress, guard=guard)
+                             progress=progress, guard=guard, row_map=row_map)
         vis, problem, placement = ar.visibility, ar.problem, ar.placement
         timings["adaptive"] = time.perf_counter() - t
         for h in ar.rounds:
@@ -311,7 +315,7 @@ def improve_placement(sc: Scene, vis: Visibility, problem: PlacementProblem, pla
 
         t = time.perf_counter()
         rf = refine_placement(sc, vis, problem, placement, time_limit_s=refine_time_s, progress=progress,
-                              guard=guard)
+                              guard=guard, row_map=row_map)
         vis, problem, placement = rf.visibility, rf.problem, rf.placement
         timings["refine"] = time.perf_counter() - t
         log.append(f"refine: cost {rf.grid_cost:.6g} -> {rf.refined_cost:.6g} ({rf.info['moved']} cameras moved, "
@@ -327,7 +331,7 @@ def run(scene: str | Path | SceneSpec, budget: int | None = None, solver: str | 
         probe: float | None = None, money_budget: float | None = None, refine: bool = False,
         refine_time_s: float = 60.0, adaptive: int = 0, robust: int = 0,
         triangulation_deg: tuple[float, float] = (20.0, 160.0), well_triangulated: bool = False,
-        keep: str | Path | None = None, **solver_options) -> RunResult:
+        keep: str | Path | None = None, crowd: dict | None = None, **solver_options) -> RunResult:
     """Run every stage on a scene (built-in name, YAML path or spec).
 
     budget / solver / time_limit_s default to the scene's ``placement`` keys. The solver
@@ -335,10 +339,13 @@ def run(scene: str | Path | SceneSpec, budget: int | None = None, solver: str | 
     between visibility chunks (Interrupted) and by the solver, which then returns its
     best placement with status 'interrupted'. ``keep``: a previous run's placement.json / .csv
     whose cameras stay as existing ones (camplace.workflows.sites; the budget counts new
-    cameras). See ``prepare_site`` for the other options."""
+    cameras). ``crowd``: overrides of the scene's ``crowd:`` keys (camplace.spec.crowd.CROWD_OPTIONS;
+    camplace.workflows.crowd: metrics in held-out crowds, and with ``optimise`` the crowd-aware
+    problem). See ``prepare_site`` for the other options."""
     timings: dict[str, float] = {}
     log: list[str] = []
     spec, _, source = resolve_scene(scene)
+    crowd_spec = crowd_with(spec.crowd, crowd)
     if solver is None:
         check_solver_name(spec.placement.solver, f"{source}: placement.solver")
     else:
@@ -368,28 +375,36 @@ def run(scene: str | Path | SceneSpec, budget: int | None = None, solver: str | 
     problem = problem_from_visibility(vis, budget, money)
     problem = with_type_limits(problem, vis.candidates.camera_ids, [c.name for c in vis.candidates.cameras],
                                sc.spec.mount_rules.max_per_type)  # new cameras per type (mount_rules)
+    cp = crowd_stage(sc, vis, problem, crowd_spec, site, workers=workers, scheduler=scheduler, progress=progress,
+                     log=log, timings=timings)  # crowd-aware: the sample-average problem (else None)
     if site is not None:  # Γ' = max(Γ - existing coverage, 0): the solvers see what remains
         problem = site.solver_problem(problem)
+    solving = problem if cp is None else cp.problem
     t = time.perf_counter()
     _stage(progress, "solve")
     if well_triangulated:  # the greedy with the triangulation requirement (positions come with the problem)
         min_deg, max_deg = triangulation_deg
-        placement = solve_stoppable(problem, "greedy-triangulated", log=log, min_deg=min_deg, max_deg=max_deg,
+        placement = solve_stoppable(solving, "greedy-triangulated", log=log, min_deg=min_deg, max_deg=max_deg,
                                     **solver_options)
         log.append(f"greedy-triangulated: triangulation-aware cost {placement.info['triangulated_cost']:.6g}")
     else:
-        placement = solve_stoppable(problem, solver, log=log, **solver_options)
+        placement = solve_stoppable(solving, solver, log=log, **solver_options)
     timings["solve"] = time.perf_counter() - t
+    grid_selected = placement.selected
     stopped = should_stop is not None and should_stop()
     if (refine or adaptive or robust) and stopped:  # interrupted: keep the solver's best, do not improve it
         log.append("beyond the grid: skipped (interrupted)")
     elif refine or adaptive or robust:
         t = time.perf_counter()
-        vis, problem, placement = improve_placement(
-            sc, vis, problem, placement, refine=refine, refine_time_s=refine_time_s, adaptive=adaptive,
+        vis, solving, placement = improve_placement(
+            sc, vis, solving, placement, refine=refine, refine_time_s=refine_time_s, adaptive=adaptive,
             robust=robust, should_stop=should_stop, progress=progress, log=log,
-            guard=None if site is None else site.guard, timings=timings)
+            guard=None if site is None else site.guard, timings=timings, row_map=None if cp is None else cp.row_map)
         timings["beyond_grid"] = time.perf_counter() - t
+    if cp is not None:  # back to the empty-store problem (the contract's cost); the crowd cost stays in info
+        problem, placement = cp.nominal(vis, problem, placement, grid_selected)
+    else:
+        problem = solving
     t = time.perf_counter()
     _stage(progress, "metrics")
     if site is not None:  # existing cameras join V and the selection, with the full Γ
@@ -397,7 +412,8 @@ def run(scene: str | Path | SceneSpec, budget: int | None = None, solver: str | 
     metrics = placement_metrics(vis, problem, placement.selected, triangulation_deg)
     if site is not None:
         metrics = site.report(vis, placement, metrics)
-    metrics = replace(metrics, grid_cost=grid_cost(placement))
+    metrics = replace(metrics, grid_cost=grid_cost(placement),
+                      crowd=crowd_scores(sc, vis, placement, crowd_spec, cp, log))  # in held-out crowds
     timings["metrics"] = time.perf_counter() - t
     return RunResult(sc, vis, problem, placement, metrics, timings, log)
 

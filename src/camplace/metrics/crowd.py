@@ -1,0 +1,92 @@
+"""Metrics in a crowd (issue 28): how well a placement sees people when the store is full.
+
+From the coverage of each target in each held-out crowd sample (S, N_p), per sample
+and then averaged over the samples with their spread (mean, std, min, max), overall
+and per target region:
+
+- ``coverage_gap``: the crowd coverage gap, cost_s / Σ_j w_j Γ_j² (paper eq. 8 with
+  coverage in sample s; its mean is the sample-average crowd cost normalised the same way);
+- ``seen_by_gamma_pct``: % of targets seen by at least Γ_j cameras;
+- ``triangulatable_pct``: % of targets still seen by at least 2 cameras.
+
+Per target: the share of samples in which it is seen by ≥ 2 cameras and by ≥ Γ_j (drawn
+by report.html), and one sampled crowd to show.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from camplace.metrics.coverage import target_figures
+
+FIGURES = ("coverage_gap", "seen_by_gamma_pct", "triangulatable_pct")
+
+
+def spread(values: np.ndarray) -> dict:
+    """{'mean', 'std', 'min', 'max'} of per-sample values (S,); equal values give exactly that value."""
+    v = np.asarray(values, np.float64)
+    if len(v) == 0:
+        return {"mean": 0.0, "std": 0.0, "min": 0.0, "max": 0.0}
+    mean = float(v[0]) if np.all(v == v[0]) else float(np.mean(v))
+    return {"mean": mean, "std": float(np.std(v)), "min": float(v.min()), "max": float(v.max())}
+
+
+def sample_figures(gamma: np.ndarray, weights: np.ndarray, coverage: np.ndarray) -> dict[str, float]:
+    """The FIGURES of one sample: gamma, weights, coverage (N,) of some targets."""
+    cov = np.asarray(coverage, np.int64)
+    fig = target_figures(gamma, weights, cov)
+    seen = 100.0 * float(np.mean(cov >= gamma)) if len(cov) else 0.0
+    return {"coverage_gap": fig["coverage_gap"], "seen_by_gamma_pct": seen,
+            "triangulatable_pct": 100.0 - fig["non_triangulatable_pct"] if len(cov) else 0.0}
+
+
+def _summary(gamma: np.ndarray, weights: np.ndarray, cov: np.ndarray) -> dict:
+    per = [sample_figures(gamma, weights, c) for c in cov]
+    return {k: spread(np.array([p[k] for p in per])) for k in FIGURES}
+
+
+@dataclass(frozen=True)
+class CrowdMetrics:
+    """summary: metrics.json ``crowd``; p_triangulatable / p_seen: (N_p,) share of samples
+    in which each target is seen by ≥ 2 / ≥ Γ_j cameras; shown: (n, 2) m the people of one
+    sample (for the report's 3D view); radius, height: m; report_height: m, the target
+    height the report draws."""
+
+    summary: dict
+    p_triangulatable: np.ndarray
+    p_seen: np.ndarray
+    shown: np.ndarray
+    radius: float
+    height: float
+    report_height: float | None = None
+    extra: dict = field(default_factory=dict)
+
+    def to_dict(self) -> dict:
+        return {**self.summary, **self.extra}
+
+
+def crowd_metrics(gamma: np.ndarray, weights: np.ndarray, coverage: np.ndarray, region_ids: np.ndarray,
+                  region_names, shown: np.ndarray, radius: float, height: float, info: dict | None = None,
+                  report_height: float | None = None) -> CrowdMetrics:
+    """The crowd metrics of a placement from its coverage (S, N_p) in S held-out crowd
+    samples (gamma, weights, region_ids: (N_p,)); ``info``: what the crowds were (density,
+    seed, persons per sample, ...), written first."""
+    cov = np.asarray(coverage, np.int64).reshape(-1, len(gamma))
+    gamma = np.asarray(gamma, np.int64)
+    w = np.asarray(weights, np.float64)
+    summary = dict(info or {})
+    summary.update(_summary(gamma, w, cov))
+    regions = {}
+    for r, name in enumerate(region_names):
+        m = np.asarray(region_ids) == r
+        regions[str(name)] = {"targets": int(m.sum()), **_summary(gamma[m], w[m], cov[:, m])}
+    summary["regions"] = regions
+    p2 = np.mean(cov >= 2, axis=0) if len(cov) else np.zeros(len(gamma))
+    pg = np.mean(cov >= gamma[None, :], axis=0) if len(cov) else np.zeros(len(gamma))
+    return CrowdMetrics(summary, p2, pg, np.asarray(shown, np.float64).reshape(-1, 2), float(radius), float(height),
+                        report_height)
+
+
+__all__ = ["CrowdMetrics", "FIGURES", "crowd_metrics", "sample_figures", "spread"]

@@ -1,0 +1,198 @@
+"""Crowds in a run and an evaluation (issue 28).
+
+- ``score_in_crowd``: the crowd metrics of a placement (camplace.metrics.crowd) on the
+  held-out crowds (stream camplace.targets.crowd.SCORE): only the selected rows of V are
+  thinned, so scoring costs a few milliseconds whatever the size of V.
+- ``crowd_problem``: a crowd-aware run's problem, the sample-average crowd problem
+  (camplace.problem.crowd) of the ``samples`` crowds of stream OPTIMISE, with V_s of
+  every candidate through the run's executors (camplace.visibility.crowd). Existing
+  cameras are thinned by the same crowds (Γ_s' = max(Γ − c_exist,s, 0)). Its ``row_map``
+  scores the refinement's and the adaptive rounds' new poses on the same crowds, and
+  ``nominal`` turns the solved placement back into one of the empty-store problem (the
+  output contract: objective = cost recomputed from the written V), keeping the crowd
+  objective and bound in ``placement.info['crowd']``.
+
+With nobody in any sample (density 0) the crowd-aware problem is the problem itself:
+every result equals the run without a crowd.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+import scipy.sparse as sp
+
+from camplace.improve.refine import extend_problem
+from camplace.metrics.crowd import CrowdMetrics, crowd_metrics, spread
+from camplace.problem.crowd import sample_coverage, side_by_side, stacked_problem
+from camplace.problem.model import PlacementProblem
+from camplace.scene.build import Scene
+from camplace.solvers.base import Placement
+from camplace.spec.crowd import CrowdSpec
+from camplace.targets.build import Targets
+from camplace.targets.crowd import OPTIMISE, SCORE, Crowds, sample_crowds
+from camplace.visibility.crowd import PeopleGrid, crowd_rows, people_grid
+from camplace.visibility.engine import Visibility
+
+SHOWN_HEIGHT = 1.5  # m: the report's default height (faces), the volume target height nearest to it
+
+
+def crowd_info(crowd: CrowdSpec, crowds: Crowds) -> dict:
+    """What the crowds were, for metrics.json ``crowd``."""
+    return {"density": float(crowd.density), "zones": {k: float(v) for k, v in crowd.zones.items()},
+            "radius": float(crowd.radius), "height": float(crowd.height), "seed": int(crowd.seed),
+            "samples": crowds.n_samples, "held_out": True, "persons": spread(crowds.counts),
+            "walkable_m2": round(float(crowds.info.get("walkable_m2", 0.0)), 3)}
+
+
+def report_height(targets: Targets, wanted: float | None) -> float | None:
+    """The volume target height (m) nearest ``wanted`` (default SHOWN_HEIGHT); None without volume targets."""
+    z = np.unique(np.round(targets.positions[~targets.is_surface, 2], 6))
+    if len(z) == 0:
+        return None
+    want = SHOWN_HEIGHT if wanted is None else float(wanted)
+    return float(z[np.argmin(np.abs(z - want))])
+
+
+def _grid(sc: Scene, crowds: Crowds) -> PeopleGrid:
+    """The people grid over the room's plan box (every camera, target and person is inside)."""
+    fp = np.asarray(sc.footprint, float)
+    return people_grid(crowds, fp.min(0), fp.max(0))
+
+
+def score_in_crowd(sc: Scene, vis: Visibility, selected: np.ndarray, crowd: CrowdSpec, executor=None,
+                   extra: dict | None = None) -> CrowdMetrics:
+    """The crowd metrics of ``selected`` (rows of vis.V, full Γ of vis.targets) on the
+    ``crowd.score_samples`` held-out crowds; ``extra``: more figures for metrics.json ``crowd``."""
+    t = vis.targets
+    crowds = sample_crowds(sc, crowd, SCORE)
+    sel = np.asarray(selected, np.int64)
+    pos = vis.candidates.positions[sel]
+    rows = crowd_rows(vis.V[sel], pos, t.positions, crowds, executor=executor,
+                      grid=_grid(sc, crowds))
+    cov = sample_coverage(rows, crowds.n_samples, np.arange(len(sel)))
+    info = crowd_info(crowd, crowds)
+    m = crowd_metrics(t.gamma, t.weights, cov, t.region_ids, t.region_names, crowds.sample(0), crowd.radius,
+                      crowd.height, info, report_height(t, crowd.report_height))
+    return replace(m, extra={"optimised": False, **(extra or {})})
+
+
+@dataclass
+class CrowdProblem:
+    """A crowd-aware run's problem: ``problem`` the stacked sample-average problem (or the
+    problem itself when no sample holds anyone), ``crowds`` the samples it averages over."""
+
+    problem: PlacementProblem
+    crowds: Crowds
+    grid: PeopleGrid | None
+    targets: Targets
+    info: dict = field(default_factory=dict)
+    seconds_per_sample: float = 0.0  # V_s time (log only: no wall-clock figure in the written results)
+
+    @property
+    def stacked(self) -> bool:
+        return self.grid is not None
+
+    def row_map(self, positions: np.ndarray, rows: sp.csr_matrix) -> sp.csr_matrix:
+        """Raycast rows (K, N_p) of poses at ``positions`` (K, 3) -> their stacked rows (K, S · N_p)."""
+        if not self.stacked:
+            return rows
+        thin = crowd_rows(rows, positions, self.targets.positions, self.crowds, grid=self.grid)
+        return side_by_side(thin, self.crowds.n_samples)
+
+    def nominal(self, vis: Visibility, problem: PlacementProblem, placement: Placement,
+                grid_selected: np.ndarray) -> tuple[PlacementProblem, Placement]:
+        """(``problem`` - the empty-store one - extended over vis's appended rows, the placement
+        scored on it): objective = its empty-store cost, bound None; the crowd objective / bound
+        (and the crowd grid / refined costs) go to ``info['crowd']``."""
+        nominal = extend_problem(problem, vis) if vis.V.shape[0] > problem.n_candidates else problem
+        sel = np.asarray(placement.selected, np.int64)
+        norm = self.problem.normalizer
+        crowd = {"samples": self.crowds.n_samples, "seed": int(self.crowds.info.get("seed", 0)),
+                 "objective": float(placement.objective), "bound": placement.bound, "status": placement.status,
+                 "coverage_gap": float(placement.objective) / norm if norm > 0 else 0.0, **self.info}
+        info = dict(placement.info, crowd=crowd)
+        for step in ("adaptive", "refine"):  # their costs were crowd costs: say so, give the empty-store ones
+            if isinstance(info.get(step), dict) and "grid_cost" in info[step]:
+                d = dict(info[step])
+                crowd[f"{step}_grid_cost"] = d["grid_cost"]
+                d["grid_cost"] = nominal.cost(grid_selected)
+                if "refined_cost" in d:
+                    crowd["refined_cost"], d["refined_cost"] = d["refined_cost"], nominal.cost(sel)
+                info[step] = d
+        return nominal, replace(placement, objective=nominal.cost(sel), bound=None, info=info)
+
+
+def crowd_problem(sc: Scene, vis: Visibility, problem: PlacementProblem, crowd: CrowdSpec, site=None,
+                  executor=None, progress=None) -> CrowdProblem:
+    """The crowd-aware problem of ``problem`` (full Γ; the run's problem before the site's
+    existing-camera offset): see module doc. ``site``: camplace.workflows.sites.Site or None."""
+    t0 = time.perf_counter()
+    crowds = sample_crowds(sc, crowd, OPTIMISE)
+    t = vis.targets
+    if crowds.empty:
+        p = site.solver_problem(problem) if site is not None else problem
+        return CrowdProblem(p, crowds, None, t, {"persons": spread(crowds.counts)})
+    pos = vis.candidates.positions
+    grid = _grid(sc, crowds)
+    rows = crowd_rows(vis.V, pos, t.positions, crowds, executor=executor, progress=progress, grid=grid)
+    t1 = time.perf_counter()
+    cov_out = None
+    if site is not None and site.V is not None:  # existing cameras: their coverage in each sample is the offset
+        ex = crowd_rows(site.V, site.existing.positions, t.positions, crowds, grid=grid)
+        cov_out = sample_coverage(ex, crowds.n_samples, np.arange(site.V.shape[0]))
+    stacked = stacked_problem(problem, rows, crowds.n_samples, cov_out)
+    S = crowds.n_samples
+    info = {"persons": spread(crowds.counts), "kept_pct": 100.0 * rows.nnz / max(1, S * vis.V.nnz)}
+    return CrowdProblem(stacked, crowds, grid, t, info, (t1 - t0) / S)
+
+
+def describe(cp: CrowdProblem, crowd: CrowdSpec) -> str:
+    """The run log's line about a crowd-aware problem."""
+    if not cp.stacked:
+        return f"crowd-aware: density {crowd.density:g} /m² places nobody: the problem is the empty-store one"
+    i = cp.info
+    return (f"crowd-aware: {cp.crowds.n_samples} crowds of {i['persons']['mean']:.0f} persons (density "
+            f"{crowd.density:g} /m², seed {crowd.seed}); V_s keeps {i['kept_pct']:.1f} % of V's entries, "
+            f"{cp.seconds_per_sample:.3f} s per sample; the solvers see {cp.problem.n_targets} stacked targets")
+
+
+def crowd_stage(sc: Scene, vis: Visibility, problem: PlacementProblem, crowd: CrowdSpec | None, site=None, *,
+                workers: int = 1, scheduler: str | None = None, progress=None, log: list | None = None,
+                timings: dict | None = None) -> CrowdProblem | None:
+    """A run's crowd-aware problem (None unless ``crowd.optimise``): V_s on the run's
+    executor (``workers`` / ``scheduler`` as for V), its log line and ``timings['crowd']``."""
+    if crowd is None or not crowd.optimise:
+        return None
+    from camplace.core.executors import make_executor
+
+    t0 = time.perf_counter()
+    if progress:
+        progress("crowd", 0, 1)
+    with make_executor(workers, scheduler) as executor:
+        cp = crowd_problem(sc, vis, problem, crowd, site, executor, progress)
+    if timings is not None:
+        timings["crowd"] = time.perf_counter() - t0
+    if log is not None:
+        log.append(describe(cp, crowd))
+    return cp
+
+
+def crowd_scores(sc: Scene, vis: Visibility, placement: Placement, crowd: CrowdSpec | None,
+                 cp: CrowdProblem | None = None, log: list | None = None) -> CrowdMetrics | None:
+    """The metrics.json ``crowd`` of a run's (folded) placement; with a crowd-aware ``cp``
+    also what the optimisation reached on its own crowds (``optimisation``)."""
+    if crowd is None:
+        return None
+    extra = {"optimised": cp is not None}
+    if cp is not None:
+        extra["optimisation"] = placement.info.get("crowd", {"samples": cp.crowds.n_samples})
+    m = score_in_crowd(sc, vis, placement.selected, crowd, extra=extra)
+    if log is not None:
+        s = m.summary
+        log.append(f"crowd: {s['samples']} held-out crowds of {s['persons']['mean']:.0f} persons: coverage gap "
+                   f"{s['coverage_gap']['mean']:.4f} ± {s['coverage_gap']['std']:.4f}, seen by ≥ Γ "
+                   f"{s['seen_by_gamma_pct']['mean']:.1f} %, triangulatable {s['triangulatable_pct']['mean']:.1f} %")
+    return m

@@ -1,0 +1,84 @@
+"""Crowds in a run (camplace.workflows.crowd): density 0 changes nothing, the crowd-aware
+problem is optimal on its own crowds, refinement keeps the contract, evaluate scores the
+same crowds the same way (issue 28)."""
+
+from __future__ import annotations
+
+import copy
+
+import numpy as np
+import pytest
+
+from camplace.spec.loading import parse_scene
+from camplace.workflows.run import prepare, problem_from_visibility, run
+
+SCENE = {"name": "crowd-room", "voxel_size": 0.5, "occupancy_resolution": 0.1,
+         "room": {"footprint": [[0, 0], [6, 0], [6, 4], [0, 4]], "height": 3.0},
+         "obstacles": [{"name": "shelf", "box": {"min": [2.5, 1.5, 0.0], "max": [3.5, 2.5, 1.5]}}],
+         "targets": [{"name": "walk", "kind": "volume", "heights": [1.0, 1.5], "coverage": 2}],
+         "cameras": [{"name": "cam", "resolution": [640, 480], "fov_deg": [90, 70], "max_range": 8.0}],
+         "mounts": [{"kind": "ceiling_grid", "camera": "cam", "spacing": 1.0,
+                     "yaw_deg": {"start": 0, "stop": 270, "step": 90}, "pitch_deg": [45]}],
+         "placement": {"budget": 3, "solver": "mip", "time_limit_s": 30},
+         "crowd": {"density": 1.0, "samples": 4, "score_samples": 8}}
+
+
+def spec(**crowd):
+    d = copy.deepcopy(SCENE)
+    d["crowd"].update(crowd)
+    return parse_scene(d)
+
+
+@pytest.fixture(scope="module")
+def empty_store():
+    return run(spec())
+
+
+def test_density_0_equals_the_run_without_a_crowd(empty_store):
+    d = copy.deepcopy(SCENE)
+    del d["crowd"]
+    plain = run(parse_scene(d), solver="greedy")
+    zero = run(spec(density=0.0, optimise=True), solver="greedy")
+    assert np.array_equal(plain.placement.selected, zero.placement.selected)
+    assert plain.placement.objective == zero.placement.objective
+    a, b = plain.metrics.to_dict(), zero.metrics.to_dict()
+    c = b.pop("crowd")
+    assert {k: v for k, v in a.items() if k != "timings_s"} == {k: v for k, v in b.items() if k != "timings_s"}
+    assert c["coverage_gap"]["mean"] == a["coverage_gap"] and c["coverage_gap"]["std"] == 0.0
+    assert c["triangulatable_pct"]["mean"] == 100.0 - a["non_triangulatable_pct"]
+
+
+def test_crowd_aware_is_optimal_on_its_own_crowds(empty_store):
+    from camplace.workflows.crowd import crowd_problem
+
+    aware = run(spec(optimise=True))
+    opt = aware.placement.info["crowd"]
+    assert aware.placement.status == "optimal" and opt["samples"] == 4
+    assert aware.placement.objective == aware.problem.cost(aware.placement.selected)  # the contract: empty-store cost
+    sc, vis = prepare(spec())
+    cp = crowd_problem(sc, vis, problem_from_visibility(vis, 3), spec().crowd)
+    assert cp.problem.n_targets == 4 * vis.V.shape[1]
+    assert abs(cp.problem.cost(aware.placement.selected) - opt["objective"]) < 1e-9
+    assert cp.problem.cost(empty_store.placement.selected) >= opt["objective"] - 1e-9
+    assert aware.metrics.crowd.to_dict()["optimised"] and not empty_store.metrics.crowd.to_dict()["optimised"]
+
+
+def test_crowd_aware_refinement_scores_poses_on_the_crowds():
+    r = run(spec(optimise=True), refine=True, refine_time_s=2.0)
+    info = r.placement.info
+    assert info["crowd"]["refined_cost"] <= info["crowd"]["refine_grid_cost"] + 1e-9
+    assert r.placement.objective == r.problem.cost(r.placement.selected) and r.placement.bound is None
+    assert info["refine"]["grid_cost"] == r.metrics.grid_cost  # empty-store costs in the written figures
+
+
+def test_evaluate_scores_the_same_held_out_crowds(empty_store, tmp_path):
+    from camplace.outputs.write import write_outputs
+    from camplace.workflows.evaluate import evaluate
+
+    r = empty_store
+    write_outputs(tmp_path, r.scene.name, r.visibility, r.placement, r.problem.budget, r.metrics, r.timings_s,
+                  report=False)
+    ev = evaluate(spec(), tmp_path / "placement.json")
+    assert ev.metrics.crowd.to_dict()["coverage_gap"] == r.metrics.crowd.to_dict()["coverage_gap"]
+    other = evaluate(spec(), tmp_path / "placement.json", crowd={"seed": 5})
+    assert other.metrics.crowd.to_dict()["coverage_gap"] != r.metrics.crowd.to_dict()["coverage_gap"]
