@@ -131,14 +131,20 @@ def plan_summary(plan, mounts: int | None = None, dropped: dict | None = None, c
     return out
 
 
-def _fits(poly, box, margin: float) -> bool:
-    return poly.buffer(margin).contains(box)
+def _two_lines(name: str) -> list[str]:
+    """``name`` broken at the space nearest its middle ([] when it has no space)."""
+    cuts = [k for k, ch in enumerate(name) if ch == " "]
+    if not cuts:
+        return []
+    k = min(cuts, key=lambda c: abs(2 * c - len(name)))
+    return [f"{name[:k]}\n{name[k + 1:]}"]
 
 
 def room_labels(rooms: list[tuple[str, float, Polygon]], m_per_pt: float) -> list[RoomLabel]:
     """The labels of the rooms (room_areas) at ``m_per_pt`` metres per point: name and
-    area inside the room at the largest LABEL_PT size that fits the room and touches no
-    label placed before (larger rooms first); else a key number (1, 2, ... in file order)."""
+    area inside the room, at its centre (else its pole of inaccessibility), at the largest
+    LABEL_PT size that fits the room and touches no label placed before (larger rooms
+    first); else a key number (1, 2, ... in file order) at the pole."""
     placed: list = []
     chosen: dict[int, RoomLabel] = {}
     order = sorted(range(len(rooms)), key=lambda k: -rooms[k][1])
@@ -149,19 +155,29 @@ def room_labels(rooms: list[tuple[str, float, Polygon]], m_per_pt: float) -> lis
         part = max(getattr(poly, "geoms", [poly]), key=lambda g: g.area)
         if part.geom_type != "Polygon":
             continue
-        c = polylabel(part, tolerance=max(0.01, math.sqrt(part.area) / 60))
-        text = f"{name}\n{area:.1f} m\u00b2"
-        lines = text.split("\n")
+        pole = polylabel(part, tolerance=max(0.01, math.sqrt(part.area) / 60))
+        spots = [part.centroid, pole] if part.contains(part.centroid) else [pole]  # the centre when it is inside
+        texts = [f"{name}\n{area:.1f} m\u00b2"] + [f"{n}\n{area:.1f} m\u00b2" for n in _two_lines(name)]
+        fit = None
         for size in LABEL_PT:
-            w = (max(len(s) for s in lines) * CHAR_EM + 0.5) * size * m_per_pt  # with the label's padding
-            h = (len(lines) * 1.2 + 0.4) * size * m_per_pt
-            box = shapely.box(c.x - w / 2, c.y - h / 2, c.x + w / 2, c.y + h / 2)
-            if _fits(part, box, 0.0) and not any(box.intersects(b) for b in placed):
-                placed.append(box)
-                chosen[k] = RoomLabel(name, area, (c.x, c.y), text, size)
+            for text in texts:
+                lines = text.split("\n")
+                w = (max(len(s) for s in lines) * CHAR_EM + 0.5) * size * m_per_pt  # with the label's padding
+                h = (len(lines) * 1.2 + 0.4) * size * m_per_pt
+                for c in spots:
+                    box = shapely.box(c.x - w / 2, c.y - h / 2, c.x + w / 2, c.y + h / 2)
+                    if part.contains(box) and not any(box.intersects(b) for b in placed):
+                        fit = (box, c, size, text)
+                        break
+                if fit:
+                    break
+            if fit:
                 break
+        if fit:
+            placed.append(fit[0])
+            chosen[k] = RoomLabel(name, area, (fit[1].x, fit[1].y), fit[3], fit[2])
         else:
-            chosen[k] = RoomLabel(name, area, (c.x, c.y), "", KEY_PT, key=0)
+            chosen[k] = RoomLabel(name, area, (pole.x, pole.y), "", KEY_PT, key=0)
     out, n = [], 0
     for k in range(len(rooms)):  # key numbers in file order
         lab = chosen.get(k)
@@ -235,46 +251,17 @@ def scale_bar_m(px_per_m: float, max_in: float = 1.8) -> float:
     return float(fits[-1] if fits else 0.5)
 
 
-def draw_preview(plan, scene, mounts: np.ndarray, summary: dict, title: str):
-    """The preview Figure (matplotlib, no pyplot) of a PlanImport, its built Scene and the
-    surviving mount positions (M, 3) m; ``summary``: plan_summary."""
-    from matplotlib.figure import Figure
-    from matplotlib.patches import PathPatch, Rectangle
+def _draw_plan(ax, plan, footprint: np.ndarray, rooms: list, walls, colours: dict, mounts: np.ndarray,
+               labels: list[RoomLabel], m_per_pt: float) -> None:
+    """The plan itself on ``ax`` (data in metres): outside grey, footprint, rooms, walls cut
+    at CUT_M, openings, mount positions, room labels."""
+    from matplotlib.patches import PathPatch
 
-    fp = np.asarray(scene.footprint, float)
-    walls = scene_walls(scene)
-    rooms = room_areas(plan.scene)
-    lo, hi = plan_bounds(fp, [w.shape for w in walls] + [r[2] for r in rooms], plan.openings or [])
-    ext = hi - lo
-    long_px = float(np.clip(ext.max() * PX_PER_M, *PLAN_PX))
-    px_per_m = long_px / ext.max()
-    m_per_pt = DPI / 72.0 / px_per_m
-    plan_w, plan_h = ext * px_per_m / DPI  # inches
-    labels = room_labels(rooms, m_per_pt)
-    by_label: dict[str, int] = {}
-    for w in walls:
-        by_label[w.label] = by_label.get(w.label, 0) + 1
-    colours = label_colours(by_label)
-    side = _side_lines(plan, summary, by_label, colours, labels, title)
-    bar = scale_bar_m(px_per_m)
-    side.insert(2, ("scale", f"{bar:g} m on the plan", bar * px_per_m / DPI))
-    line_in = LINE_PT / 72.0
-    top, bottom, left = 0.35, 0.45, 0.55  # inches around the plan
-    avail = max(plan_h, 4.0)
-    cols = max(1, math.ceil(len(side) * line_in / avail))
-    if cols > 3:
-        cols, avail = 3, len(side) * line_in / 3
-    fig_w, fig_h = left + plan_w + 0.3 + cols * SIDE_IN, top + bottom + max(plan_h, avail)
-    fig = Figure(figsize=(fig_w, fig_h), dpi=DPI)
-    ax = fig.add_axes((left / fig_w, (fig_h - top - plan_h) / fig_h, plan_w / fig_w, plan_h / fig_h))
-    ax.set_xlim(lo[0], hi[0])
-    ax.set_ylim(lo[1], hi[1])
-    ax.set_aspect("equal")
     ax.set_facecolor(OUTSIDE_FILL)
     ax.tick_params(labelsize=FONT_PT, length=2, color="#888888", labelcolor="#555555")
     ax.set_xlabel("x (m)", fontsize=FONT_PT, color="#555555")
     ax.set_ylabel("y (m)", fontsize=FONT_PT, color="#555555")
-    outline = mpl_path(Polygon(fp))
+    outline = mpl_path(Polygon(footprint))
     ax.add_patch(PathPatch(outline, fc=FOOTPRINT_FILL, ec="none", zorder=1))
     ax.add_patch(PathPatch(outline, fc="none", ec="#000000", lw=1.3, zorder=4.5))  # over rooms and walls
     for k, (_, _, poly) in enumerate(rooms):
@@ -294,11 +281,10 @@ def draw_preview(plan, scene, mounts: np.ndarray, summary: dict, title: str):
         ax.add_patch(PathPatch(mpl_path(shapely.union_all(shapes)), fc="none", ec=colours[lab], lw=0.5, ls="--",
                                zorder=3))
     for ring in plan.openings or []:
-        if len(ring) >= 3:
-            poly = shapely.make_valid(Polygon(ring))
-            path = mpl_path(poly) if not poly.is_empty else None
-            if path is not None:
-                ax.add_patch(PathPatch(path, fc=OPENING_FILL, ec=OPENING_EDGE, lw=0.6, zorder=4))
+        poly = shapely.make_valid(Polygon(ring)) if len(ring) >= 3 else Polygon()
+        path = mpl_path(poly) if not poly.is_empty else None
+        if path is not None:
+            ax.add_patch(PathPatch(path, fc=OPENING_FILL, ec=OPENING_EDGE, lw=0.6, zorder=4))
     if len(mounts):
         size = float(np.clip(0.18 / m_per_pt, 2.5, 6.0))
         ax.scatter(mounts[:, 0], mounts[:, 1], s=size**2, marker="+", c=MOUNT_COLOUR, linewidths=0.6, zorder=5,
@@ -307,12 +293,19 @@ def draw_preview(plan, scene, mounts: np.ndarray, summary: dict, title: str):
         ax.text(*lab.anchor, lab.text, fontsize=lab.size, ha="center", va="center", zorder=6, linespacing=1.1,
                 color="#1a1a1a", weight="bold" if lab.key is not None else "normal",
                 bbox={"boxstyle": "round,pad=0.12", "fc": "white", "ec": "none", "alpha": 0.75})
-    x_side = left + plan_w + 0.3
+
+
+def _draw_side(fig, side: list, x0_in: float, top_in: float, cols: int) -> None:
+    """The side column lines (_side_lines) on ``fig`` from ``x0_in`` inches, in ``cols`` columns."""
+    from matplotlib.patches import Rectangle
+
+    fig_w, fig_h = fig.get_size_inches()
+    line_in = LINE_PT / 72.0
     per_col = max(1, math.ceil(len(side) / cols))
     for n, (style, text, swatch) in enumerate(side):
         col, row = divmod(n, per_col)
-        x = (x_side + col * SIDE_IN) / fig_w
-        y = (fig_h - top - (row + 0.8) * line_in) / fig_h
+        x = (x0_in + col * SIDE_IN) / fig_w
+        y = (fig_h - top_in - (row + 0.8) * line_in) / fig_h
         tx = x
         if style == "scale":  # a bar as long as `text` metres on the plan
             fig.add_artist(Rectangle((x, y - 0.025 / fig_h), swatch / fig_w, 0.05 / fig_h, transform=fig.transFigure,
@@ -330,6 +323,43 @@ def draw_preview(plan, scene, mounts: np.ndarray, summary: dict, title: str):
             tx = x + sw + 0.06 / fig_w
         fig.text(tx, y, text, fontsize=FONT_PT + (1.5 if style == "title" else 0), va="center", ha="left",
                  weight="bold" if style in ("title", "head") else "normal", family="DejaVu Sans")
+
+
+def draw_preview(plan, scene, mounts: np.ndarray, summary: dict, title: str):
+    """The preview Figure (matplotlib, no pyplot) of a PlanImport, its built Scene and the
+    surviving mount positions (M, 3) m; ``summary``: plan_summary. The plan at PX_PER_M
+    (within PLAN_PX), the side column beside it in as many columns (at most 3) as it needs."""
+    from matplotlib.figure import Figure
+
+    fp = np.asarray(scene.footprint, float)
+    walls = scene_walls(scene)
+    rooms = room_areas(plan.scene)
+    lo, hi = plan_bounds(fp, [w.shape for w in walls] + [r[2] for r in rooms], plan.openings or [])
+    ext = hi - lo
+    px_per_m = float(np.clip(ext.max() * PX_PER_M, *PLAN_PX)) / ext.max()
+    m_per_pt = DPI / 72.0 / px_per_m
+    plan_w, plan_h = ext * px_per_m / DPI  # inches
+    labels = room_labels(rooms, m_per_pt)
+    by_label: dict[str, int] = {}
+    for w in walls:
+        by_label[w.label] = by_label.get(w.label, 0) + 1
+    colours = label_colours(by_label)
+    side = _side_lines(plan, summary, by_label, colours, labels, title)
+    bar = scale_bar_m(px_per_m)
+    side.insert(2, ("scale", f"{bar:g} m on the plan", bar * px_per_m / DPI))
+    top, bottom, left, gap = 0.35, 0.45, 0.55, 0.3  # inches around the plan
+    avail = max(plan_h, 4.0)
+    cols = max(1, math.ceil(len(side) * LINE_PT / 72.0 / avail))
+    if cols > 3:
+        cols, avail = 3, len(side) * LINE_PT / 72.0 / 3
+    fig_w, fig_h = left + plan_w + gap + cols * SIDE_IN, top + bottom + max(plan_h, avail)
+    fig = Figure(figsize=(fig_w, fig_h), dpi=DPI)
+    ax = fig.add_axes((left / fig_w, (fig_h - top - plan_h) / fig_h, plan_w / fig_w, plan_h / fig_h))
+    ax.set_xlim(lo[0], hi[0])
+    ax.set_ylim(lo[1], hi[1])
+    ax.set_aspect("equal")
+    _draw_plan(ax, plan, fp, rooms, walls, colours, mounts, labels, m_per_pt)
+    _draw_side(fig, side, left + plan_w + gap, top, cols)
     return fig
 
 
