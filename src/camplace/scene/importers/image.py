@@ -25,18 +25,19 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
+import shapely
 from scipy import ndimage
 
 from camplace.core.errors import InputError
-from camplace.scene.importers import (DEFAULT_CEILING_M, PlanImport, clean_polygons, plan_scene, prism_obstacles,
-                                      room_zones, rooms_footprint)
+from camplace.scene.importers import (DEFAULT_CEILING_M, PlanImport, clean_polygons, footprint_of, plan_scene,
+                                      polygons_of, prism_obstacles, room_zones)
 from camplace.scene.importers.image_ocr import ocr_engine, read_lines, room_name, text_lines_mask
-from camplace.scene.importers.image_rooms import bridge_openings, free_regions, mask_polygons
-from camplace.scene.importers.image_walls import find_plans, ink_threshold, read_darkness, solid_walls
+from camplace.scene.importers.image_rooms import colour_rooms, free_regions, mask_polygons
+from camplace.scene.importers.image_walls import (bridge_openings, brightness, find_plans, ink_threshold, read_image,
+                                                  solid_walls, square_morphology)
 
 OPTIONS = ("scale", "ref", "threshold", "storey", "min_wall_thickness", "max_wall_thickness", "hatch_spacing",
            "max_opening", "min_room_area", "ocr")
-PLAN_GAP_M = 1.0  # wall pieces closer than this belong to one plan
 
 
 def metres_per_pixel(path: Path, scale: float | None, ref) -> tuple[float, str]:
@@ -59,7 +60,9 @@ def metres_per_pixel(path: Path, scale: float | None, ref) -> tuple[float, str]:
 class PlanRooms:
     """One plan of the sheet: ``box`` (rows, cols slices of the sheet), its ``walls`` and
     ``bridges`` (bool masks in the box), free-region ``labels`` (int, in the box), the
-    labels that are ``rooms`` and their ``names`` (None: not read) and printed areas."""
+    labels that are ``rooms`` and their ``names`` (None: not read) and printed areas, the
+    pixels of its ``outline`` and the ``enclosed`` mask: the free space inside the outer
+    walls (rooms, stairs, closets) closed across the walls between them."""
 
     box: tuple[slice, slice]
     walls: np.ndarray
@@ -68,6 +71,9 @@ class PlanRooms:
     rooms: list[int]
     names: dict[int, str] = field(default_factory=dict)
     printed: dict[int, float] = field(default_factory=dict)
+    coloured: int = 0
+    outline_px: int = 0
+    enclosed: np.ndarray | None = None
 
 
 @dataclass
@@ -90,7 +96,8 @@ class Sheet:
 def analyse(path: Path, scale=None, ref=None, threshold=None, min_wall_thickness=0.08, max_wall_thickness=0.8,
             hatch_spacing=0.3, max_opening=1.8, min_room_area=1.0, ocr=True) -> Sheet:
     """The plans, walls, openings, rooms and room names of a plan image."""
-    dark = read_darkness(path)
+    rgb = read_image(path)
+    dark = brightness(rgb)
     s, scale_from = metres_per_pixel(path, scale, ref)
     if threshold is None:
         t, how = ink_threshold(dark, s, max_wall_thickness)
@@ -103,15 +110,17 @@ def analyse(path: Path, scale=None, ref=None, threshold=None, min_wall_thickness
     raw = solid_walls(ink, s, hatch_spacing, min_wall_thickness, max_wall_thickness, skipped)
     if not raw.any():
         raise InputError(f"{path}: no walls found (no dark strokes at least {min_wall_thickness} m thick)")
-    found = find_plans(raw, ink, s, PLAN_GAP_M, skipped)
+    found = find_plans(raw, ink, s, max_opening, max_wall_thickness, skipped)
     plans = [_plan_rooms(found.plan_of, k, box, s, max_opening, max_wall_thickness, min_room_area, skipped)
              for k, box in enumerate(found.plans, 1)]
+    for plan in plans:
+        _colour_split(plan, rgb, ink, s, min_room_area)
     if not any(p.rooms for p in plans):
         raise InputError(f"{path}: no closed room found (no free region of at least {min_room_area} m² "
                          "enclosed by walls)")
     engine, ocr_line = ocr_engine() if ocr else (None, "off")
     if engine is not None:
-        _name_rooms(engine, ink, plans)
+        _name_rooms(engine, dark, ink, plans)
     return Sheet(s, scale_from, t, how, plans, dark.shape[0], ocr_line, skipped, max_wall_thickness)
 
 
@@ -124,16 +133,36 @@ def _plan_rooms(plan_of: np.ndarray, k: int, box, s: float, max_opening: float, 
     box = (slice(box[0].start - m, box[0].stop + m), slice(box[1].start - m, box[1].stop + m))
     bridges = bridge_openings(walls, s, max_opening, max_wall)
     labels, n, outside = free_regions(walls | bridges)
+    shape, _ = ndimage.label(~np.isin(labels, np.flatnonzero(outside[1:]) + 1))  # walls and what they enclose
+    outline_px = int(np.bincount(shape.ravel())[1:].max(initial=0))
+    enclosed = ndimage.binary_fill_holes(square_morphology((labels > 0) & ~outside[labels], max_wall / s, "close"))
+    parts, n_parts = ndimage.label(enclosed)
+    if n_parts:
+        enclosed = parts == np.bincount(parts.ravel())[1:].argmax() + 1
     area = np.bincount(labels.ravel(), minlength=n + 1) * s * s
     inside = ~outside
     rooms = [int(r) for r in np.flatnonzero(inside & (area >= min_room_area))]
     small = int(np.count_nonzero(inside & (area < min_room_area) & (area > 0)))
     if small:
         skipped[f"enclosed pieces under {min_room_area:g} m² (not rooms)"] += small
-    return PlanRooms(box, walls, bridges, labels, rooms)
+    return PlanRooms(box, walls, bridges, labels, rooms, outline_px=outline_px, enclosed=enclosed)
 
 
-def _name_rooms(engine, ink: np.ndarray, plans: list[PlanRooms]) -> None:
+def _colour_split(plan: PlanRooms, rgb: np.ndarray, ink: np.ndarray, s: float, min_room_area: float) -> None:
+    """Rooms told apart by their fill colours where no wall parts them (image_rooms.colour_rooms)."""
+    m = plan.walls.shape
+    pad = [(max(0, -plan.box[0].start), 0), (max(0, -plan.box[1].start), 0)]
+    r0, c0 = max(0, plan.box[0].start), max(0, plan.box[1].start)
+    crop = lambda a: np.pad(a[r0:plan.box[0].stop, c0:plan.box[1].stop],  # noqa: E731
+                            pad + [(0, 0)] * (a.ndim - 2), mode="edge")
+    colours, marks = crop(rgb), crop(ink)
+    colours = np.pad(colours, [(0, m[0] - colours.shape[0]), (0, m[1] - colours.shape[1]), (0, 0)], mode="edge")
+    marks = np.pad(marks, [(0, m[0] - marks.shape[0]), (0, m[1] - marks.shape[1])], mode="edge")
+    plan.labels, plan.rooms, plan.coloured = colour_rooms(colours, marks, plan.walls, plan.labels, plan.rooms, s,
+                                                          min_room_area)
+
+
+def _name_rooms(engine, dark: np.ndarray, ink: np.ndarray, plans: list[PlanRooms]) -> None:
     """Room names and printed areas from the text lines inside each room (one OCR call)."""
     lines, n, hc = text_lines_mask(ink)
     if n == 0:
@@ -149,11 +178,11 @@ def _name_rooms(engine, ink: np.ndarray, plans: list[PlanRooms]) -> None:
             if 0 <= r < room_at.shape[0] and 0 <= c < room_at.shape[1] and room_at[r, c]:
                 where[k] = (i, int(room_at[r, c]))
     found: dict[tuple[int, int], list] = {}
-    for ln in read_lines(engine, ink, lines, sorted(where), hc):
+    for ln in read_lines(engine, dark, lines, sorted(where), hc):
         k = int(np.max(lines[ln.box[0]:ln.box[2], ln.box[1]:ln.box[3]]))
         found.setdefault(where[k], []).append(ln)
     for (i, room), got in found.items():
-        name, area = room_name(got)
+        name, area = room_name(got, hc)
         if name:
             plans[i].names[room] = name
         if area is not None:
@@ -168,7 +197,8 @@ def _polygons(plan: PlanRooms, sheet: Sheet, min_area: float):
     for i, k in enumerate(plan.rooms):
         b = boxes[k - 1]
         poly = mask_polygons(plan.labels[b] == k, sheet.s, (at[0] + b[0].start, at[1] + b[1].start), sheet.rows)
-        rooms.append((plan.names.get(k, f"room-{i + 1}"), poly.simplify(sheet.s / 2)))
+        pieces = polygons_of(shapely.make_valid(poly.simplify(sheet.s / 2)))  # the room, not crumbs cut off it
+        rooms.append((plan.names.get(k, f"room-{i + 1}"), max(pieces, key=lambda q: q.area) if pieces else poly))
     walls = mask_polygons(plan.walls, sheet.s, at, sheet.rows).simplify(sheet.s / 2)
     blab, nb = ndimage.label(plan.bridges)
     openings = [q for j, b in enumerate(ndimage.find_objects(blab), 1)
@@ -178,12 +208,14 @@ def _polygons(plan: PlanRooms, sheet: Sheet, min_area: float):
 
 
 def _storey_rows(sheet: Sheet) -> list[dict]:
-    """PlanImport.storeys: every plan of the sheet with its rooms (name, area m²)."""
+    """PlanImport.storeys: every plan of the sheet with its rooms (name, area m²) and the
+    area of its outline (m²: the outer face of its walls, openings bridged)."""
     rows = []
     for i, plan in enumerate(sheet.plans):
         area = np.bincount(plan.labels.ravel()) * sheet.s * sheet.s
         rooms = [[plan.names.get(k, f"room-{j + 1}"), round(float(area[k]), 2)] for j, k in enumerate(plan.rooms)]
-        rows.append({"name": f"plan-{i + 1}", "elevation_m": 0.0, "rooms": rooms, "chosen": False})
+        rows.append({"name": f"plan-{i + 1}", "elevation_m": 0.0, "rooms": rooms, "chosen": False,
+                     "outline_m2": round(plan.outline_px * sheet.s * sheet.s, 2)})
     return rows
 
 
@@ -209,7 +241,8 @@ def plan_import(path: Path, sheet: Sheet, index: int, why: str, *, name=None, wa
     skipped = Counter(sheet.skipped)
     obstacles = prism_obstacles(walls, 0.0, min(float(wall_height or ceiling), ceiling), "wall", src, tolerance=0,
                                 skipped=skipped)
-    footprint = rooms_footprint([p for _, p in rooms], walls, sheet.max_wall, str(path))
+    at = (plan.box[0].start, plan.box[1].start)
+    footprint = footprint_of([mask_polygons(plan.enclosed, sheet.s, at, sheet.rows)], str(path))
     zones = room_zones(rooms, coverage or 2, skipped=skipped)
     title = name or (path.stem if len(sheet.plans) == 1 else f"{path.stem} plan-{index + 1}")
     scene = plan_scene(title, footprint, ceiling, obstacles, zones, heights=heights, coverage=coverage, budget=budget)

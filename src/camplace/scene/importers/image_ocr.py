@@ -20,19 +20,23 @@ from camplace.scene.importers.image_walls import EIGHT
 
 OCR_HEIGHT_PX = 32  # character height Tesseract reads best (lines are scaled up to it, at most 4x)
 MIN_CONF = 50  # Tesseract word confidence (0..100) below which a word is not used
-AREA_RE = re.compile(r"^(\d{1,4})([.,](\d{1,2}))?\s*(m2|m²|м2|м²|qm|sqm|sq\.?m|m)?$", re.IGNORECASE)
+AREA_RE = re.compile(r"^(\d{1,4})(?:[.,]\s?|\s)(\d{1,2})(?:\s*([mм]2|[mм][^\s\d]{0,3}|sq\.?\s*m|sqm|qm|[^\s\d]{1,3}))?$",
+                     re.IGNORECASE)
+UNITS = {"m", "mm", "cm", "m2", "m²", "м", "м2", "м²", "sqm", "qm"}
 NUMBER_RE = re.compile(r"^[A-Za-z]{0,2}\d{1,4}([.\-/]\d{1,3}){0,2}[A-Za-z]?$")
 
 
 @dataclass
 class TextLine:
     """One line of text on the sheet: ``text`` as read, ``conf`` (mean word confidence
-    0..100), ``box`` (row0, col0, row1, col1) in sheet pixels, ``height`` (pixels)."""
+    0..100), ``box`` (row0, col0, row1, col1) in sheet pixels, ``height`` (pixels),
+    ``dimension``: a line of ink longer than the text runs just above or below it."""
 
     text: str
     conf: float
     box: tuple[int, int, int, int]
     height: int
+    dimension: bool = False
 
     @property
     def centre(self) -> tuple[float, float]:
@@ -80,9 +84,10 @@ def text_lines_mask(ink: np.ndarray) -> tuple[np.ndarray, int, float]:
     return np.where(text, lines, 0), m, hc
 
 
-def read_lines(engine, ink: np.ndarray, lines: np.ndarray, wanted: list[int], hc: float) -> list[TextLine]:
+def read_lines(engine, dark: np.ndarray, lines: np.ndarray, wanted: list[int], hc: float) -> list[TextLine]:
     """The text of the lines ``wanted`` (labels of ``lines``), read by one Tesseract call
-    on a mosaic of the lines stacked top to bottom (each scaled to OCR_HEIGHT_PX)."""
+    on a mosaic of the lines stacked top to bottom (each scaled to OCR_HEIGHT_PX; grey
+    levels of ``dark`` kept around the line's marks, everything else white)."""
     from PIL import Image
 
     if not wanted:
@@ -93,7 +98,8 @@ def read_lines(engine, ink: np.ndarray, lines: np.ndarray, wanted: list[int], hc
     tiles, rows, y = [], [], 0
     for k in wanted:
         b = boxes[k - 1]
-        tile = np.where(lines[b] == k, 0, 255).astype(np.uint8)
+        near = ndimage.binary_dilation(lines[b] == k, EIGHT)
+        tile = np.where(near, dark[b], 255).astype(np.uint8)
         tile = np.pad(tile, pad, constant_values=255)
         tiles.append((y, tile))
         rows.append((y, y + tile.shape[0], k, b))
@@ -119,33 +125,51 @@ def read_lines(engine, ink: np.ndarray, lines: np.ndarray, wanted: list[int], hc
         got = sorted(words.get(k, []))
         if got:
             out.append(TextLine(" ".join(t for _, t, _ in got), float(np.mean([c for _, _, c in got])),
-                                (b[0].start, b[1].start, b[0].stop, b[1].stop), b[0].stop - b[0].start))
+                                (b[0].start, b[1].start, b[0].stop, b[1].stop), b[0].stop - b[0].start,
+                                _on_dimension_line(dark < 128, b, hc)))
     return out
 
 
+def _on_dimension_line(ink: np.ndarray, b: tuple[slice, slice], hc: float) -> bool:
+    """True when a row of ink just below or above the text box ``b`` runs past both its
+    ends (a dimension line, or an underline)."""
+    reach = max(2, int(hc * 0.6))
+    c0, c1 = max(0, b[1].start - 2), min(ink.shape[1], b[1].stop + 2)
+    for r0, r1 in ((b[0].stop, b[0].stop + reach), (b[0].start - reach, b[0].start)):
+        rows = ink[max(0, r0):max(0, r1), c0:c1]
+        if rows.size and rows.all(axis=1).any():
+            return True
+    return False
+
+
 def printed_area(text: str) -> float | None:
-    """The area (m²) a label like '14,43 m²', '14.4 m2' or '25,50' states; None otherwise."""
-    m = AREA_RE.match(text.replace(" ", "").replace("²", "²"))
-    if not m or not (m.group(4) or (m.group(3) and len(m.group(3)) == 2)):
+    """The area (m²) a label like '14,43 m²', '14.4 m2' or '25,50' states; None otherwise
+    (a number needs a unit or a decimal comma with two digits to be an area)."""
+    m = AREA_RE.match(text.strip())
+    if not m or not m.group(2) or not (m.group(3) or len(m.group(2)) == 2):
         return None
-    return float(f"{m.group(1)}.{m.group(3) or 0}")
+    return float(f"{m.group(1)}.{m.group(2)}")
 
 
-def room_name(lines: list[TextLine]) -> tuple[str | None, float | None]:
-    """(name, printed area m²) of a room from the text lines inside it: words (at least
-    two letters, confident) before room numbers such as '1.4' or 'B12'; an area such
-    as '14,43 m²' is not a name. The tallest, most confident line wins."""
+def room_name(lines: list[TextLine], hc: float) -> tuple[str | None, float | None]:
+    """(name, printed area m²) of a room from the text lines inside it: words (three
+    letters or more, confident) before room numbers such as '1.4' or 'B12' (before plain
+    integers); an area such
+    as '14,43 m²' is not a name, nor a dimension (a lone number on a dimension line, or
+    four digits and more). The tallest, most confident line wins; lines shorter than
+    0.6 ``hc`` (the typical character height) are fragments."""
     words, numbers, area = [], [], None
     for ln in lines:
-        text = ln.text.strip(" .,:;|_-—'\"“”‘’()[]{}")
-        if not text or ln.conf < MIN_CONF:
+        text = ln.text.strip(" .,:;|_-—'\"“”‘’()[]{}«»~")
+        if not text or ln.conf < MIN_CONF or ln.height < 0.6 * hc or text.lower() in UNITS:
             continue
         a = printed_area(text)
         if a is not None:
             area = area if area is not None else a
-        elif sum(ch.isalpha() for ch in text) >= 2 and not NUMBER_RE.match(text):
-            words.append((-ln.height, -ln.conf, text))
         elif NUMBER_RE.match(text):
-            numbers.append((-ln.height, -ln.conf, text))
+            if not ln.dimension and not re.fullmatch(r"\d{4,}", text):
+                numbers.append((not re.search(r"\D", text), -ln.height, -ln.conf, text))
+        elif sum(ch.isalpha() for ch in text) >= 3:
+            words.append((-ln.height, -ln.conf, text))
     pick = sorted(words) or sorted(numbers)
-    return (pick[0][2] if pick else None), area
+    return (pick[0][-1] if pick else None), area

@@ -11,57 +11,7 @@ import numpy as np
 from scipy import ndimage
 from shapely.geometry import Polygon
 
-from camplace.scene.importers.image_walls import EIGHT, odd
-
-
-def _line(mask: np.ndarray, length: int, axis: int, op: str) -> np.ndarray:
-    """Binary ``op`` ('open' / 'close') of ``mask`` by a line of ``length`` pixels along ``axis``."""
-    size = (length, 1) if axis == 0 else (1, length)
-    m = mask.astype(np.uint8)
-    first, second = (ndimage.minimum_filter, ndimage.maximum_filter) if op == "open" else \
-        (ndimage.maximum_filter, ndimage.minimum_filter)
-    return second(first(m, size=size, mode="nearest"), size=size, mode="nearest").astype(bool)
-
-
-def bridge_openings(walls: np.ndarray, s: float, max_opening_m: float, max_wall_m: float) -> np.ndarray:
-    """Pixels that close the door and window gaps of ``walls`` (H, W) bool. Along each
-    axis, a run of free pixels up to ``max_opening_m`` long between two wall pixels is a
-    gap when a wall running along that axis (no thicker across than ``max_wall_m``) ends
-    at one of its two ends: a door beside a corner is a gap, a room or corridor between
-    two wall faces is not. Gaps thicker across than a wall are not bridged either."""
-    gap, thick = odd(max_opening_m / s, 3), int(round(max_wall_m / s)) + 1
-    out = np.zeros_like(walls)
-    for along in (1, 0):
-        across = 1 - along
-        pieces = walls & ~_line(walls, thick, across, "open")  # thin across: walls running along this axis
-        added = _line(walls, gap, along, "close") & ~walls
-        row = np.zeros((3, 3), bool)
-        row[1, :] = True
-        runs, n = ndimage.label(added, row if along == 1 else row.T)
-        if n == 0:
-            continue
-        touch = added & (np.roll(pieces, 1, axis=along) | np.roll(pieces, -1, axis=along))
-        ends = np.r_[False, ndimage.maximum(touch, runs, np.arange(1, n + 1)) > 0][runs]
-        out |= _between_rooms(ends & ~_line(ends, thick, across, "open"), walls, across)
-    return out
-
-
-def _between_rooms(bridges: np.ndarray, walls: np.ndarray, across: int) -> np.ndarray:
-    """The bridges with free space on both sides across (a gap through a wall), not those
-    lying along a wall's face (a run between two bumps of one wall): at most a quarter
-    of the pixels bordering a bridge across are wall."""
-    lab, n = ndimage.label(bridges, EIGHT)
-    if n == 0:
-        return bridges
-    border = np.zeros(lab.shape, np.int64)
-    wall = np.zeros(lab.shape, np.int64)
-    for step in (1, -1):
-        edge = bridges & ~np.roll(bridges, step, axis=across)
-        border += edge
-        wall += edge & np.roll(walls, step, axis=across)
-    idx = np.arange(1, n + 1)
-    ok = ndimage.sum(wall, lab, idx) <= 0.25 * np.maximum(ndimage.sum(border, lab, idx), 1)
-    return np.r_[False, ok][lab]
+from camplace.scene.importers.image_walls import square_morphology
 
 
 def free_regions(barrier: np.ndarray) -> tuple[np.ndarray, int, np.ndarray]:
@@ -98,3 +48,60 @@ def mask_polygons(mask: np.ndarray, s: float, at: tuple[int, int] = (0, 0), imag
 def region_polygon(labels: np.ndarray, k: int, box: tuple[slice, slice], s: float):
     """The polygon (m, simplified by half a pixel) of region ``k`` of ``labels`` in its box."""
     return mask_polygons(labels[box] == k, s, (box[0].start, box[1].start), len(labels)).simplify(s / 2)
+
+
+def colour_keys(rgb: np.ndarray) -> np.ndarray:
+    """(h, w) int colour class of each pixel: the 3x3 mean colour in 8 levels a channel
+    (a flat fill is one class; scan noise and JPEG ringing are averaged out)."""
+    smooth = ndimage.uniform_filter(rgb.astype(np.float32), size=(3, 3, 1), mode="nearest")
+    q = np.clip(smooth, 0, 255).astype(np.int32) >> 5
+    return (q[..., 0] << 6) | (q[..., 1] << 3) | q[..., 2]
+
+
+def colour_rooms(rgb: np.ndarray, ink: np.ndarray, walls: np.ndarray, labels: np.ndarray, rooms: list[int],
+                 s: float, min_room_area: float) -> tuple[np.ndarray, list[int], int]:
+    """Rooms of a coloured plan (each room a flat fill): (labels, room labels, rooms added).
+    A region enclosed by walls that holds two or more fills of at least ``min_room_area``
+    (and a tenth of it) is split between them (each pixel to the nearest fill: a hall and
+    a kitchen drawn without a wall between them); a fill outside every region beside the
+    ``walls`` (a porch drawn without walls) is a room of its own. ``rgb`` (h, w, 3),
+    ``ink``, ``walls`` and ``labels`` cover the plan's box; the fills are told apart from the paper (the commonest colour)."""
+    keys = colour_keys(rgb)
+    paper = np.bincount(keys[~ink].ravel()).argmax() if (~ink).any() else -1
+    px_min = min_room_area / (s * s)
+    counts = np.bincount(keys[(labels > 0) & ~ink & (keys != paper)].ravel(), minlength=512)
+    fill = np.zeros(labels.shape, np.int32)  # 1 + index of the fill colour, 0: no fill
+    for i, key in enumerate(np.flatnonzero(counts >= px_min), 1):
+        fill[square_morphology((keys == key) & (labels > 0), 0.25 / s, "open")] = i  # lines in a colour: not fills
+    if not fill.any():
+        return labels, rooms, 0
+    out = np.where(np.isin(labels, rooms), labels, 0)
+    top, added = int(labels.max()), 0
+    boxes = ndimage.find_objects(out)
+    for r in list(rooms):
+        box = boxes[r - 1]
+        region = out[box] == r
+        share = np.bincount(fill[box][region].ravel())
+        own = [f for f in range(1, len(share)) if share[f] >= px_min]
+        if len(own) < 2:
+            continue
+        markers = np.where(region & np.isin(fill[box], own), fill[box], 0)
+        _, (ri, ci) = ndimage.distance_transform_edt(markers == 0, return_indices=True)
+        nearest = markers[ri, ci]
+        for f in own[1:]:
+            top += 1
+            out[box][region & (nearest == f)] = top
+            rooms.append(top)
+            added += 1
+    near_walls = ndimage.maximum_filter(walls.astype(np.uint8), size=5) > 0
+    lone, n = ndimage.label((fill > 0) & (out == 0))
+    border = set(np.unique(np.r_[lone[0], lone[-1], lone[:, 0], lone[:, -1]]))
+    area = np.bincount(lone.ravel(), minlength=n + 1)
+    for f in range(1, n + 1):
+        if f in border or area[f] < px_min or not (near_walls & (lone == f)).any():
+            continue
+        top += 1
+        out[lone == f] = top
+        rooms.append(top)
+        added += 1
+    return out, rooms, added

@@ -18,30 +18,37 @@ from camplace.core.errors import InputError
 
 MAX_PIXELS = 100_000_000
 EIGHT = np.ones((3, 3), bool)  # 8-connectivity
-LONG_STROKE_M = 1.0  # ink pieces at least this long across are strokes (wall outlines, dimension lines)
+DOOR_M = 1.0  # the widest door beside a corner
+MIN_JAMB_M = 0.12  # a wall beside a door runs at least this far in line with it
+REACH_M = 1.0  # a small wall piece this close to a plan belongs to it
+LONG_STROKE_M = 0.6  # ink pieces at least this long across are strokes (wall outlines, dimension lines)
 
 
-def read_darkness(path: Path) -> np.ndarray:
-    """(H, W) uint8 brightness of an image file: the brightest of its channels (HSV
-    value), so a flat colour fill (magenta, green: one bright channel) is light and only
-    grey-to-black ink is dark; transparency is laid on white paper."""
+def read_image(path: Path) -> np.ndarray:
+    """(H, W, 3) uint8 RGB of an image file: transparency laid on white paper, 16-bit
+    and float scans stretched to 0..255."""
     from PIL import Image, UnidentifiedImageError
 
     Image.MAX_IMAGE_PIXELS = MAX_PIXELS
     try:
         with Image.open(path) as im:
             im.load()
-            if im.mode in ("I;16", "I;16B", "I;16L", "I", "F"):  # 16-bit / float scans: stretch to 0..255
+            if im.mode in ("I;16", "I;16B", "I;16L", "I", "F"):
                 a = np.asarray(im, np.float64)
                 lo, hi = np.percentile(a, [0.1, 99.9])
-                return np.clip((a - lo) * 255.0 / max(hi - lo, 1e-9), 0, 255).astype(np.uint8)
+                grey = np.clip((a - lo) * 255.0 / max(hi - lo, 1e-9), 0, 255).astype(np.uint8)
+                return np.repeat(grey[..., None], 3, axis=2)
             if im.mode in ("RGBA", "LA", "PA") or (im.mode == "P" and "transparency" in im.info):
                 rgba = im.convert("RGBA")
-                paper = Image.new("RGBA", rgba.size, (255, 255, 255, 255))
-                im = Image.alpha_composite(paper, rgba)
-            rgb = np.asarray(im.convert("RGB"))
+                im = Image.alpha_composite(Image.new("RGBA", rgba.size, (255, 255, 255, 255)), rgba)
+            return np.asarray(im.convert("RGB"))
     except (UnidentifiedImageError, OSError, Image.DecompressionBombError, ValueError) as err:
         raise InputError(f"{path}: not a readable image ({str(err).splitlines()[0]})") from None
+
+
+def brightness(rgb: np.ndarray) -> np.ndarray:
+    """(H, W) uint8: the brightest channel of each pixel (HSV value), so a flat colour
+    fill (magenta, green: one bright channel) is light and only grey-to-black ink is dark."""
     return rgb.max(axis=2)
 
 
@@ -94,7 +101,8 @@ def solid_walls(ink: np.ndarray, s: float, hatch_m: float, min_wall_m: float, ma
     across: wall outlines with their hatch, dimension lines) bound the paper; paper is the
     inside of a wall where it is narrow (at most ``hatch_m`` wide: a hatch cell, the strip
     between the two lines of a thin wall) or in a strip no wider than ``max_wall_m``
-    holding marks (a hatch of dashes or dots, ≥ 8 % ink). Those fill in; rooms, the strips
+    holding marks (a hatch of dashes or dots, ≥ 8 % ink) and long (not the disc inside the
+    circle around a room number). Those fill in; rooms, the strips
     between a wall and a dimension line and the text in them do not. Broad filled
     areas that were mostly paper (stair treads) are given back, then strokes thinner
     than ``min_wall_m`` (text, dimension lines, door swings) are opened away."""
@@ -107,7 +115,12 @@ def solid_walls(ink: np.ndarray, s: float, hatch_m: float, min_wall_m: float, ma
     cells = free & ~square_morphology(free, hatch_m / s, "open")  # hatch cells, the inside of thin walls
     bands = free & ~square_morphology(free, max_wall_m / s, "open")  # strips no wider than a wall
     blab, nb = ndimage.label(bands)
-    marked = np.r_[False, ndimage.mean(ink & free, blab, np.arange(1, nb + 1)) >= 0.08] if nb else np.zeros(1, bool)
+    marked = np.zeros(nb + 1, bool)
+    if nb:  # a strip along a wall, not a disc (the circle around a room number)
+        bidx = np.arange(1, nb + 1)
+        width = ndimage.maximum(ndimage.distance_transform_edt(bands), blab, bidx)
+        marked[1:] = (ndimage.mean(ink & free, blab, bidx) >= 0.08) & (
+            np.bincount(blab.ravel(), minlength=nb + 1)[1:] >= 8 * width ** 2)
     solid = ink | strokes | cells | marked[blab]
     broad = square_morphology(solid, max_wall_m / s, "open")
     if broad.any():
@@ -121,6 +134,61 @@ def solid_walls(ink: np.ndarray, s: float, hatch_m: float, min_wall_m: float, ma
     return square_morphology(solid, max(min_wall_m / s, 2), "open")
 
 
+def _line(mask: np.ndarray, length: int, axis: int, op: str) -> np.ndarray:
+    """Binary ``op`` ('open' / 'close') of ``mask`` by a line of ``length`` pixels along ``axis``."""
+    size = (length, 1) if axis == 0 else (1, length)
+    m = mask.astype(np.uint8)
+    first, second = (ndimage.minimum_filter, ndimage.maximum_filter) if op == "open" else \
+        (ndimage.maximum_filter, ndimage.minimum_filter)
+    return second(first(m, size=size, mode="nearest"), size=size, mode="nearest").astype(bool)
+
+
+def bridge_openings(walls: np.ndarray, s: float, max_opening_m: float, max_wall_m: float) -> np.ndarray:
+    """Pixels that close the door and window gaps of ``walls`` (H, W) bool. Along each
+    axis, a run of free pixels up to ``max_opening_m`` long between two wall pixels is a
+    gap when walls running along that axis (no thicker across than ``max_wall_m``, at
+    least MIN_JAMB_M long) end at both its ends, or at one end for a gap up to DOOR_M (a
+    door beside a corner); a room or corridor between two wall faces is not a gap. Gaps thicker across than a wall are not bridged either."""
+    gap, thick = odd(max_opening_m / s, 3), int(round(max_wall_m / s)) + 1
+    out = np.zeros_like(walls)
+    row = np.zeros((3, 3), bool)
+    row[1, :] = True
+    for along in (1, 0):
+        across = 1 - along
+        pieces = walls & ~_line(walls, thick, across, "open")  # thin across: walls running along this axis
+        added = _line(walls, gap, along, "close") & ~walls
+        runs, n = ndimage.label(added, row if along == 1 else row.T)
+        if n == 0:
+            continue
+        plab, npl = ndimage.label(pieces, row if along == 1 else row.T)  # runs of the walls along the axis
+        long = np.r_[False, np.bincount(plab.ravel(), minlength=npl + 1)[1:] * s >= MIN_JAMB_M][plab]
+        idx = np.arange(1, n + 1)
+        before = ndimage.maximum(added & np.roll(long, 1, axis=along), runs, idx) > 0
+        after = ndimage.maximum(added & np.roll(long, -1, axis=along), runs, idx) > 0
+        short = np.bincount(runs.ravel(), minlength=n + 1)[1:] * s <= DOOR_M
+        ends = np.r_[False, (before & after) | ((before | after) & short)][runs]
+        out |= _between_rooms(ends & ~_line(ends, thick, across, "open"), walls, across)
+    return out
+
+
+def _between_rooms(bridges: np.ndarray, walls: np.ndarray, across: int) -> np.ndarray:
+    """The bridges with free space on both sides across (a gap through a wall), not those
+    lying along a wall's face (a run between two bumps of one wall): at most a quarter
+    of the pixels bordering a bridge across are wall."""
+    lab, n = ndimage.label(bridges, EIGHT)
+    if n == 0:
+        return bridges
+    border = np.zeros(lab.shape, np.int64)
+    wall = np.zeros(lab.shape, np.int64)
+    for step in (1, -1):
+        edge = bridges & ~np.roll(bridges, step, axis=across)
+        border += edge
+        wall += edge & np.roll(walls, step, axis=across)
+    idx = np.arange(1, n + 1)
+    ok = ndimage.sum(wall, lab, idx) <= 0.25 * np.maximum(ndimage.sum(border, lab, idx), 1)
+    return np.r_[False, ok][lab]
+
+
 @dataclass
 class Sheet:
     """The plans found on a sheet: ``plans`` (list of (rows, cols) slices, one per plan,
@@ -132,11 +200,13 @@ class Sheet:
     plans: list[tuple[slice, slice]] = field(default_factory=list)
 
 
-def find_plans(raw: np.ndarray, ink: np.ndarray, s: float, plan_gap_m: float, skipped: Counter) -> Sheet:
+def find_plans(raw: np.ndarray, ink: np.ndarray, s: float, max_opening_m: float, max_wall_m: float,
+               skipped: Counter) -> Sheet:
     """The separate plans of a sheet in the wall mask ``raw``. A wall piece (8-connected)
-    is drawn (its edge is ink: an outline, a solid stroke, ≥ 80 %) or a block of text and
-    symbols the hatch closing made solid (edge partly paper); drawn pieces within
-    ``plan_gap_m`` of each other are one plan. Plans under a quarter of the largest
+    is drawn (its edge is ink: an outline, a solid stroke, ≥ 60 %, and at least 0.05 m²)
+    or a blot of symbols; a thin ring around most of the sheet is its frame. Drawn pieces of some size (a twentieth of the largest) joined
+    across the openings between walls in line (bridge_openings: ``max_opening_m``,
+    ``max_wall_m``) are one plan; smaller drawn pieces within REACH_M of one belong to it. Plans under a quarter of the largest
     plan's wall area (key plans, title blocks, legends, scale bars) and frames around
     other plans are not the building; each plan keeps its drawn pieces and any piece at
     least a quarter of its largest."""
@@ -146,22 +216,29 @@ def find_plans(raw: np.ndarray, ink: np.ndarray, s: float, plan_gap_m: float, sk
     idx = np.arange(1, n + 1)
     area = np.bincount(lab.ravel(), minlength=n + 1)[1:].astype(float)
     edge = raw & ~ndimage.binary_erosion(raw)
-    drawn = (ndimage.mean(ink, np.where(edge, lab, 0), idx) >= 0.8) | (area >= 0.25 * area.max())
+    drawn = (ndimage.mean(ink, np.where(edge, lab, 0), idx) >= 0.6) | (area >= 0.25 * area.max())
     drawn &= area * s * s >= 0.05
-    near = ndimage.maximum_filter(drawn[lab - 1] & raw, size=odd(plan_gap_m / s, 3), mode="constant")
-    glab, ng = ndimage.label(near, EIGHT)
-    group = ndimage.maximum(glab, lab, idx).astype(np.int64)  # group of each piece (0: none)
+    frame = _sheet_frames(ndimage.find_objects(lab), area, drawn, raw.shape)
+    if frame.any():
+        skipped["sheet frames"] += int(frame.sum())
+        drawn &= ~frame
+    big = drawn & (area >= 0.05 * area[drawn].max(initial=0))  # the pieces that say where the plans are
+    bones = big[lab - 1] & raw
+    bones |= bridge_openings(bones, s, max_opening_m, max_wall_m)  # one plan across its windows and doors
+    glab, ng = ndimage.label(ndimage.maximum_filter(bones, size=3), EIGHT)
+    near = ndimage.maximum_filter(glab, size=odd(2 * REACH_M / s, 3), mode="constant")
+    group = ndimage.maximum(near, lab, idx).astype(np.int64)  # group of each piece (0: none)
     biggest = np.zeros(ng + 1)
     np.maximum.at(biggest, group, area)
     keep = drawn | (area >= 0.25 * biggest[group])
     keep &= group > 0
     gsum = np.bincount(group, weights=area * keep, minlength=ng + 1)
     gsum[0] = 0
-    big = [int(g) for g in np.flatnonzero(gsum >= 0.25 * gsum.max())]
+    large = [int(g) for g in np.flatnonzero(gsum >= 0.25 * gsum.max())]
     boxes = ndimage.find_objects(glab)
-    plans = [g for g in big if not _frames_another(boxes[g - 1], [boxes[h - 1] for h in big if h != g])]
-    if len(big) > len(plans):
-        skipped["frames around plans"] += len(big) - len(plans)
+    plans = [g for g in large if not _frames_another(boxes[g - 1], [boxes[h - 1] for h in large if h != g])]
+    if len(large) > len(plans):
+        skipped["frames around plans"] += len(large) - len(plans)
     on_plan = np.isin(group, plans)
     if np.count_nonzero(on_plan & ~keep):
         skipped["text and symbols on the plans"] += int(np.count_nonzero(on_plan & ~keep))
@@ -174,6 +251,21 @@ def find_plans(raw: np.ndarray, ink: np.ndarray, s: float, plan_gap_m: float, sk
         piece_plan[1:][(group == g) & keep] = k
     plan_of = piece_plan[lab]
     return Sheet(plan_of > 0, plan_of, [boxes[g - 1] for g in order])
+
+
+def _sheet_frames(boxes: list, area: np.ndarray, drawn: np.ndarray, shape: tuple[int, int]) -> np.ndarray:
+    """Per piece, True for a sheet frame: a thin ring (a fifth of its box or less) across
+    most of the sheet (80 % each way) around drawn pieces of a tenth of its area or more."""
+    r0, r1 = np.array([b[0].start for b in boxes]), np.array([b[0].stop for b in boxes])
+    c0, c1 = np.array([b[1].start for b in boxes]), np.array([b[1].stop for b in boxes])
+    big = ((r1 - r0) >= 0.8 * shape[0]) & ((c1 - c0) >= 0.8 * shape[1]) & (area < 0.2 * (r1 - r0) * (c1 - c0))
+    out = np.zeros(len(boxes), bool)
+    cy, cx = (r0 + r1) / 2, (c0 + c1) / 2
+    for i in np.flatnonzero(big):
+        inside = drawn & (cy > r0[i]) & (cy < r1[i]) & (cx > c0[i]) & (cx < c1[i])
+        inside[i] = False
+        out[i] = area[inside].sum() >= 0.1 * area[i]
+    return out
 
 
 def _frames_another(box: tuple[slice, slice], others: list[tuple[slice, slice]]) -> bool:

@@ -1,0 +1,207 @@
+"""A realistic apartment plan sheet drawn with Pillow, for the plan-image tests (issue 25):
+outer walls as outlines filled with a diagonal hatch, inner walls solid, windows as white
+gaps with thin glazing lines, doors as gaps with a leaf and a swing arc, five rooms
+labelled in a real TTF font (name and area), dimension lines with ticks and numbers in
+mm, a scale bar, a north arrow and a title block with a frame around the sheet."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from pathlib import Path
+
+PX = 0.02  # m per pixel (1:50 at 127 dpi)
+OUTER = 0.3  # outer wall thickness, m
+INNER = 0.12  # inner wall thickness, m
+W, D = 10.0, 7.0  # clear inside of the outer walls, m
+# the rooms' clear rectangles (x0, y0, x1, y1, m; y up from the inner face of the south wall)
+ROOMS = {
+    "Living": (0.0, 3.06, 5.44, 7.0),
+    "Bedroom": (5.56, 3.56, 10.0, 7.0),
+    "Kitchen": (0.0, 0.0, 2.94, 2.94),
+    "Bathroom": (3.06, 0.0, 5.44, 2.94),
+    "Office": (5.56, 0.0, 10.0, 3.44),
+}
+
+
+def room_area(name: str) -> float:
+    x0, y0, x1, y1 = ROOMS[name]
+    return (x1 - x0) * (y1 - y0)
+
+
+@dataclass
+class Sheet:
+    """Where the plan lies on the sheet: ``origin`` the pixel (col, row) of the inside
+    corner x = 0, y = 0 (south-west), ``size`` the image (width, height) in pixels."""
+
+    path: Path
+    origin: tuple[int, int]
+    size: tuple[int, int]
+
+
+def font(size: int, bold: bool = False):
+    import matplotlib
+    from PIL import ImageFont
+
+    name = "DejaVuSans-Bold.ttf" if bold else "DejaVuSans.ttf"
+    return ImageFont.truetype(str(Path(matplotlib.__file__).parent / "mpl-data" / "fonts" / "ttf" / name), size)
+
+
+def draw_apartment(path: str | Path, *, jpeg_quality: int | None = None, noise: float = 0.0, seed: int = 0,
+                   labels: bool = True) -> Sheet:
+    """The apartment sheet as PNG (or JPEG with ``jpeg_quality``; ``noise``: the grey
+    level std of a scan's noise on a slightly grey paper)."""
+    import numpy as np
+    from PIL import Image, ImageDraw
+
+    margin, title_h = 120, 130
+    ox, oy = margin + round(OUTER / PX), margin + round((D + OUTER) / PX)  # pixel of inside (0, 0)
+    width = round((W + 2 * OUTER) / PX) + 2 * margin + 220
+    height = round((D + 2 * OUTER) / PX) + 2 * margin + title_h
+    im = Image.new("RGB", (width, height), "white")
+    d = ImageDraw.Draw(im)
+
+    def p(x: float, y: float) -> tuple[int, int]:
+        return ox + round(x / PX), oy - round(y / PX)
+
+    def box(x0, y0, x1, y1, **kw):
+        (c0, r1), (c1, r0) = p(x0, y0), p(x1, y1)
+        d.rectangle([min(c0, c1), min(r0, r1), max(c0, c1) - 1, max(r0, r1) - 1], **kw)
+
+    # outer walls: outline + 45° hatch, then the openings cut white
+    t = OUTER
+    ring = [(-t, -t, W + t, 0), (-t, D, W + t, D + t), (-t, -t, 0, D + t), (W, -t, W + t, D + t)]
+    for r in ring:
+        box(*r, fill="white")
+    hatch = Image.new("L", im.size, 0)
+    hd = ImageDraw.Draw(hatch)
+    for k in range(-height, width, 6):
+        hd.line([(k, height), (k + height, 0)], fill=255, width=1)
+    mask = Image.new("L", im.size, 0)
+    md = ImageDraw.Draw(mask)
+    for x0, y0, x1, y1 in ring:
+        (c0, r1), (c1, r0) = p(x0, y0), p(x1, y1)
+        md.rectangle([c0, r0, c1 - 1, r1 - 1], fill=255)
+    im.paste((0, 0, 0), (0, 0), Image.fromarray(np.minimum(np.asarray(hatch), np.asarray(mask))))
+    d.rectangle([*p(-t, D + t), *p(W + t, -t)], outline="black", width=2)
+    d.rectangle([*p(0, D), *p(W, 0)], outline="black", width=2)
+    # inner walls (solid), door gaps cut later
+    inner = [(5.44, 0.0, 5.56, 7.0), (0.0, 2.94, 5.44, 3.06), (2.94, 0.0, 3.06, 2.94), (5.56, 3.44, 10.0, 3.56)]
+    for r in inner:
+        box(*r, fill="black")
+    # windows: gaps through the outer wall (north and west with two glazing lines) (side, span)
+    windows = [("s", 0.8, 2.2), ("s", 6.5, 8.2), ("n", 1.0, 2.6), ("n", 3.2, 4.6), ("n", 6.6, 8.4), ("w", 4.0, 5.6),
+               ("e", 4.6, 6.2), ("e", 1.0, 2.4)]
+    for side, a, b in windows:
+        c0, c1 = {"s": (-t, 0), "n": (D, D + t), "w": (-t, 0), "e": (W, W + t)}[side]
+
+        def xy(u, v, side=side):  # along the wall u, across it v -> (x, y)
+            return (u, v) if side in "sn" else (v, u)
+
+        box(*xy(a, c0 - 0.02), *xy(b, c1 + 0.02), fill="white")
+        if side in "se":  # south and east windows: plain white gaps (no glazing drawn)
+            continue
+        for f in (0.33, 0.67):
+            d.line([p(*xy(a, c0 + f * t)), p(*xy(b, c0 + f * t))], fill="black", width=1)
+        for u in (a, b):
+            d.line([p(*xy(u, c0)), p(*xy(u, c1))], fill="black", width=1)
+    # doors: gap, leaf and swing arc (hinge, leaf direction, gap span)
+    doors = [("v", 5.44, 5.56, 4.2, 5.1), ("v", 5.44, 5.56, 1.2, 2.1), ("h", 3.06, 2.94, 1.4, 2.3),
+             ("h", 3.56, 3.44, 7.0, 7.9), ("v", 2.94, 3.06, 0.15, 0.95)]
+    for kind, a, b, lo, hi in doors:
+        if kind == "v":
+            box(min(a, b), lo, max(a, b), hi, fill="white")
+            hinge = p(max(a, b), lo)
+            r = round((hi - lo) / PX)
+            d.line([hinge, (hinge[0] + r, hinge[1])], fill="black", width=2)
+            d.arc([hinge[0] - r, hinge[1] - r, hinge[0] + r, hinge[1] + r], 270, 360, fill="black", width=1)
+        else:
+            box(lo, min(a, b), hi, max(a, b), fill="white")
+            hinge = p(lo, min(a, b))
+            r = round((hi - lo) / PX)
+            d.line([hinge, (hinge[0], hinge[1] + r)], fill="black", width=2)
+            d.arc([hinge[0] - r, hinge[1] - r, hinge[0] + r, hinge[1] + r], 0, 90, fill="black", width=1)
+    box(9.0, -t - 0.02, 9.95, 0.02, fill="white")  # entrance door in the south wall
+    d.line([p(9.0, 0), p(9.0, -0.9)], fill="black", width=2)
+    # dimension lines (mm) outside and one inside the living room, 0.45 m from its north wall
+    f_dim = font(12)
+
+    def dim_h(x0, x1, y, text):
+        d.line([p(x0, y), p(x1, y)], fill="black", width=1)
+        for x in (x0, x1):
+            c, r = p(x, y)
+            d.line([(c - 4, r + 4), (c + 4, r - 4)], fill="black", width=2)
+            d.line([(c, r - 10), (c, r + 6)], fill="black", width=1)
+        c, r = p((x0 + x1) / 2, y)
+        d.text((c, r - 3), text, font=f_dim, fill="black", anchor="mb")
+
+    def dim_v(x, y0, y1, text):
+        d.line([p(x, y0), p(x, y1)], fill="black", width=1)
+        for y in (y0, y1):
+            c, r = p(x, y)
+            d.line([(c - 4, r + 4), (c + 4, r - 4)], fill="black", width=2)
+            d.line([(c - 6, r), (c + 10, r)], fill="black", width=1)
+        label = Image.new("L", (60, 16), 0)
+        ImageDraw.Draw(label).text((30, 8), text, font=f_dim, fill=255, anchor="mm")
+        label = label.rotate(90, expand=True)
+        c, r = p(x, (y0 + y1) / 2)
+        im.paste((0, 0, 0), (c - 18, r - 30), label)
+
+    dim_h(-t, W + t, D + t + 0.9, f"{round((W + 2 * t) * 1000)}")
+    dim_h(0, 5.44, D + t + 0.45, "5440")
+    dim_h(5.56, W, D + t + 0.45, "4440")
+    dim_v(-t - 0.9, -t, D + t, f"{round((D + 2 * t) * 1000)}")
+    dim_h(0.0, 5.44, D - 0.45, "5440")
+    # room labels: name (bold) and area in m² below it
+    if labels:
+        f_name, f_area = font(18, bold=True), font(14)
+        for name, (x0, y0, x1, y1) in ROOMS.items():
+            c, r = p((x0 + x1) / 2, (y0 + y1) / 2)
+            d.text((c, r - 2), name, font=f_name, fill="black", anchor="mb")
+            d.text((c, r + 4), f"{room_area(name):.2f} m²".replace(".", ","), font=f_area, fill="black", anchor="mt")
+    # scale bar: 0-1-2-3-4-5 m, alternating blocks, under the plan
+    c0, r0 = p(0, -t - 1.6)
+    step = round(1.0 / PX)
+    for k in range(5):
+        d.rectangle([c0 + k * step, r0, c0 + (k + 1) * step - 1, r0 + 8], fill="black" if k % 2 == 0 else "white",
+                    outline="black")
+        d.text((c0 + k * step, r0 + 12), str(k), font=f_dim, fill="black", anchor="mt")
+    d.text((c0 + 5 * step, r0 + 12), "5 m", font=f_dim, fill="black", anchor="mt")
+    # north arrow
+    cx, cy = width - 90, 80
+    d.polygon([(cx, cy - 40), (cx - 14, cy + 10), (cx, cy), (cx + 14, cy + 10)], outline="black", fill="black")
+    d.text((cx, cy + 14), "N", font=font(16, bold=True), fill="black", anchor="mt")
+    # title block and sheet frame
+    d.rectangle([8, 8, width - 9, height - 9], outline="black", width=2)
+    tx0, ty0 = width - 380, height - title_h
+    d.rectangle([tx0, ty0, width - 9, height - 9], outline="black", width=2)
+    for k in (1, 2, 3):
+        y = ty0 + k * (title_h - 9) // 4
+        d.line([(tx0, y), (width - 9, y)], fill="black", width=1)
+    d.line([(tx0 + 150, ty0), (tx0 + 150, height - 9)], fill="black", width=1)
+    f_tb = font(13)
+    rows = [("Project", "Apartment 3B"), ("Drawing", "Floor plan"), ("Scale", "1:50"), ("Date", "2026-03-01")]
+    for k, (a, b) in enumerate(rows):
+        y = ty0 + k * (title_h - 9) // 4 + 8
+        d.text((tx0 + 8, y), a, font=f_tb, fill="black")
+        d.text((tx0 + 158, y), b, font=f_tb, fill="black")
+    a = np.asarray(im).astype(np.float64)
+    if noise:
+        rng = np.random.default_rng(seed)
+        a = a * 0.93 + 6 + rng.normal(0, noise, a.shape[:2])[..., None]  # slightly grey paper, noise
+    out = Image.fromarray(np.clip(a, 0, 255).astype(np.uint8))
+    path = Path(path)
+    if jpeg_quality:
+        out.save(path, quality=jpeg_quality)
+    else:
+        out.save(path)
+    return Sheet(path, (ox, oy), (width, height))
+
+
+def inside(sheet: Sheet, x: float, y: float) -> bool:
+    """True when (x, y) m of the importer's frame lies inside the apartment's clear area:
+    the importer puts pixel (c, r) at x = (c + 0.5) s, y = (H - r - 0.5) s."""
+    c = x / PX - 0.5
+    r = sheet.size[1] - y / PX - 0.5
+    px, py = (c - sheet.origin[0]) * PX, (sheet.origin[1] - r) * PX
+    return -1e-6 <= px <= W and -1e-6 <= py <= D and not math.isnan(px)

@@ -1,0 +1,63 @@
+"""The real plan image of shared/data/plans (SOURCES.md section 5): three storey plans of a
+house side by side on one sheet at 32 px/m, walls drawn as outlines with a hatch (dashes
+in the basement), rooms in flat colours, labelled '1.4' in a circle and '14,43 m²'."""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path
+
+import pytest
+from shapely.geometry import Polygon
+
+from camplace.scene.importers import read_plan, read_storey_plans
+from tests.scene.test_image_plans import need_ocr
+
+HOUSE = Path(__file__).parents[2].parent / "shared" / "data" / "plans" / "TheHouseBuiltByProgrammer_plan.png"
+SCALE = 1 / 32  # m per pixel (SOURCES.md: 32 px/m ± 2 %)
+PRINTED = {"plan-1": 7, "plan-2": 8, "plan-3": 7}  # rooms printed on the basement, ground and upper floor
+NUMBERS = {f"{k}.{i}" for k, n in ((0, 7), (1, 8), (2, 7)) for i in range(1, n + 1)}
+# the ground and upper floor outline: the 10.7 m x 11.45 m block and the 1.35 m deep bay,
+# 6.44 m wide with 45° corners (10700 and 12800 from the dimension lines, the bay from the drawing)
+OUTLINE_M2 = 10.7 * 11.45 + 6.44 * 1.35 - 1.35 ** 2
+
+pytestmark = pytest.mark.skipif(not HOUSE.is_file(), reason=f"{HOUSE} is absent (shared/data/plans)")
+
+
+@pytest.fixture(scope="module")
+def storeys():
+    return {name: got for name, got, _ in read_storey_plans(HOUSE, scale=SCALE)}
+
+
+def test_three_plans_with_about_the_printed_rooms(storeys):
+    assert sorted(storeys) == ["plan-1", "plan-2", "plan-3"]
+    for name, got in storeys.items():
+        assert abs(len(got.scene["zones"]) - PRINTED[name]) <= 2, (name, [z["name"] for z in got.scene["zones"]])
+    assert sum(len(g.scene["zones"]) for g in storeys.values()) == pytest.approx(22, abs=3)
+
+
+def test_outline_and_footprint(storeys):
+    for name in ("plan-2", "plan-3"):
+        got = storeys[name]
+        row = next(s for s in got.storeys if s["name"] == name)
+        assert row["outline_m2"] == pytest.approx(OUTLINE_M2, rel=0.1), name
+        footprint = Polygon(got.scene["room"]["footprint"]).area
+        assert 0.75 * OUTLINE_M2 < footprint < OUTLINE_M2, (name, footprint)  # inside the 0.65 m outer walls
+
+
+def test_default_plan_and_what_was_dropped():
+    got = read_plan(HOUSE, scale=SCALE, ocr=False)
+    assert [s["name"] for s in got.storeys] == ["plan-1", "plan-2", "plan-3"]
+    chosen = [s["name"] for s in got.storeys if s["chosen"]]
+    assert len(chosen) == 1 and any("3 plans side by side" in n for n in got.notes)
+    assert got.skipped["marks off the plans (title block, legend, scale bar, key plan, text)"] > 0
+    assert got.used["scale"] == "0.03125 m/px (given)"
+
+
+def test_room_numbers_read_by_ocr(storeys):
+    need_ocr()
+    names = [z["name"] for g in storeys.values() for z in g.scene["zones"]]
+    digits = {n.replace(".", "") for n in NUMBERS}
+    read = [n for n in names if re.sub(r"\D", "", n) in digits]
+    assert len(read) >= 8, names  # 8 px digits in circles: Tesseract reads some, the dot is often lost
+    assert any("printed" in n for g in storeys.values() for n in g.notes)

@@ -1,0 +1,119 @@
+"""Plan images as they come (issue 25): a generated apartment sheet (hatched outer walls,
+solid inner walls, windows as white gaps, doors with swings, labels in a TTF font,
+dimension lines, scale bar, title block, sheet frame) gives its five rooms with their
+areas and names, the openings, and a grid-only run inside the footprint; a scan of it
+(grey paper, noise, JPEG) the same rooms; two plans side by side are two storeys."""
+
+from __future__ import annotations
+
+import os
+
+import numpy as np
+import pytest
+from shapely.geometry import Point, Polygon
+
+from camplace.core.errors import InputError
+from camplace.scene.importers import read_plan, read_storey_plans
+from tests.scene.image_drawings import PX, ROOMS, D, W, draw_apartment, room_area
+
+
+def need_ocr():
+    """Skip without Tesseract (pytesseract and the tesseract program), except on CI
+    (CI=true), where a missing OCR engine fails the test."""
+    from camplace.scene.importers.image_ocr import ocr_engine
+
+    engine, why = ocr_engine()
+    if engine is None:
+        if os.environ.get("CI") == "true":
+            pytest.fail(f"OCR is required on CI: {why}")
+        pytest.skip(f"no OCR: {why}")
+
+
+@pytest.fixture(scope="module")
+def apartment(tmp_path_factory):
+    sheet = draw_apartment(tmp_path_factory.mktemp("apt") / "apartment.png")
+    return sheet, read_plan(sheet.path, scale=PX)
+
+
+def _zones(got):
+    return {z["name"]: Polygon(z["polygon"]) for z in got.scene["zones"]}
+
+
+def test_five_rooms_with_their_areas(apartment):
+    _, got = apartment
+    areas = sorted(p.area for p in _zones(got).values())
+    assert areas == pytest.approx(sorted(room_area(n) for n in ROOMS), rel=0.1), areas
+    assert Polygon(got.scene["room"]["footprint"]).area == pytest.approx(W * D, rel=0.05)
+    assert len(got.storeys) == 1 and got.storeys[0]["chosen"]
+    assert got.storeys[0]["outline_m2"] == pytest.approx((W + 0.6) * (D + 0.6), rel=0.05)
+
+
+def test_openings_title_block_and_summary(apartment):
+    _, got = apartment
+    doors_and_plain_windows = 6 + 3  # five doors and the entrance; the south and east windows
+    assert len(got.openings) >= doors_and_plain_windows - 1, got.openings
+    assert all(Polygon(o).area < 2.0 for o in got.openings)
+    assert got.skipped["marks off the plans (title block, legend, scale bar, key plan, text)"] > 0
+    assert got.used["scale"].startswith(f"{PX:g} m/px") and "threshold" in got.used
+    walls = [Polygon(o["prism"]["polygon"]) for o in got.scene["obstacles"]]
+    assert sum(w.bounds[2] - w.bounds[0] > W for w in walls) >= 1  # the outer walls, not the title block
+    assert max(w.bounds[2] for w in walls) < (W + 6.0)  # nothing from the title block at the sheet's right
+
+
+def test_rooms_named_by_their_labels(apartment):
+    need_ocr()
+    _, got = apartment
+    zones = _zones(got)
+    assert set(zones) == set(ROOMS), sorted(zones)
+    for name, poly in zones.items():
+        assert poly.area == pytest.approx(room_area(name), rel=0.1), name
+    assert got.used["ocr"].startswith("tesseract") and "5 of 5 rooms named" in got.used["ocr"]
+    printed = [n for n in got.notes if "printed" in n]
+    assert len(printed) >= 4, got.notes  # '21,43 m²' read as an area, never as a name
+
+
+def test_without_ocr_rooms_are_numbered_with_a_note(apartment, monkeypatch):
+    import camplace.scene.importers.image as image
+
+    monkeypatch.setattr(image, "ocr_engine", lambda: (None, "pytesseract is not installed"))
+    got = read_plan(apartment[0].path, scale=PX)
+    assert sorted(_zones(got)) == [f"room-{k}" for k in range(1, 6)]
+    assert any("OCR not available" in n for n in got.notes)
+
+
+def test_a_noisy_jpeg_scan_gives_the_same_rooms(tmp_path):
+    sheet = draw_apartment(tmp_path / "scan.jpg", jpeg_quality=70, noise=8.0, seed=3)
+    got = read_plan(sheet.path, scale=PX, ocr=False)
+    areas = sorted(p.area for p in _zones(got).values())
+    assert areas == pytest.approx(sorted(room_area(n) for n in ROOMS), rel=0.1), areas
+
+
+def test_grid_only_run_puts_cameras_inside(apartment):
+    import camplace
+    from camplace.spec.loading import parse_scene
+
+    sheet, got = apartment
+    res = camplace.run(parse_scene(got.scene, str(sheet.path)), budget=4, solver="greedy")
+    pos = res.visibility.candidates.positions[res.placement.selected]
+    assert len(pos) == 4
+    assert not res.scene.occupancy.is_occupied(pos).any()
+    footprint = Polygon(got.scene["room"]["footprint"])
+    assert all(footprint.contains(Point(*p[:2])) for p in pos)
+
+
+def test_two_plans_side_by_side_are_two_storeys(tmp_path):
+    from PIL import Image
+
+    one = np.asarray(Image.open(draw_apartment(tmp_path / "a.png", labels=False).path))
+    sheet = tmp_path / "two.png"
+    Image.fromarray(np.concatenate([one, one[:, :700]], axis=1)).save(sheet)
+    got = read_plan(sheet, scale=PX, ocr=False)
+    assert [s["name"] for s in got.storeys] == ["plan-1", "plan-2"]
+    assert [len(s["rooms"]) for s in got.storeys] == [5, 5]
+    assert sum(s["chosen"] for s in got.storeys) == 1 and any("2 plans" in n for n in got.notes)
+    both = read_storey_plans(sheet, scale=PX, ocr=False)
+    assert [name for name, _, _ in both] == ["plan-1", "plan-2"]
+    second = read_plan(sheet, scale=PX, ocr=False, storey="plan-2")
+    assert second.storeys[1]["chosen"] and len(second.scene["zones"]) == 5
+    with pytest.raises(InputError, match="plan-1, plan-2"):
+        read_plan(sheet, scale=PX, ocr=False, storey="Level 3")
