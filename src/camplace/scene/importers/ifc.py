@@ -26,7 +26,8 @@ import shapely
 from camplace.core.errors import InputError
 from camplace.scene.importers import (UNITS_M, PlanImport, clean_polygons, plan_scene, prism_obstacles, room_zones,
                                       validated)
-from camplace.scene.importers.ifc_geometry import Element, element_shapes, plan_hull, plan_shape, z_bands
+from camplace.scene.importers.ifc_geometry import (Element, element_shapes, footprint_shapes, plan_hull, plan_shape,
+                                                   z_bands)
 from camplace.scene.importers.ifc_model import (Storey, Structure, length_scale, occupiable, open_model, room_labels,
                                                 structure, unit_words)
 from camplace.scene.importers.ifc_storey import (CEILINGS, FLOOR_MAKERS, FLOOR_TOL_M, WALLS, StoreyRooms,
@@ -36,6 +37,7 @@ OPTIONS = ("storey", "doors", "glass", "max_wall_gap")
 OCCLUDERS = ("IfcElement",)  # walls, slabs, columns, stairs, furniture, proxies, equipment... (IFC2X3 to IFC4X3)
 NOT_ELEMENTS = ("IfcFeatureElement", "IfcVirtualElement", "IfcElementComponent")  # openings, virtual, fasteners
 NOT_FLOORS = ("ROOF", "LANDING")  # slab types that are never a storey's floor
+STAY_DOWN = ("IfcFurnishingElement", "IfcDoor", "IfcWindow", "IfcCovering", "IfcDistributionElement")  # never reach up
 
 
 def _entities(model, classes) -> list:
@@ -154,19 +156,33 @@ class _Model:
     def shapes(self, entities: list, skipped: Counter) -> list[Element]:
         """The bodies of ``entities`` (units applied); those without one are counted in
         ``skipped`` (an aggregate whose parts have bodies is not)."""
-        got = [e.moved(0.0, self.factor) if self.factor != 1.0 else e for e in element_shapes(self.model, entities)]
+        got = element_shapes(self.model, entities)
         have = {e.eid for e in got}
+        flat = footprint_shapes(self.model, [e for e in entities if e.id() not in have and e.is_a("IfcSpace")])
+        got = [e.moved(0.0, self.factor) if self.factor != 1.0 else e for e in got + flat]
+        have |= {e.eid for e in flat}
         wholes = set(self.s.parent.values())
         for e in entities:
             if e.id() not in have and e.id() not in wholes:
                 skipped[f"no body: {e.is_a()}"] += 1
         return got
 
-    def with_floors(self, elements: list[Element]) -> None:
-        """A file without storeys: each stand-in storey's floor from its elements (floor_level)."""
-        if self.s.synthetic:
-            self.s.storeys = [replace(st, elevation=floor_level(
-                [e for e in elements if self.s.storey_key(e.eid) in (st.key, 0)])) for st in self.s.storeys]
+    def with_floors(self, elements: list[Element], spaces: bool = False) -> None:
+        """The floors the file does not say (a storey without placement or Elevation, a building
+        standing in for a storey): the lowest point of its spaces (``spaces``), else the level
+        its doors and walls stand on (floor_level); 0 when it has neither."""
+        s = self.s
+
+        def floor(st: Storey) -> float:
+            if st.elevation == st.elevation:
+                return st.elevation
+            own = [e for e in elements if s.storey_key(e.eid) in (st.key, 0 if s.synthetic else -1)]
+            if own:
+                return min(e.z_range[0] for e in own) if spaces else floor_level(own)
+            return float("nan") if spaces else 0.0
+
+        s.storeys = sorted([replace(st, elevation=floor(st)) for st in s.storeys],
+                           key=lambda st: (st.elevation != st.elevation, st.elevation))
 
 
 def import_storeys(path: str | Path, **options) -> list[tuple[str, dict]]:
@@ -187,12 +203,19 @@ def read_storeys(path: str | Path, *, storey: str | None = None, doors: str = "o
     m = _Model(p, units)
     s, skipped = m.s, Counter()
     spaces = m.shapes(list(m.model.by_type("IfcSpace")), skipped)
+    m.with_floors(spaces, spaces=True)
     rooms, where, labels = _storey_rooms(m.model, s, spaces)
     chosen, why = choose_storeys(s, rooms, storey, p)
-    near = {k for st in chosen for k in (st.key, getattr(s.below(st), "key", None)) if k is not None} | {0}
-    above = {s.above(st).key for st in chosen if s.above(st) is not None}
-    ents = [e for e in _occluder_entities(m.model) if s.synthetic or s.storey_key(e.id()) in near
-            or (s.storey_key(e.id()) in above and e.is_a() in CEILINGS)]
+    own = {st.key for st in chosen} | {0}
+    below = {s.below(st).key for st in chosen if s.below(st) is not None} - own
+    above = {s.above(st).key for st in chosen if s.above(st) is not None} - own
+
+    def wanted(e) -> bool:  # its own storey's; what may reach up from the one below; the ceilings above
+        key = s.storey_key(e.id())
+        return (s.synthetic or key in own or key in below and not any(e.is_a(c) for c in STAY_DOWN)
+                or key in above and e.is_a() in CEILINGS)
+
+    ents = [e for e in _occluder_entities(m.model) if wanted(e)]
     elements = m.shapes(ents, skipped)
     m.with_floors(elements)
     chosen = [next(x for x in s.storeys if x.key == st.key) for st in chosen]
@@ -248,8 +271,9 @@ def _storey(m: _Model, st: Storey, spaces: list[Element], elements: list[Element
     got = PlanImport(validated(data, f"{p} (storey '{st.name}')"), "ifc")
     got.skipped = Counter({k: v for k, v in skipped.items() if v})
     got.openings = _openings(mine, floor, top)
-    got.notes = [opts["why"]] + ([f"the building's floor is taken at z = {floor:.2f} m (where most of its doors and "
-                                  "walls stand); elements below it (footings) are left out"] if s.synthetic else [])
+    got.notes = [opts["why"]] + ([f"the file gives '{st.name}' no elevation: its floor is taken at z = {floor:.2f} m "
+                                  "(the lowest point of its spaces, else where most of its doors and walls stand); "
+                                  "elements below it (footings) are left out"] if st.level == "geometry" else [])
     if fp.pieces > 1:
         got.notes.append(f"the rooms form {fp.pieces} separate pieces (blocks, or rooms parted by walls thicker than "
                          f"{opts['gap']:g} m): joined by {fp.pieces - 1} thin seam(s) filled by 'outside' obstacles "
@@ -273,8 +297,10 @@ def _storey(m: _Model, st: Storey, spaces: list[Element], elements: list[Element
 def storey_elevations(path: str | Path, units: str | None = None) -> dict[str, float]:
     """Storey name -> floor elevation (m; ``units`` overrides the file's length unit)."""
     m = _Model(Path(path), units)
-    if m.s.synthetic:
-        m.with_floors(m.shapes(_entities(m.model, [c for cs in FLOOR_MAKERS for c in cs]), Counter()))
+    if any(st.elevation != st.elevation for st in m.s.storeys):
+        m.with_floors(m.shapes(list(m.model.by_type("IfcSpace")), Counter()), spaces=True)
+        m.with_floors(m.shapes(list({e.id(): e for e in _entities(m.model, [c for cs in FLOOR_MAKERS for c in cs])
+                                     }.values()), Counter()))
     return {st.name: st.elevation for st in m.s.storeys}
 
 

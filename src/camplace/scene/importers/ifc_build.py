@@ -64,6 +64,7 @@ class _Writer:
         from ifcopenshell import api
 
         self.api = api
+        self.scale = 0.001 if unit == "mm" else 1.0  # metres per file unit
         self.m = api.project.create_file(version="IFC4")
         proj = self.entity("IfcProject", "camplace grid building")
         api.unit.assign_unit(self.m, units=[api.unit.add_si_unit(self.m, unit_type="LENGTHUNIT",
@@ -82,9 +83,11 @@ class _Writer:
             setattr(e, k, v)
         return e
 
-    def storey(self, name: str, elevation: float, scale: float):
-        st = self.entity("IfcBuildingStorey", name, Elevation=elevation / scale)
-        self.place(st, np.array([0.0, 0.0, elevation]))
+    def storey(self, name: str, elevation: float, scale: float, level: bool = True):
+        """A storey of the building; ``level=False``: without Elevation and placement."""
+        st = self.entity("IfcBuildingStorey", name, Elevation=elevation / scale if level else None)
+        if level:
+            self.place(st, np.array([0.0, 0.0, elevation]))
         self.api.aggregate.assign_object(self.m, products=[st], relating_object=self.building)
         return st
 
@@ -103,6 +106,21 @@ class _Writer:
         self.place(e, np.asarray(lo, float))
         if storey is not None:
             self.api.spatial.assign_container(self.m, products=[e], relating_structure=storey)
+        return e
+
+    def footprint_space(self, name: str, lo: np.ndarray, hi: np.ndarray, **attrs):
+        """An IfcSpace with no body, only a FootPrint curve: the rectangle lo..hi (m, world) at lo's z."""
+        e = self.entity("IfcSpace", name, **attrs)
+        ctx = next((c for c in self.m.by_type("IfcGeometricRepresentationSubContext")
+                    if c.ContextIdentifier == "FootPrint"), None) or self.api.context.add_context(
+            self.m, context_type="Model", context_identifier="FootPrint", target_view="SKETCH_VIEW",
+            parent=self.body.ParentContext)
+        w, d = (np.asarray(hi, float) - np.asarray(lo, float))[:2] / self.scale
+        ring = [(0.0, 0.0), (w, 0.0), (w, d), (0.0, d), (0.0, 0.0)]
+        curve = self.m.createIfcPolyline([self.m.createIfcCartesianPoint(p) for p in ring])
+        rep = self.m.createIfcShapeRepresentation(ctx, "FootPrint", "Curve2D", [self.m.createIfcGeometricCurveSet([curve])])
+        self.api.geometry.assign_representation(self.m, product=e, representation=rep)
+        self.place(e, np.asarray(lo, float))
         return e
 
     def hole(self, wall, cls: str, name: str, lo: np.ndarray, hi: np.ndarray, storey) -> None:
@@ -141,17 +159,22 @@ def _door_box(axis: str, lo: np.ndarray, hi: np.ndarray, b: GridBuilding) -> tup
 
 
 def write_grid_building(path: str | Path, b: GridBuilding = GridBuilding(), unit: str = "m",
-                        roof_storey: bool = True, floors: tuple[str, ...] = ("Ground Floor",)) -> Path:
+                        roof_storey: bool = True, floors: tuple[str, ...] = ("Ground Floor",), *,
+                        spaces_in: str = "storey", space_body: str = "body", storey_levels: bool = True) -> Path:
     """Write the grid building as IFC4 (lengths in ``unit``: 'mm' or 'm'): one storey per
     name in ``floors`` (the first at z = 0, each b.height + b.slab above the last), each
     with the rooms (IfcSpace, LongName), walls, doors and the window on a floor slab;
-    with ``roof_storey`` a storey 'Roof' at the slab above the top floor."""
+    with ``roof_storey`` a storey 'Roof' at the slab above the top floor. The ways real
+    files differ: ``spaces_in='building'`` aggregates the spaces to the building, not their
+    storey; ``space_body='footprint'`` gives them only a FootPrint curve, no body;
+    ``storey_levels=False`` writes the storeys without Elevation and placement."""
     wr = _Writer(unit)
     scale = 0.001 if unit == "mm" else 1.0
     W, D = b.nx * b.room[0], b.ny * b.room[1]
     t = b.wall
     for n, floor in enumerate(floors):
-        _floor(wr, b, wr.storey(floor, n * (b.height + b.slab), scale), n * (b.height + b.slab), n)
+        st = wr.storey(floor, n * (b.height + b.slab), scale, storey_levels)
+        _floor(wr, b, st, n * (b.height + b.slab), n, wr.building if spaces_in == "building" else st, space_body)
     if roof_storey:
         top = (len(floors) - 1) * (b.height + b.slab) + b.height
         roof = wr.storey("Roof", top, scale)
@@ -160,8 +183,9 @@ def write_grid_building(path: str | Path, b: GridBuilding = GridBuilding(), unit
     return atomic_write_text(Path(path), wr.m.to_string())
 
 
-def _floor(wr: _Writer, b: GridBuilding, storey, z0: float, n: int) -> None:
-    """One storey's floor slab, spaces, walls, doors and window, lifted by z0 m."""
+def _floor(wr: _Writer, b: GridBuilding, storey, z0: float, n: int, space_parent, space_body: str) -> None:
+    """One storey's floor slab, spaces (aggregated to ``space_parent``; with a body, or only a
+    'footprint'), walls, doors and window, lifted by z0 m."""
     up = np.array([0.0, 0.0, z0])
     W, D = b.nx * b.room[0], b.ny * b.room[1]
     t = b.wall
@@ -169,8 +193,10 @@ def _floor(wr: _Writer, b: GridBuilding, storey, z0: float, n: int) -> None:
     wr.box("IfcSlab", f"{tag}Floor slab", np.array([-t / 2, -t / 2, z0 - b.slab]),
            np.array([W + t / 2, D + t / 2, z0]), storey)
     for k, (lo, hi) in enumerate(b.space_boxes()):
-        sp = wr.box("IfcSpace", f"{tag}R{k + 1:02d}", lo + up, hi + up, LongName=b.name(k))
-        wr.api.aggregate.assign_object(wr.m, products=[sp], relating_object=storey)
+        name = f"{tag}R{k + 1:02d}"
+        sp = (wr.box("IfcSpace", name, lo + up, hi + up, LongName=b.name(k)) if space_body == "body"
+              else wr.footprint_space(name, lo + up, hi + up, LongName=b.name(k)))
+        wr.api.aggregate.assign_object(wr.m, products=[sp], relating_object=space_parent)
     for k, (axis, lo, hi) in enumerate(_walls(b)):
         wall = wr.box("IfcWall", f"{tag}Wall {k + 1}", lo + up, hi + up, storey)
         a = 1 if axis == "x" else 0  # the coordinate across the wall

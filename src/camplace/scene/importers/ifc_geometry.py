@@ -54,30 +54,65 @@ def _iterator(settings, model, elements: list):
         return ifcopenshell.geom.iterator(settings, model, 1, include=elements)
 
 
+def _shapes(model, elements: list, curves: bool = False):
+    """(iterator shape, (V, 3) world vertices in m) of each of ``elements`` that has a body
+    (``curves``: a plan curve instead, such as a space's FootPrint)."""
+    import ifcopenshell.geom
+
+    if not elements:
+        return
+    settings = ifcopenshell.geom.settings()
+    settings.set("use-world-coords", True)
+    if curves:
+        settings.set("dimensionality", 2)  # curves only
+    it = _iterator(settings, model, elements)
+    if not it.initialize():
+        return
+    while True:
+        sh = it.get()
+        yield sh, np.asarray(sh.geometry.verts, float).reshape(-1, 3)
+        if not it.next():
+            break
+
+
 def element_shapes(model, elements: list) -> list[Element]:
     """The triangulated bodies of ``elements`` (entity instances of ``model``) in world
     coordinates (metres, whatever the file's units), in file order; elements without a
     body are left out. Openings are cut from their hosts (walls get their door and window
     holes). One thread: the iterator's threads made it slower on 2 cores (docs/plans.md)."""
-    import ifcopenshell.geom
-
-    if not elements:
-        return []
-    settings = ifcopenshell.geom.settings()
-    settings.set("use-world-coords", True)
-    it = _iterator(settings, model, elements)
-    out: list[Element] = []
-    if not it.initialize():
-        return []
-    while True:
-        sh = it.get()
-        v = np.asarray(sh.geometry.verts, float).reshape(-1, 3)
+    out = []
+    for sh, v in _shapes(model, elements):
         f = np.asarray(sh.geometry.faces, np.int64).reshape(-1, 3)
         if len(f):
             out.append(Element(sh.guid, sh.type, sh.name or "", v, f, int(sh.id)))
-        if not it.next():
-            break
     return sorted(out, key=lambda e: e.eid)
+
+
+def footprint_shapes(model, elements: list) -> list[Element]:
+    """Flat stand-ins (m, world) for elements without a body, such as an IfcSpace with only a
+    FootPrint: their plan curves polygonised (even-odd) and triangulated at their height."""
+    out = []
+    for sh, v in _shapes(model, elements, curves=True):
+        edges = np.asarray(sh.geometry.edges, np.int64).reshape(-1, 2)
+        shape = _even_odd(v[edges][:, :, :2]) if len(edges) else Polygon()
+        if shape.is_empty:
+            continue
+        tri = np.array([np.asarray(t.exterior.coords)[:3] for t in shapely.get_parts(
+            shapely.constrained_delaunay_triangles(shape)) if t.within(shape.buffer(1e-6))])
+        if len(tri):
+            verts = np.concatenate([tri.reshape(-1, 2), np.full((tri.size // 2, 1), v[:, 2].min())], axis=1)
+            out.append(Element(sh.guid, sh.type, sh.name or "", verts, np.arange(len(verts)).reshape(-1, 3),
+                               int(sh.id)))
+    return sorted(out, key=lambda e: e.eid)
+
+
+def _even_odd(segments: np.ndarray):
+    """The region (shapely) that closed outlines of (S, 2, 2) xy segments enclose, even-odd filled."""
+    lines = shapely.linestrings(np.round(segments, 6))
+    out = Polygon()
+    for f in polygons_of(shapely.polygonize(list(shapely.get_parts(shapely.union_all(lines))))):
+        out = out.symmetric_difference(f)
+    return out
 
 
 def plan_shape(el: Element, zmin: float = -np.inf, zmax: float = np.inf, min_nz: float = 0.1):
@@ -127,14 +162,7 @@ def section(el: Element, z: float):
     """The element's cross-section at height z (shapely): the closed outlines cut by the
     plane z, even-odd filled (holes stay holes); empty for an open surface."""
     seg = plane_segments(el, z)
-    if len(seg) == 0:
-        return Polygon()
-    lines = shapely.linestrings(np.round(seg, 6))
-    faces = polygons_of(shapely.polygonize(list(shapely.get_parts(shapely.union_all(lines)))))
-    out = Polygon()
-    for f in faces:
-        out = out.symmetric_difference(f)
-    return out
+    return _even_odd(seg) if len(seg) else Polygon()
 
 
 def z_bands(el: Element, zmin: float = -np.inf, zmax: float = np.inf, tol: float = 1e-3

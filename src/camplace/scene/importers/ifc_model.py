@@ -30,7 +30,8 @@ class Storey:
     """A storey to plan: ``name`` (unique in the file), ``elevation`` (m, world z of its
     floor), ``key`` (entity id of the IfcBuildingStorey, or of the IfcBuilding standing in
     for one; 0 for a file without either), ``building`` (entity id, 0: none), ``level``:
-    where the elevation came from ('placement', 'Elevation', 'geometry', 'none')."""
+    where the elevation came from ('placement', 'Elevation', or 'geometry': nan until its spaces
+    or elements say it)."""
 
     name: str
     elevation: float
@@ -180,8 +181,9 @@ def _unique(names: list[str], suffixes: list[str]) -> list[str]:
 def structure(model, scale: float) -> Structure:
     """The model's storeys and element -> storey map (elevations in m: the storey's placement z,
     world, like the geometry; its Elevation attribute where placements are missing or all
-    equal while the attributes differ). A file without IfcBuildingStorey: one storey per
-    IfcBuilding (one for the file without one), its elevation left to the geometry (nan)."""
+    equal while the attributes differ; neither: nan, left to the geometry). A file without
+    IfcBuildingStorey: one storey per IfcBuilding (one for the file without one), its
+    elevation left to the geometry."""
     parent = _parents(model)
     buildings = {b.id(): (b.Name or b.LongName or "building") for b in model.by_type("IfcBuilding")}
     ents = list(model.by_type("IfcBuildingStorey"))
@@ -198,12 +200,12 @@ def structure(model, scale: float) -> Structure:
     for s, z, a in zip(ents, placed, attrs):
         level, elev = ("placement", z) if not use_attr and z is not None else ("Elevation", a)
         if elev is None:
-            level, elev = ("placement", z) if z is not None else ("none", 0.0)
+            level, elev = ("placement", z) if z is not None else ("geometry", float("nan"))
         sts.append(Storey(s.Name or s.LongName or f"storey #{s.id()}", float(elev), s.id(),
                           _building_of(s.id(), parent, set(buildings)), level))
     labels = _unique([s.name for s in sts], [buildings.get(s.building, "") for s in sts])
     sts = [replace(s, name=n) for s, n in zip(sts, labels)]
-    return Structure(sorted(sts, key=lambda s: s.elevation), parent, False, buildings)
+    return Structure(sorted(sts, key=lambda s: (s.elevation != s.elevation, s.elevation)), parent, False, buildings)
 
 
 def is_external(space) -> bool:

@@ -10,7 +10,7 @@ from collections import Counter
 from dataclasses import dataclass
 
 import shapely
-from shapely.geometry import LineString, Polygon
+from shapely.geometry import Polygon
 
 from camplace.core.errors import InputError
 from camplace.scene.importers import DEFAULT_CEILING_M, footprint_of, polygons_of, walls_outline
@@ -121,7 +121,7 @@ def ceiling_of(floor: float, nxt: float | None, ceilings: list[Element], spaces:
             return min(e.z_range[0] for e in els) - floor, f"{els[0].ifc_class} underside"
     if nxt is not None:
         return nxt - floor, "next storey's elevation"
-    if spaces:
+    if spaces and max(e.z_range[1] for e in spaces) - floor >= MIN_CEILING_M:
         return max(e.z_range[1] for e in spaces) - floor, "top of the spaces"
     tops = Counter(round(e.z_range[1] - floor, 2) for e in walls if e.z_range[1] - floor >= MIN_CEILING_M)
     if tops:
@@ -142,17 +142,16 @@ def _pieces(parts: list, gap: float) -> list[Polygon]:
 def join_pieces(pieces: list[Polygon], width: float = SEAM_M) -> tuple[Polygon, object]:
     """One simple polygon over separate ``pieces`` (largest first) and the seams (shapely)
     added to join them: each piece in turn is joined to the nearest one already joined by
-    a strip ``width`` m wide along the shortest line between them."""
+    a strip ``width`` m wide along the shortest line between them (``width`` inside both,
+    so that the strip enters them clear of their corners)."""
     joined, seams, rest = pieces[0], [], list(pieces[1:])
     while rest:
         k = min(range(len(rest)), key=lambda i: joined.distance(rest[i]))
         piece = rest.pop(k)
-        (x0, y0), (x1, y1) = shapely.shortest_line(joined, piece).coords
-        d = ((x1 - x0) ** 2 + (y1 - y0) ** 2) ** 0.5
-        if d > 1e-9:
-            ux, uy = (x1 - x0) / d * width, (y1 - y0) / d * width  # reach `width` into both pieces
-            seam = LineString([(x0 - ux, y0 - uy), (x1 + ux, y1 + uy)]).buffer(width / 2, cap_style="flat")
-            seams.append(seam)
+        inner = joined.buffer(-width), piece.buffer(-width)  # from `width` inside both: clear of their corners
+        ends = shapely.shortest_line(*(inner if not (inner[0].is_empty or inner[1].is_empty) else (joined, piece)))
+        if ends.length > 1e-9:
+            seams.append(ends.buffer(width / 2, cap_style="flat"))
         joined = shapely.union_all([joined, piece] + seams[-1:])
         joined = max(polygons_of(shapely.make_valid(joined)), key=lambda q: q.area)
     union = shapely.union_all(pieces)

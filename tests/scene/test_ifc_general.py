@@ -1,0 +1,62 @@
+"""The IFC importer on the ways real files differ from the tidy case (issue 25), each on a
+small two-storey building written with ifcopenshell.api: spaces aggregated to the building
+instead of their storey and with only a FootPrint curve (no body), storeys without
+Elevation or placement, a length-unit override; and the pieces of the footprint rule
+(separate blocks joined by seams)."""
+
+from __future__ import annotations
+
+import pytest
+from shapely.geometry import Polygon, box
+
+pytest.importorskip("ifcopenshell")
+
+from camplace.scene.importers import read_plan, read_storey_plans  # noqa: E402
+from camplace.scene.importers.ifc_build import GridBuilding, write_grid_building  # noqa: E402
+from camplace.scene.importers.ifc_storey import join_pieces  # noqa: E402
+from camplace.spec.loading import parse_scene  # noqa: E402
+
+B = GridBuilding(names=("Office", "Lab"))
+FLOORS = ("Ground Floor", "First Floor")
+UP = B.height + B.slab  # the first floor's elevation
+
+
+def _check(path, **options):
+    """Both floors with storey 'all': names, elevations, rooms and footprint as the tidy file's."""
+    got = read_storey_plans(path, **options)
+    assert [(n, e) for n, _, e in got] == [("Ground Floor", 0.0), ("First Floor", pytest.approx(UP))]
+    for name, g, _ in got:
+        parse_scene(g.scene, name)
+        assert [z["name"] for z in g.scene["zones"]] == ["Office", "Lab"], name
+        assert Polygon(g.scene["room"]["footprint"]).area == pytest.approx(B.clear_area(), rel=0.01), name
+        assert g.scene["room"]["height"] == pytest.approx(B.height), name
+    return got
+
+
+def test_spaces_in_the_building_with_only_a_footprint_curve(tmp_path):
+    path = write_grid_building(tmp_path / "b.ifc", B, unit="mm", floors=FLOORS, spaces_in="building",
+                               space_body="footprint")
+    _check(path)
+
+
+def test_storeys_without_elevation_take_their_spaces_level(tmp_path):
+    got = _check(write_grid_building(tmp_path / "b.ifc", B, floors=FLOORS, storey_levels=False))
+    assert any("no elevation" in note for note in got[1][1].notes)
+
+
+def test_units_override_scales_the_building(tmp_path):
+    path = write_grid_building(tmp_path / "b.ifc", B, unit="mm")
+    g = read_plan(path, units="cm")  # a file wrongly saying mm: 10 x the size
+    rooms = [Polygon(z["polygon"]).area for z in g.scene["zones"]]
+    assert rooms == pytest.approx([100 * 4.8 * 3.8] * 2, rel=0.01)  # the 2 m wall between them: two pieces
+    assert g.scene["room"]["height"] == pytest.approx(10 * B.height)
+    assert g.used["units"].startswith("cm (units option")
+
+
+def test_separate_blocks_join_into_one_simple_polygon_with_a_thin_seam():
+    a, b = box(0, 0, 4, 4), box(7, 1, 10, 3)
+    outline, seam = join_pieces([a, b], width=0.1)
+    assert outline.is_valid and not outline.interiors and outline.contains(a) and outline.contains(b)
+    assert seam.area == pytest.approx(3 * 0.1, rel=0.01)  # 3 m between the blocks, 0.1 m wide
+    assert outline.area == pytest.approx(a.area + b.area + seam.area, rel=1e-3)
+    assert seam.intersection(a).area < 1e-9 and seam.intersection(b).area < 1e-9
