@@ -66,7 +66,8 @@ def main() -> None:
             data = got.scene
             label = storey or f"default ({got.used['storey'].split(' (')[0]})"
             rooms = len(data["zones"]) if got.used["rooms"][0].isdigit() else 0
-            print(f"| {name} | {label} | {t:.2f} | {cpu:.2f} | {Polygon(data['room']['footprint']).area:.1f} | {rooms} | "
+            area = Polygon(data["room"]["footprint"]).area
+            print(f"| {name} | {label} | {t:.2f} | {cpu:.2f} | {area:.1f} | {rooms} | "
                   f"{len(data['obstacles'])} |")
         if args.cli:
             with tempfile.TemporaryDirectory() as tmp:

@@ -41,7 +41,7 @@ def test_spaces_in_the_building_with_only_a_footprint_curve(tmp_path):
 
 def test_storeys_without_elevation_take_their_spaces_level(tmp_path):
     got = _check(write_grid_building(tmp_path / "b.ifc", B, floors=FLOORS, storey_levels=False))
-    assert any("no elevation" in note for note in got[1][1].notes)
+    assert any("no floor level" in note and "lowest point of its spaces" in note for note in got[1][1].notes)
 
 
 def test_units_override_scales_the_building(tmp_path):

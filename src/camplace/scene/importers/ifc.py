@@ -173,16 +173,17 @@ class _Model:
         its doors and walls stand on (floor_level); 0 when it has neither."""
         s = self.s
 
-        def floor(st: Storey) -> float:
+        def floor(st: Storey) -> Storey:
             if st.elevation == st.elevation:
-                return st.elevation
+                return st
             own = [e for e in elements if s.storey_key(e.eid) in (st.key, 0 if s.synthetic else -1)]
+            if own and spaces:
+                return replace(st, elevation=min(e.z_range[0] for e in own), level="lowest space")
             if own:
-                return min(e.z_range[0] for e in own) if spaces else floor_level(own)
-            return float("nan") if spaces else 0.0
+                return replace(st, elevation=floor_level(own), level="doors and walls")
+            return st if spaces else replace(st, elevation=0.0, level="nothing: 0")
 
-        s.storeys = sorted([replace(st, elevation=floor(st)) for st in s.storeys],
-                           key=lambda st: (st.elevation != st.elevation, st.elevation))
+        s.storeys = sorted([floor(st) for st in s.storeys], key=lambda st: (st.elevation != st.elevation, st.elevation))
 
 
 def import_storeys(path: str | Path, **options) -> list[tuple[str, dict]]:
@@ -271,9 +272,11 @@ def _storey(m: _Model, st: Storey, spaces: list[Element], elements: list[Element
     got = PlanImport(validated(data, f"{p} (storey '{st.name}')"), "ifc")
     got.skipped = Counter({k: v for k, v in skipped.items() if v})
     got.openings = _openings(mine, floor, top)
-    got.notes = [opts["why"]] + ([f"the file gives '{st.name}' no elevation: its floor is taken at z = {floor:.2f} m "
-                                  "(the lowest point of its spaces, else where most of its doors and walls stand); "
-                                  "elements below it (footings) are left out"] if st.level == "geometry" else [])
+    said = {"lowest space": "the lowest point of its spaces", "doors and walls": "where most of its doors and walls "
+            "stand", "nothing: 0": "it has no spaces, doors or walls to say it"}
+    got.notes = [opts["why"]] + ([f"the file gives '{st.name}' no floor level: taken at z = {floor:.2f} m "
+                                  f"({said[st.level]}); elements below it (footings) are left out"]
+                                 if st.level in said else [])
     if fp.pieces > 1:
         got.notes.append(f"the rooms form {fp.pieces} separate pieces (blocks, or rooms parted by walls thicker than "
                          f"{opts['gap']:g} m): joined by {fp.pieces - 1} thin seam(s) filled by 'outside' obstacles "
@@ -282,7 +285,8 @@ def _storey(m: _Model, st: Storey, spaces: list[Element], elements: list[Element
     n_glass = sum(e.ifc_class == "IfcWindow" for e in mine if min(e.z_range[1], top) - max(e.z_range[0], floor) > 0.01)
     got.used = {
         "units": m.units,
-        "storey": f"{st.name} (floor at {floor:+.2f} m from its {st.level}; {len(inside)} room{'s' * (len(inside) != 1)})",
+        "storey": f"{st.name} (floor at {floor:+.2f} m, from its {st.level}; "
+                  f"{len(inside)} room{'s' * (len(inside) != 1)})",
         "ceiling": f"{height:.2f} m ({h_from})",
         "footprint": f"{fp.polygon.area:.1f} m² from {fp.how}",
         "rooms": (f"{len(inside)} IfcSpace, zones named by LongName (else Name)" if inside else

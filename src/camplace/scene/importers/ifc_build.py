@@ -118,7 +118,8 @@ class _Writer:
         w, d = (np.asarray(hi, float) - np.asarray(lo, float))[:2] / self.scale
         ring = [(0.0, 0.0), (w, 0.0), (w, d), (0.0, d), (0.0, 0.0)]
         curve = self.m.createIfcPolyline([self.m.createIfcCartesianPoint(p) for p in ring])
-        rep = self.m.createIfcShapeRepresentation(ctx, "FootPrint", "Curve2D", [self.m.createIfcGeometricCurveSet([curve])])
+        curves = self.m.createIfcGeometricCurveSet([curve])
+        rep = self.m.createIfcShapeRepresentation(ctx, "FootPrint", "Curve2D", [curves])
         self.api.geometry.assign_representation(self.m, product=e, representation=rep)
         self.place(e, np.asarray(lo, float))
         return e

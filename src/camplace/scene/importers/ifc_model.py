@@ -30,8 +30,8 @@ class Storey:
     """A storey to plan: ``name`` (unique in the file), ``elevation`` (m, world z of its
     floor), ``key`` (entity id of the IfcBuildingStorey, or of the IfcBuilding standing in
     for one; 0 for a file without either), ``building`` (entity id, 0: none), ``level``:
-    where the elevation came from ('placement', 'Elevation', or 'geometry': nan until its spaces
-    or elements say it)."""
+    where the elevation came from ('placement', 'Elevation'; 'geometry' while nan, until its
+    spaces ('lowest space') or its doors and walls ('doors and walls') say it)."""
 
     name: str
     elevation: float
