@@ -20,6 +20,7 @@ from camplace.scene.importers.image_walls import EIGHT
 
 OCR_HEIGHT_PX = 32  # character height Tesseract reads best (lines are scaled up to it, at most 4x)
 MIN_CONF = 50  # Tesseract word confidence (0..100) below which a word is not used
+WORD_CONF = 70  # ... and below which it does not name a room (numbers need MIN_CONF)
 AREA_RE = re.compile(r"^(\d{1,4})(?:[.,]\s?|\s)(\d{1,2})(?:\s*([mм]2|[mм][^\s\d]{0,3}|sq\.?\s*m|sqm|qm|[^\s\d]{1,3}))?$",
                      re.IGNORECASE)
 UNITS = {"m", "mm", "cm", "m2", "m²", "м", "м2", "м²", "sqm", "qm"}
@@ -73,12 +74,17 @@ def text_lines_mask(ink: np.ndarray) -> tuple[np.ndarray, int, float]:
     char = (h <= 2 * hc) & (w <= 3 * hc)
     frames = np.flatnonzero(char & (h >= 1.3 * hc))  # circles and boxes around text
     small = np.flatnonzero(char & (h < 1.3 * hc))
+    text = np.r_[False, char][lab]
     if len(frames) and len(small):
         cy, cx = (r0[small] + r1[small]) / 2, (c0[small] + c1[small]) / 2
         holds = ((cy[None] > r0[frames, None]) & (cy[None] < r1[frames, None]) & (cx[None] > c0[frames, None])
                  & (cx[None] < c1[frames, None])).any(axis=1)
-        char[frames[holds]] = False
-    text = np.r_[False, char][lab]
+        for f in frames[holds]:  # the ring goes, the digits touching it inside stay
+            b = (slice(r0[f], r1[f]), slice(c0[f], c1[f]))
+            rr, cc = np.ogrid[r0[f]:r1[f], c0[f]:c1[f]]
+            ring = np.hypot((rr - (r0[f] + r1[f] - 1) / 2) / (r1[f] - r0[f]),
+                            (cc - (c0[f] + c1[f] - 1) / 2) / (c1[f] - c0[f])) >= 0.36
+            text[b] &= ~((lab[b] == f + 1) & ring)
     joined = ndimage.maximum_filter(text.astype(np.uint8), size=(max(1, int(hc // 4)), max(3, int(hc))))
     lines, m = ndimage.label(joined, EIGHT)
     return np.where(text, lines, 0), m, hc
@@ -131,13 +137,13 @@ def read_lines(engine, dark: np.ndarray, lines: np.ndarray, wanted: list[int], h
 
 
 def _on_dimension_line(ink: np.ndarray, b: tuple[slice, slice], hc: float) -> bool:
-    """True when a row of ink just below or above the text box ``b`` runs past both its
-    ends (a dimension line, or an underline)."""
+    """True when a row of ink just below or above the text box ``b`` runs along most of
+    it (a dimension line, or an underline)."""
     reach = max(2, int(hc * 0.6))
     c0, c1 = max(0, b[1].start - 2), min(ink.shape[1], b[1].stop + 2)
     for r0, r1 in ((b[0].stop, b[0].stop + reach), (b[0].start - reach, b[0].start)):
         rows = ink[max(0, r0):max(0, r1), c0:c1]
-        if rows.size and rows.all(axis=1).any():
+        if rows.size and (rows.mean(axis=1) >= 0.8).any():
             return True
     return False
 
@@ -169,7 +175,7 @@ def room_name(lines: list[TextLine], hc: float) -> tuple[str | None, float | Non
         elif NUMBER_RE.match(text):
             if not ln.dimension and not re.fullmatch(r"\d{4,}", text):
                 numbers.append((not re.search(r"\D", text), -ln.height, -ln.conf, text))
-        elif sum(ch.isalpha() for ch in text) >= 3:
+        elif sum(ch.isalpha() for ch in text) >= 3 and ln.conf >= WORD_CONF:
             words.append((-ln.height, -ln.conf, text))
     pick = sorted(words) or sorted(numbers)
     return (pick[0][-1] if pick else None), area

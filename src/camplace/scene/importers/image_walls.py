@@ -101,8 +101,9 @@ def solid_walls(ink: np.ndarray, s: float, hatch_m: float, min_wall_m: float, ma
     across: wall outlines with their hatch, dimension lines) bound the paper; paper is the
     inside of a wall where it is narrow (at most ``hatch_m`` wide: a hatch cell, the strip
     between the two lines of a thin wall) or in a strip no wider than ``max_wall_m``
-    holding marks (a hatch of dashes or dots, ≥ 8 % ink) and long (not the disc inside the
-    circle around a room number). Those fill in; rooms, the strips
+    holding marks (a hatch of dashes, ≥ 8 % ink, drawn slanted: more diagonal than
+    upright neighbours, unlike text) and long (not the disc inside the circle around a
+    room number). Those fill in; rooms, the strips
     between a wall and a dimension line and the text in them do not. Broad filled
     areas that were mostly paper (stair treads) are given back, then strokes thinner
     than ``min_wall_m`` (text, dimension lines, door swings) are opened away."""
@@ -119,8 +120,12 @@ def solid_walls(ink: np.ndarray, s: float, hatch_m: float, min_wall_m: float, ma
     if nb:  # a strip along a wall, not a disc (the circle around a room number)
         bidx = np.arange(1, nb + 1)
         width = ndimage.maximum(ndimage.distance_transform_edt(bands), blab, bidx)
-        marked[1:] = (ndimage.mean(ink & free, blab, bidx) >= 0.08) & (
-            np.bincount(blab.ravel(), minlength=nb + 1)[1:] >= 8 * width ** 2)
+        marks = ink & free
+        diagonal = (marks & (np.roll(marks, (1, 1), (0, 1)) | np.roll(marks, (1, -1), (0, 1)))).astype(np.int8)
+        square = (marks & (np.roll(marks, 1, 0) | np.roll(marks, 1, 1))).astype(np.int8)
+        marked[1:] = ((ndimage.mean(marks, blab, bidx) >= 0.08)
+                      & (np.bincount(blab.ravel(), minlength=nb + 1)[1:] >= 8 * width ** 2)
+                      & (ndimage.sum(diagonal, blab, bidx) > ndimage.sum(square, blab, bidx)))
     solid = ink | strokes | cells | marked[blab]
     broad = square_morphology(solid, max_wall_m / s, "open")
     if broad.any():
