@@ -17,7 +17,7 @@ from camplace.spec.loading import load_scene_file, parse_scene
 from camplace.spec.schema import SceneSpec
 from camplace.spec.wording import did_you_mean
 
-BUILTIN_SCENES = ("demo", "standard-store", "store-a", "warehouse", "catalogue-store", "retail-site")
+BUILTIN_SCENES = ("demo", "standard-store", "store-a", "warehouse", "catalogue-store", "retail-site", "lens-store")
 PROCEDURAL_SCENES = ("warehouse",)  # generated in code; ``warehouse:AREA`` picks the size
 
 # --- procedural warehouse (issue 7: site scale) -------------------------------------
@@ -128,7 +128,9 @@ def resolve_scene(scene: str | Path | SceneSpec) -> tuple[SceneSpec, Path | None
     if spec is not None:
         return spec, None, f"<built-in {text}>"
     if text in BUILTIN_SCENES:
-        return parse_scene(yaml.safe_load(builtin_yaml(text)), f"<built-in {text}>"), None, f"<built-in {text}>"
+        with resources.as_file(resources.files("camplace.spec").joinpath("scenes")) as folder:  # catalogues beside it
+            spec = parse_scene(yaml.safe_load(builtin_yaml(text)), f"<built-in {text}>", folder)
+        return spec, None, f"<built-in {text}>"
     p = Path(text)
     if p.suffix.lower() in (".yaml", ".yml") or p.exists():
         return load_scene_file(p), p.resolve().parent, str(p)

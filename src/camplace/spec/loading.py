@@ -6,12 +6,13 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
-import yaml
 from pydantic import BaseModel, ValidationError
 
 from camplace.core.errors import InputError
+from camplace.spec.catalogue import expand_catalogue
 from camplace.spec.schema import SceneSpec
 from camplace.spec.wording import format_validation_error
+from camplace.spec.yamltext import load_yaml_text  # noqa: F401 - re-exported (scene files read it from here)
 
 FILE_KEYS = ("mesh", "point_cloud", "octomap", "calibration", "file", "path", "points",  # scene keys that name a file
              "existing")
@@ -46,47 +47,17 @@ def check_referenced_files(spec: BaseModel, base_dir: Path | None, source: str) 
 GIB = 1024**3
 
 
-def parse_scene(data: Any, source: str = "<scene>") -> SceneSpec:
-    """Validate a scene mapping; raise InputError with a one-line message."""
+def parse_scene(data: Any, source: str = "<scene>", base_dir: Path | None = None) -> SceneSpec:
+    """Validate a scene mapping; raise InputError with a one-line message. ``cameras:
+    {catalogue: FILE}`` is read first (camplace.spec.catalogue; FILE relative to ``base_dir``,
+    default the working directory)."""
     if not isinstance(data, dict):
         raise InputError(f"{source}: expected a YAML mapping of scene keys, got {type(data).__name__}")
+    data = expand_catalogue(data, base_dir, source)
     try:
         return SceneSpec.model_validate(data)
     except ValidationError as err:
         raise InputError(format_validation_error(err, source, SceneSpec)) from None
-
-
-class _UniqueKeyLoader(yaml.SafeLoader):
-    """yaml.SafeLoader that refuses a key given twice in one mapping (PyYAML keeps the last)."""
-
-
-def _construct_unique_mapping(loader: _UniqueKeyLoader, node: yaml.MappingNode, deep: bool = False) -> dict:
-    seen: dict[Any, int] = {}
-    for key_node, _ in node.value:
-        key = loader.construct_object(key_node, deep=deep)
-        try:
-            if key in seen:
-                raise yaml.constructor.ConstructorError(
-                    None, None, f"key '{key}' appears twice in one mapping (first on line {seen[key] + 1})",
-                    key_node.start_mark)
-            seen[key] = key_node.start_mark.line
-        except TypeError:  # unhashable key: let the default constructor complain
-            pass
-    return loader.construct_mapping(node, deep=deep)
-
-
-_UniqueKeyLoader.add_constructor(yaml.resolver.BaseResolver.DEFAULT_MAPPING_TAG, _construct_unique_mapping)
-
-
-def load_yaml_text(text: str, source: str) -> Any:
-    """Parse YAML (duplicate keys refused); errors are one line with line and column."""
-    try:
-        return yaml.load(text, Loader=_UniqueKeyLoader)  # noqa: S506 - a SafeLoader subclass
-    except yaml.YAMLError as err:
-        mark = getattr(err, "problem_mark", None)
-        problem = getattr(err, "problem", None) or str(err).strip().splitlines()[0]
-        where = f" at line {mark.line + 1}, column {mark.column + 1}" if mark is not None else ""
-        raise InputError(f"{source}: not valid YAML{where}: {problem}") from None
 
 
 def load_scene_file(path: str | Path) -> SceneSpec:
@@ -105,6 +76,6 @@ def load_scene_file(path: str | Path) -> SceneSpec:
     data = load_yaml_text(text, str(p))
     if data is None:
         raise InputError(f"{p}: the file is empty; expected a YAML mapping of scene keys")
-    spec = parse_scene(data, str(p))
+    spec = parse_scene(data, str(p), p.resolve().parent)
     check_referenced_files(spec, p.resolve().parent, str(p))
     return spec
