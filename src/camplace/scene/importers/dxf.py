@@ -1,255 +1,341 @@
-"""DXF floor plans -> a scene mapping (camplace.scene.importers.import_plan).
+"""DXF floor plans -> what was understood (PlanImport) and the scene mapping
+(camplace.scene.importers.read_plan / import_plan).
 
-Walls: LINE, LWPOLYLINE/POLYLINE, ARC and HATCH entities on wall layers. Double-line
-walls are closed into solids by a morphological closing of the linework (buffer by half
-the thickest wall, union, buffer back), single lines get ``wall_thickness``; HATCH
-boundaries are solid already. Doors (door layers, or blocks named ``*DOOR*``) cut the
-walls (``doors: open``, the default) or fill their gap (``closed``); windows fill it.
-Furniture blocks become prisms of their plan hull, ``furniture_heights`` per layer
-pattern. Closed polylines on room layers become zones named by the TEXT/MTEXT inside.
+The modelspace is read with its block references exploded (dxf_read). Each layer's role
+comes from its name in the common conventions and languages (dxf_layers; the
+``*_layers`` options replace them); wall layers that no name reveals are found by their
+geometry, parallel line pairs a wall's thickness apart (dxf_walls). Walls are the
+linework closed into solids, hatches as they are; glass (window layers) and columns are
+solids too. The main building is the largest cluster of them: what lies apart (title
+block, legend, a second drawing) is left out and counted. Doors are open (their plan
+rectangle cuts the walls) or closed (fills the gap); windows and glass occlude.
+Furniture blocks become prisms of their plan hull. Rooms are the closed outlines on
+room layers, else the free pieces the walls enclose, named by the texts and block
+attributes inside (dxf_rooms). The footprint is the rooms merged across the walls
+between them, else the walls' outline (walls_outline).
 """
 
 from __future__ import annotations
 
-from fnmatch import fnmatch
+import re
+from collections import Counter, defaultdict
 from pathlib import Path
 
+import numpy as np
 import shapely
-from shapely.geometry import LineString, MultiPoint, Point, Polygon, box
+from shapely.geometry import LineString, Polygon
 
 from camplace.core.errors import InputError
-from camplace.scene.importers import (PlanImport, DEFAULT_CEILING_M, footprint_of, plan_scene, polygons_of, prism_obstacles,
-                                      room_zones, rooms_footprint, unit_scale)
+from camplace.scene.importers import (DEFAULT_CEILING_M, PlanImport, plan_scene, polygons_of, prism_obstacles,
+                                      room_zones, rooms_footprint, walls_outline)
+from camplace.scene.importers.dxf_layers import ROLES, block_role, layer_role, matches
+from camplace.scene.importers.dxf_read import (FILLED, LINEWORK, Drawing, Shape, check_span, drawing_units,
+                                               filled_polygons, read_drawing, read_dxf)
+from camplace.scene.importers.dxf_rooms import enclosed_rooms, room_names, room_polygons
+from camplace.scene.importers.dxf_walls import (closing_solid, column_solid, components, fill_gap, is_wall_fill,
+                                                layer_pairs, main_building, span, wall_layers_by_geometry)
 
-OPTIONS = ("wall_layers", "door_layers", "window_layers", "furniture_layers", "furniture_heights", "room_layers",
-           "doors", "wall_thickness", "max_wall_thickness")
-WALL_LAYERS = ("A-WALL*", "WALL*", "WAND*")
-DOOR_LAYERS = ("A-DOOR*", "DOOR*", "TUER*")
-WINDOW_LAYERS = ("A-GLAZ*", "WINDOW*", "FENSTER*")
-FURNITURE_LAYERS = ("A-FURN*", "A-EQPM*", "FURN*", "MOEBEL*")
-ROOM_LAYERS = ("A-AREA*", "ROOM*", "A-SPACE*", "RAUM*")
-INSUNITS = {1: "in", 2: "ft", 4: "mm", 5: "cm", 6: "m"}
-FLATTEN = 0.01  # chord error of arcs and bulges, drawing units x this / metre-scale (see _paths)
+OPTIONS = ("wall_layers", "door_layers", "window_layers", "column_layers", "furniture_layers", "furniture_heights",
+           "room_layers", "doors", "wall_thickness", "max_wall_thickness")
 DEFAULT_FURNITURE_M = 0.9
+GLASS_M = 0.05  # width of a glass pane drawn as one line, m
+DOOR_MAX_M = 3.5  # a door's plan rectangle is at most this long; larger door-layer groups cut nothing
+BLOCK_MAX_M = 5.0  # a block named like a door, window or furniture is one when at most this large
+FURNITURE_MAX_M = 6.0
+COLUMN_MAX_M2 = 10.0  # larger closed shapes on column layers are no column
+ROOM_BRIDGE_M = 1.0  # doorways up to this wide are closed when rooms are found from the walls
+MAX_HANDLES = 30  # handles named in one obstacle's provenance
 
 
-def _matches(layer: str, patterns) -> bool:
-    name = layer.upper()
-    return any(fnmatch(name, p.upper()) for p in patterns)
-
-
-def _read(path: Path):
-    import ezdxf
-
-    try:
-        return ezdxf.readfile(str(path))
-    except (OSError, UnicodeDecodeError) as err:
-        raise InputError(f"{path}: cannot read the file ({err})") from None
-    except ezdxf.DXFError as err:
-        raise InputError(f"{path}: not a DXF file ({str(err).splitlines()[0] if str(err) else type(err).__name__})"
-                         ) from None
-
-
-def _units(doc, path: Path, units: str | None) -> float:
-    """Metres per drawing unit: ``units`` if given, else the header's $INSUNITS."""
-    if units is not None:
-        return unit_scale(units)
-    code = int(doc.header.get("$INSUNITS", 0))
-    if code not in INSUNITS:
-        raise InputError(f"{path}: the drawing units are unknown ($INSUNITS {code}); expected mm, cm, m, in or ft "
-                         "(units)", option="units")
-    return unit_scale(INSUNITS[code])
-
-
-def _points(entity, s: float) -> list[list[tuple[float, float]]]:
-    """Plan vertex lists (m) of the entity's paths (arcs and bulges flattened)."""
-    from ezdxf import path as dxfpath
-
-    paths = dxfpath.from_hatch(entity) if entity.dxftype() == "HATCH" else [dxfpath.make_path(entity)]
-    out = []
-    for p in paths:
-        pts = [(v.x * s, v.y * s) for v in p.flattening(FLATTEN / s)]
-        if len(pts) >= 2:
-            out.append(pts)
-    return out
-
-
-def _walls(msp, s: float, layers, thickness: float, max_thickness: float) -> tuple[object, list[tuple]]:
-    """(wall solid (m), [(geometry, layer, handle)] of the wall entities): closing of the
-    linework, HATCH solids."""
-    lines, solids, found = [], [], []
-    for e in msp.query("LINE LWPOLYLINE POLYLINE ARC HATCH"):
-        if not _matches(e.dxf.layer, layers):
-            continue
-        for pts in _points(e, s):
-            if e.dxftype() == "HATCH" and len(pts) >= 3:
-                solids.append(shapely.make_valid(Polygon(pts)))
-            else:
-                lines.append(LineString(pts))
-            found.append(((solids if e.dxftype() == "HATCH" else lines)[-1], e.dxf.layer, e.dxf.handle))
-    if not lines and not solids:
-        return None, found
-    r = max_thickness / 2
-    net = shapely.unary_union(lines)
-    closed = net.buffer(r, join_style="mitre").buffer(-r, join_style="mitre") if lines else Polygon()
-    single = [ln for ln in lines if ln.difference(closed.buffer(thickness)).length > thickness]
-    parts = [closed, *solids, *(ln.buffer(thickness / 2, cap_style="flat") for ln in single)]
-    return shapely.unary_union(parts), found
-
-
-def _wall_obstacles(walls, found: list[tuple], z: float, src: str) -> list[dict]:
-    """Prism obstacles wall-1..n, each naming the layers and handles of the entities in it."""
-    out = []
-    for piece in polygons_of(walls):
-        near = [(layer, h) for g, layer, h in found if g.distance(piece) < 1e-3]
-        source = {"file": src, "layer": ",".join(sorted({layer for layer, _ in near})),
-                  "handle": ",".join(h for _, h in near)}
-        out += [dict(o, name=f"wall-{len(out) + 1}") for o in prism_obstacles(piece, 0.0, z, "wall", source)]
-    return out
-
-
-def _hull(entity, s: float):
-    """Plan polygon (m) of an entity or block reference: the hull of its flattened paths."""
-    pts = []
-    ents = entity.virtual_entities() if entity.dxftype() == "INSERT" else [entity]
-    for ve in ents:
-        if ve.dxftype() == "INSERT":
-            pts += list(_hull(ve, s).exterior.coords) if not _hull(ve, s).is_empty else []
-            continue
-        try:
-            for ring in _points(ve, s):
-                pts += ring
-        except (TypeError, ValueError, AttributeError):  # TEXT, ATTRIB, ...: no outline
-            continue
-    hull = MultiPoint(pts).convex_hull if pts else Polygon()
-    return hull if isinstance(hull, Polygon) else hull.buffer(0.01)
-
-
-def _fill_gap(walls, opening, reach: float):
-    """The wall gap next to an ``opening`` (a door's / window's plan box, m): what a
-    closing of the walls near it adds within ``reach`` m of the box."""
-    x0, y0, x1, y1 = opening.bounds
-    R = max(x1 - x0, y1 - y0) / 2 + 0.05
-    region = opening.buffer(reach, join_style="mitre")
-    local = walls.intersection(region.buffer(R))
-    closed = local.buffer(R, join_style="mitre").buffer(-R, join_style="mitre")
-    gap = closed.intersection(region).difference(walls).buffer(-1e-4)
-    return shapely.unary_union([q.convex_hull for q in polygons_of(gap)]).difference(walls)
-
-
-def _openings(msp, s: float, door_layers, window_layers) -> tuple[list, list]:
-    """([(polygon, entity)] doors, [(polygon, entity)] windows): plan boxes (m)."""
-    doors, windows = [], []
-    for e in msp:
-        layer = e.dxf.get("layer", "0")
-        is_door = _matches(layer, door_layers) or (e.dxftype() == "INSERT" and "DOOR" in e.dxf.name.upper())
-        is_window = not is_door and _matches(layer, window_layers)
-        if not (is_door or is_window):
-            continue
-        hull = _hull(e, s)
-        if hull.is_empty:
-            continue
-        (doors if is_door else windows).append((box(*hull.bounds), e))
-    return doors, windows
-
-
-def _merge(items: list) -> list:
-    """Door / window pieces (polygon, entity) merged where they overlap, first entity kept."""
-    out: list = []
-    for poly, e in items:
-        for k, (q, f) in enumerate(out):
-            if q.intersects(poly):
-                out[k] = (q.union(poly).envelope, f)
-                break
-        else:
-            out.append((poly, e))
-    return out
-
-
-def _furniture(msp, s: float, layers, heights: dict, ceiling: float, src: str) -> list[dict]:
-    out = []
-    for e in msp.query("INSERT"):
-        if not _matches(e.dxf.layer, layers):
-            continue
-        h = next((float(v) for k, v in heights.items() if _matches(e.dxf.layer, [k])), DEFAULT_FURNITURE_M)
-        hull = _hull(e, s)
-        if hull.is_empty:
-            continue
-        obs = prism_obstacles(hull, 0.0, min(h, ceiling - 0.05), f"{e.dxf.name.lower()}",
-                              {"file": src, "layer": e.dxf.layer, "block": e.dxf.name, "handle": e.dxf.handle})
-        out += [dict(o, name=f"{o['name'].rsplit('-', 1)[0]}-{len(out) + 1}") for o in obs]
-    return out
-
-
-def _labels(msp, s: float) -> list[tuple[Point, str]]:
-    out = []
-    for e in msp.query("TEXT MTEXT"):
-        text = e.plain_text() if e.dxftype() == "MTEXT" else e.dxf.text
-        text = " ".join(str(text).split())
-        if text:
-            p = e.dxf.insert
-            out.append((Point(p.x * s, p.y * s), text))
-    return out
-
-
-def _rooms(msp, s: float, layers) -> list[tuple[str, Polygon]]:
-    polys = []
-    for e in msp.query("LWPOLYLINE POLYLINE"):
-        if _matches(e.dxf.layer, layers) and e.is_closed:
-            for pts in _points(e, s):
-                if len(pts) >= 3:
-                    polys.append(shapely.make_valid(Polygon(pts)))
-    labels = _labels(msp, s)
-    out = []
-    for k, poly in enumerate(polys):
-        inside = [t for p, t in labels if poly.contains(p)]
-        out.append((inside[0] if inside else f"room-{k + 1}", poly))
-    return out
-
-
-def import_plan(path: Path, *, name: str | None = None, units: str | None = None, wall_height: float | None = None,
-                ceiling_height: float | None = None, heights=None, coverage: int | None = None,
-                budget: int | None = None, wall_layers=WALL_LAYERS, door_layers=DOOR_LAYERS,
-                window_layers=WINDOW_LAYERS, furniture_layers=FURNITURE_LAYERS, furniture_heights: dict | None = None,
-                room_layers=ROOM_LAYERS, doors: str = "open", wall_thickness: float = 0.2,
-                max_wall_thickness: float = 0.6) -> dict:
-    """The scene mapping of a DXF floor plan (lengths in m; layer patterns fnmatch-style,
-    case-insensitive)."""
+def read(path: Path, *, name: str | None = None, units: str | None = None, wall_height: float | None = None,
+         ceiling_height: float | None = None, heights=None, coverage: int | None = None, budget: int | None = None,
+         wall_layers=None, door_layers=None, window_layers=None, column_layers=None, furniture_layers=None,
+         furniture_heights: dict | None = None, room_layers=None, doors: str = "open", wall_thickness: float = 0.2,
+         max_wall_thickness: float = 0.6) -> PlanImport:
+    """What was understood of a DXF floor plan, with its scene mapping (lengths in m;
+    ``*_layers``: fnmatch patterns, case-insensitive, replacing the conventions for that
+    role)."""
     if doors not in ("open", "closed"):
         raise InputError(f"doors: expected open or closed, got '{doors}'", option="doors")
-    doc = _read(path)
-    s = _units(doc, path, units)
-    msp = doc.modelspace()
+    doc = read_dxf(path)
+    scale, unit_text = drawing_units(doc, path, units)
+    d = read_drawing(doc, scale, unit_text)
+    if "guessed" in unit_text:
+        d.notes.append(f"units {unit_text}; if that is wrong, give them (units)")
+    given = {"wall": wall_layers, "door": door_layers, "window": window_layers, "column": column_layers,
+             "room": room_layers, "furniture": furniture_layers}
+    out = PlanImport({}, "dxf", used={"units": unit_text}, skipped=d.skipped, notes=d.notes)
+    role, how = _layer_roles(d, given)
+    parts = _by_role(d, role)
+    walls, wall_how = _wall_linework(path, d, parts, role, how, given["wall"])
+    out.used["wall layers"] = _listing(d, wall_how)
+    r = max_wall_thickness / 2
+    wall_solid = closing_solid(walls[0], walls[1], r, wall_thickness)
+    glass = closing_solid(*_lines_fills(parts["window"]), r, GLASS_M)
+    columns = shapely.union_all([q for q in polygons_of(column_solid(*_lines_fills(parts["column"])))
+                                 if q.area <= COLUMN_MAX_M2] or [Polygon()])
+    region, wall_solid, glass, columns = _main_building(out, wall_solid, glass, columns)
+    src = path.name
     ceiling = float(ceiling_height or DEFAULT_CEILING_M)
     wall_z = min(float(wall_height or ceiling), ceiling)
-    walls, found = _walls(msp, s, wall_layers, wall_thickness, max_wall_thickness)
-    if walls is None or walls.area <= 0:
-        raise InputError(f"{path}: no walls found (no LINE, LWPOLYLINE, POLYLINE, ARC or HATCH on the layers "
-                         f"{', '.join(wall_layers)})")
-    src = path.name
-    door_boxes, window_boxes = (_merge(x) for x in _openings(msp, s, door_layers, window_layers))
-    fills = [("window", _fill_gap(walls, poly, max_wall_thickness), e) for poly, e in window_boxes]
-    for poly, e in door_boxes:
-        if doors == "open":
-            walls = walls.difference(poly)
-        else:
-            fills.append(("door", _fill_gap(walls, poly, max_wall_thickness), e))
-    obstacles = _wall_obstacles(walls, found, wall_z, src)
-    for what, gap, e in fills:
-        obs = prism_obstacles(gap, 0.0, wall_z, what, {"file": src, "layer": e.dxf.get("layer", "0"),
-                                                       "handle": e.dxf.handle})
-        n = sum(o["name"].startswith(f"{what}-") for o in obstacles)
-        obstacles += [dict(o, name=f"{what}-{n + k + 1}") for k, o in enumerate(obs)]
-    obstacles += _furniture(msp, s, furniture_layers, furniture_heights or {}, ceiling, src)
-    rooms = _rooms(msp, s, room_layers)
-    if not rooms:  # the enclosed free pieces inside the walls' outline
-        rooms = [(f"room-{k + 1}", q) for k, q in enumerate(
-            q for q in polygons_of(footprint_of([walls], str(path)).difference(walls)) if q.area >= 1.0)]
-    footprint = rooms_footprint([p for _, p in rooms], walls, max_wall_thickness, str(path))
-    return plan_scene(name or path.stem, footprint, ceiling, obstacles, room_zones(rooms, coverage or 2),
-                      heights=heights, coverage=coverage, budget=budget)
+    out.notes += check_span(span(wall_solid), scale, unit_text)
+    door_rects = _openings(out, parts["door"], region, DOOR_MAX_M, "door outlines too large for one door")
+    uncut = wall_solid
+    if doors == "open" and door_rects:
+        wall_solid = wall_solid.difference(shapely.union_all(door_rects))
+    glass = glass.difference(wall_solid)
+    sources = _sources(parts, role)
+    obstacles = _obstacles(wall_solid, sources, 0.0, wall_z, "wall", src, out.skipped)
+    obstacles += _obstacles(glass, sources, 0.0, wall_z, "window", src, out.skipped)
+    jambs = shapely.union_all([uncut, glass])
+    gaps = shapely.union_all([fill_gap(jambs, q, max_wall_thickness) for q in door_rects] or [Polygon()])
+    if doors == "closed":
+        obstacles += _obstacles(gaps.difference(jambs), sources, 0.0, wall_z, "door", src, out.skipped)
+    obstacles += _obstacles(columns, sources, 0.0, ceiling, "column", src, out.skipped)
+    obstacles += _furniture(d, role, region, furniture_heights or {}, ceiling, src, out)
+    out.openings = [_ring(q) for q in door_rects + polygons_of(glass)]
+    for what, rects in (("door", door_rects), ("window", polygons_of(glass))):
+        if rects:
+            out.used[f"{what}s"] = f"{len(rects)} on {_listing(d, _layers_of(parts[what], how), counts=False)}"
+    if not columns.is_empty:
+        out.used["columns"] = f"{len(polygons_of(columns))} on {_listing(d, _layers_of(parts['column'], how), False)}"
+    rooms, footprint = _rooms_and_footprint(out, d, parts["room"], role, how, region, uncut, glass, columns.union(gaps),
+                                            max_wall_thickness, str(path))
+    zones = room_zones(rooms, coverage or 2, skipped=out.skipped)
+    out.scene = plan_scene(name or path.stem, footprint, ceiling, obstacles, zones, heights=heights,
+                           coverage=coverage, budget=budget)
+    return out
 
 
-def read(path: Path, **options) -> PlanImport:
-    """What was understood of the plan (options as import_plan)."""
-    return PlanImport(import_plan(path, **options), "dxf")
+def import_plan(path: Path, **options) -> dict:
+    """The scene mapping of a DXF floor plan (options as read)."""
+    return read(path, **options).scene
+
+
+# ------------------------------------------------------------------ layers and their roles
+def _layer_roles(d: Drawing, given: dict) -> tuple[dict[str, str | None], dict[str, str]]:
+    """(layer -> role or None, layer -> how the role was found: 'given' or 'by name')."""
+    role, how = {}, {}
+    for layer in {sh.layer for sh in d.shapes}:
+        mine = next((r for r in ROLES if given[r] and matches(layer, given[r])), None)
+        if mine is not None:
+            role[layer], how[layer] = mine, "given"
+            continue
+        named = layer_role(layer)
+        role[layer] = None if named in ROLES and given[named] else named
+        how[layer] = "by name"
+    return role, how
+
+
+def _by_role(d: Drawing, role: dict) -> dict[str, list[Shape]]:
+    """Shapes per role: the layer's role, or the block's where a small block is named
+    like a door, window or furniture."""
+    groups: dict[int, list[Shape]] = defaultdict(list)
+    for sh in d.shapes:
+        groups[sh.group].append(sh)
+    out: dict[str, list[Shape]] = defaultdict(list)
+    for g, shapes in groups.items():
+        named = block_role(shapes[0].block) if shapes[0].block else None
+        if named and _extent([sh.geom for sh in shapes]) > BLOCK_MAX_M:
+            named = None
+        for sh in shapes:
+            out[named or role.get(sh.layer) or "none"].append(sh)
+    return out
+
+
+def _extent(geoms: list) -> float:
+    """The larger side (m) of the box around ``geoms``."""
+    b = shapely.bounds(np.asarray(geoms, dtype=object))
+    return float(max(b[:, 2].max() - b[:, 0].min(), b[:, 3].max() - b[:, 1].min()))
+
+
+def _lines_fills(shapes: list[Shape]) -> tuple[list, list]:
+    """(LineStrings, filled Polygons) of shapes, m."""
+    lines = [sh.geom for sh in shapes if isinstance(sh.geom, LineString)]
+    fills = [q for sh in shapes if not isinstance(sh.geom, LineString) for q in polygons_of(sh.geom)]
+    return lines, fills
+
+
+def _wall_linework(path: Path, d: Drawing, parts: dict, role: dict, how: dict, given) -> tuple[tuple, dict]:
+    """((wall lines, wall fills), layer -> how found) by name or given patterns, else by
+    geometry; InputError listing the layers with linework when there are none."""
+    lines, fills = _lines_fills(parts["wall"])
+    thin = [q for q in fills if is_wall_fill(q)]
+    if len(fills) > len(thin):
+        d.skipped["filled areas on wall layers too wide to be walls"] += len(fills) - len(thin)
+    if lines or thin:
+        return (lines, thin), _layers_of(parts["wall"], how)
+    if given is None:
+        cand = [sh for k, v in parts.items() if k in ("none", "other") for sh in v]
+        by_line, by_fill = defaultdict(list), defaultdict(list)
+        for sh in cand:
+            if isinstance(sh.geom, LineString):
+                if role.get(sh.layer) is None:
+                    by_line[sh.layer].append(sh.geom)
+            else:
+                by_fill[sh.layer] += polygons_of(sh.geom)
+        stats = layer_pairs(by_line, by_fill)
+        chosen = wall_layers_by_geometry(stats)
+        if chosen:
+            lines = [ln for n in chosen for ln in stats[n].lines]
+            fills = [q for n in chosen for q in by_fill.get(n, []) if is_wall_fill(q)]
+            gaps = np.concatenate([stats[n].gaps for n in chosen])
+            lo, hi = (np.percentile(gaps, [10, 90]) if len(gaps) else (0.0, 0.0))
+            apart = f"{lo:.2f} m apart" if hi - lo < 0.005 else f"{lo:.2f}-{hi:.2f} m apart"
+            d.notes.append(f"no layer is named like walls; took {', '.join(chosen)} by their parallel line pairs "
+                           f"({apart}); if that is wrong, name the wall layers (wall_layers)")
+            for n in chosen:
+                role[n] = "wall"
+            return (lines, fills), {n: f"by geometry: parallel pairs {apart}" for n in chosen}
+    raise InputError(_no_walls_message(path, d, given), option="wall_layers")
+
+
+def _no_walls_message(path: Path, d: Drawing, given) -> str:
+    per = defaultdict(Counter)
+    for (layer, kind), n in d.inventory.items():
+        if kind in LINEWORK or kind in FILLED or kind == "MLINE":
+            per[layer][kind] += n
+    ranked = sorted(per, key=lambda la: -sum(per[la].values()))
+    listing = ", ".join(f"{la} ({', '.join(f'{n} {k}' for k, n in per[la].most_common())})" for la in ranked[:12])
+    listing += f" and {len(ranked) - 12} more" if len(ranked) > 12 else ""
+    where = (f"on the layers {', '.join(given)}" if given else
+             "(no layer is named like walls - WALL, WAND, MUR, MURO, PARED, PAREDE, PARETE, A-WALL, ... - and none "
+             "holds parallel line pairs 5-60 cm apart)")
+    have = f"the layers with linework are {listing}" if ranked else "the drawing has no linework"
+    return f"{path}: no walls found {where}; {have}; name the wall layers (wall_layers)"
+
+
+def _layers_of(shapes: list[Shape], how: dict) -> dict[str, str]:
+    return {sh.layer: how.get(sh.layer, "by name") for sh in shapes}
+
+
+def _listing(d: Drawing, layers: dict[str, str], counts: bool = True, most: int = 8) -> str:
+    """'E41_AUSSENWAENDE (212 LINE, 4 HATCH), E61_INNENWAENDE (80 LINE) (by name)'."""
+    per = defaultdict(Counter)
+    for (layer, kind), n in d.inventory.items():
+        if layer in layers and (kind in LINEWORK or kind in FILLED):
+            per[layer][kind] += n
+    names = sorted(layers, key=lambda la: -sum(per[la].values()))
+    text = ", ".join(f"{la} ({', '.join(f'{n} {k}' for k, n in per[la].most_common(3))})" if counts and per[la]
+                     else la for la in names[:most])
+    text += f" and {len(names) - most} more" if len(names) > most else ""
+    hows = sorted(set(layers.values()))
+    return f"{text} ({'; '.join(hows)})" if hows else text
+
+
+# ------------------------------------------------------------------ the building and its parts
+def _main_building(out: PlanImport, walls, glass, columns):
+    """(region, walls, glass, columns) of the main building (the largest cluster)."""
+    kinds = [(walls, 1.0), (glass, 0.0), (columns, 0.0)]
+    pieces = [(q, w, k) for k, (g, w) in enumerate(kinds) for q in polygons_of(g)]
+    region, kept = main_building([p[0] for p in pieces], [p[0].area * p[1] for p in pieces])
+    picked = [shapely.union_all([p[0] for p, keep in zip(pieces, kept) if keep and p[2] == k] or [Polygon()])
+              for k in range(3)]
+    dropped = [p for p, keep in zip(pieces, kept) if not keep]
+    if dropped:
+        out.skipped["wall, glass and column pieces apart from the main building"] += len(dropped)
+        area = sum(p[0].area for p in dropped if p[2] == 0)
+        out.notes.append(f"kept the largest building; left out {len(dropped)} pieces apart from it "
+                         f"({area:.1f} m² of walls)")
+    return region, *picked
+
+
+def _openings(out: PlanImport, shapes: list[Shape], region, max_m: float, too_big: str | None) -> list[Polygon]:
+    """Plan rectangles (m) of the doors / windows drawn in ``shapes`` inside ``region``,
+    at most ``max_m`` long (larger groups counted under ``too_big``)."""
+    geoms = [sh.geom for sh in shapes if sh.geom.intersects(region)]
+    rects = components(geoms)
+    keep = [q for q in rects if span(q) <= max_m]
+    if too_big and len(rects) > len(keep):
+        out.skipped[too_big] += len(rects) - len(keep)
+    return keep
+
+
+def _sources(parts: dict, role: dict) -> tuple:
+    """(STRtree of the building shapes, their shapes) for provenance."""
+    shapes = [sh for k in ("wall", "window", "door", "column") for sh in parts.get(k, [])]
+    shapes += [sh for sh in parts.get("none", []) + parts.get("other", []) if role.get(sh.layer) == "wall"]
+    return shapely.STRtree(np.asarray([sh.geom for sh in shapes], dtype=object)), shapes
+
+
+def _obstacles(geom, sources: tuple, z0: float, z1: float, prefix: str, src: str, skipped: Counter) -> list[dict]:
+    """Prisms prefix-1..n of the pieces of ``geom`` (m), each naming the layers and
+    handles of the entities that made it."""
+    tree, shapes = sources
+    out = []
+    for piece in polygons_of(geom):
+        near = [shapes[i] for i in tree.query(piece, predicate="dwithin", distance=1e-3)] if shapes else []
+        handles = list(dict.fromkeys(sh.handle for sh in near if sh.handle))
+        source = {"file": src, "layer": ",".join(sorted({sh.layer for sh in near})) or prefix,
+                  "handle": ",".join(handles[:MAX_HANDLES]) + (f",+{len(handles) - MAX_HANDLES}"
+                                                               if len(handles) > MAX_HANDLES else "")}
+        for o in prism_obstacles(piece, z0, z1, prefix, source, skipped=skipped):
+            out.append(dict(o, name=f"{prefix}-{len(out) + 1}"))
+    return out
+
+
+def _furniture(d: Drawing, role: dict, region, heights: dict, ceiling: float, src: str,
+               out: PlanImport) -> list[dict]:
+    """Prisms of the furniture blocks (block references on furniture layers or named
+    like furniture) inside the building: their plan hull, floor to the height of the
+    first ``heights`` pattern matching the layer (default 0.9 m)."""
+    groups: dict[int, list] = defaultdict(list)
+    for sh in d.shapes:
+        if sh.group in d.inserts:
+            groups[sh.group].append(sh.geom)
+    obstacles = []
+    for g, geoms in groups.items():
+        layer, block, handle = d.inserts[g]
+        if role.get(layer) != "furniture" and block_role(block) != "furniture":
+            continue
+        hull = shapely.union_all(geoms).convex_hull
+        if not hull.intersects(region) or span(hull) > FURNITURE_MAX_M:
+            out.skipped["furniture blocks outside the building or too large"] += 1
+            continue
+        hull = hull if isinstance(hull, Polygon) else hull.buffer(0.01)
+        h = next((float(v) for k, v in heights.items() if matches(layer, [k])), DEFAULT_FURNITURE_M)
+        label = re.sub(r"[^a-z0-9_]+", "-", block.lower()).strip("-") or "furniture"
+        for o in prism_obstacles(hull, 0.0, min(h, ceiling - 0.05), label,
+                                 {"file": src, "layer": layer, "block": block, "handle": handle},
+                                 skipped=out.skipped):
+            obstacles.append(dict(o, name=f"{o['name'].rsplit('-', 1)[0]}-{len(obstacles) + 1}"))
+    if obstacles:
+        out.used["furniture"] = f"{len(obstacles)} blocks"
+    return obstacles
+
+
+def _rooms_and_footprint(out: PlanImport, d: Drawing, room_shapes: list[Shape], role: dict, how: dict, region,
+                         walls, glass, columns, gap: float, source: str) -> tuple[list, Polygon]:
+    """([(name, polygon)] rooms, footprint) (m): the closed outlines on room layers in
+    the building, named; the footprint their union closed across the walls. Without
+    them (or where they cover less than half the walls' outline) the footprint is the
+    walls' outline and the rooms the free pieces the walls enclose."""
+    outline = walls_outline(walls)
+    hull = walls.convex_hull
+    polys = [q for q in filled_polygons(room_shapes) if region.contains(q.representative_point())]
+    rooms = room_polygons(polys, out.skipped)
+    labels = [lb for lb in d.labels if region.contains(lb.point)]
+    footprint = rooms_footprint(rooms, walls, gap, source) if rooms else None
+    if rooms:
+        out.used["rooms"] = f"{len(rooms)} outlines on {_listing(d, _layers_of(room_shapes, how), counts=False)}"
+    if footprint is None or footprint.area < 0.5 * outline.area:
+        if footprint is not None:
+            out.notes.append(f"the room outlines cover {footprint.area:.0f} m² of the walls' {outline.area:.0f} m²: "
+                             "the footprint is the walls' outline")
+        footprint = outline
+        kind = "convex hull of the walls" if outline.area >= 0.999 * hull.area else "enclosed by the outer walls"
+        out.used["footprint"] = f"{footprint.area:.1f} m², {kind}"
+        if not rooms:
+            barrier = shapely.union_all([walls, glass, columns])
+            rooms = enclosed_rooms(footprint, barrier, ROOM_BRIDGE_M)
+            out.used["rooms"] = f"{len(rooms)} free areas the walls enclose (no room outlines)"
+    else:
+        out.used["footprint"] = f"{footprint.area:.1f} m², the rooms merged across the walls"
+    names, named = room_names(rooms, labels)
+    if named:
+        out.used["room names"] = ", ".join(f"{k} ({n})" for k, n in named.items())
+    return list(zip(names, rooms)), footprint
+
+
+def _ring(poly: Polygon) -> list[list[float]]:
+    return [[round(float(x), 4), round(float(y), 4)] for x, y in list(poly.exterior.coords)[:-1]]

@@ -1,0 +1,295 @@
+"""A DXF file's modelspace as plan shapes and labels in metres (ezdxf): block references
+exploded (nested, MINSERT arrays too; an entity on layer 0 inside a block takes the
+reference's layer, as CAD programs draw it), curves flattened, hatches as filled areas,
+texts and block attributes as labels. Entities on layers turned off or frozen are left
+out and counted; so are entities ezdxf cannot take apart.
+"""
+
+from __future__ import annotations
+
+from collections import Counter
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import shapely
+from shapely.geometry import LineString, Point, Polygon
+
+from camplace.core.errors import InputError
+from camplace.scene.importers import UNITS_M, polygons_of, unit_scale
+
+INSUNITS = {1: ("in", 0.0254), 2: ("ft", 0.3048), 4: ("mm", 0.001), 5: ("cm", 0.01), 6: ("m", 1.0),
+            10: ("yd", 0.9144), 14: ("dm", 0.1)}  # $INSUNITS code -> (unit, m per unit)
+FLATTEN_M = 0.01  # chord error of flattened arcs, bulges and splines (m)
+MAX_DEPTH = 8  # nesting depth of block references followed
+MAX_ENTITIES = 2_000_000  # exploded entities read at most (a guard against runaway arrays)
+LINEWORK = {"LINE", "LWPOLYLINE", "POLYLINE", "ARC", "CIRCLE", "ELLIPSE", "SPLINE"}
+FILLED = {"HATCH", "MPOLYGON", "SOLID", "TRACE", "3DFACE"}
+TEXTS = {"TEXT", "MTEXT", "ATTRIB"}
+PLAUSIBLE_M = (3.0, 1500.0)  # the span of a building plan that makes sense, m
+TYPICAL_SPAN_M = 30.0  # a file without units is read in the unit (mm, cm, m) that makes its span nearest this
+
+
+@dataclass
+class Shape:
+    """One piece of plan geometry (m). ``geom``: a LineString (linework) or a Polygon
+    (a filled HATCH / SOLID, a polyline drawn with a width); ``closed``: an outline that
+    closes on itself (a closed polyline, circle); ``group``: index of the modelspace
+    entity it came from (one block reference = one group), ``block`` that entity's block
+    name ('' for plain entities), ``handle`` its handle."""
+
+    layer: str
+    kind: str
+    geom: Any
+    closed: bool
+    group: int
+    block: str
+    handle: str
+
+
+@dataclass
+class Label:
+    """A text in the plan: TEXT / MTEXT line or block attribute (``tag`` set) at
+    ``point`` (m), ``height`` m, in modelspace entity ``group``."""
+
+    point: Point
+    text: str
+    height: float
+    layer: str
+    tag: str
+    group: int
+
+
+@dataclass
+class Drawing:
+    """The plan content of a DXF file in metres: ``shapes``, ``labels``, entity counts
+    per (layer, type) after exploding blocks (``inventory``), block references per group
+    (``inserts``: group -> (layer, block name, handle)), ``scale`` m per drawing unit,
+    ``units`` (how the unit was found), ``skipped`` counts, ``notes``."""
+
+    shapes: list[Shape]
+    labels: list[Label]
+    inventory: Counter
+    inserts: dict[int, tuple[str, str, str]]
+    scale: float
+    units: str
+    skipped: Counter = field(default_factory=Counter)
+    notes: list[str] = field(default_factory=list)
+
+
+def read_dxf(path: Path):
+    """The ezdxf document of ``path`` (InputError naming the file when it is no DXF)."""
+    import ezdxf
+
+    try:
+        return ezdxf.readfile(str(path))
+    except (OSError, UnicodeDecodeError) as err:
+        raise InputError(f"{path}: cannot read the file ({err})") from None
+    except ezdxf.DXFError as err:
+        raise InputError(f"{path}: not a DXF file ({str(err).splitlines()[0] if str(err) else type(err).__name__})"
+                         ) from None
+
+
+def drawing_units(doc, path: Path, units: str | None) -> tuple[float, str]:
+    """(m per drawing unit, how it was found): ``units`` if given, else the header's
+    $INSUNITS; a unitless drawing is an InputError that says what its extent would
+    mean in each unit."""
+    if units is not None:
+        return unit_scale(units), f"{units} (given)"
+    code = int(doc.header.get("$INSUNITS", 0) or 0)
+    if code in INSUNITS:
+        name, metres = INSUNITS[code]
+        return metres, f"{name} ($INSUNITS {code})"
+    span = _span_units(doc)
+    if "$INSUNITS" not in doc.header and span > 0:  # R12 and older writers cannot say the units: guess them
+        name = min(("mm", "cm", "m"), key=lambda u: abs(np.log10(span * UNITS_M[u] / TYPICAL_SPAN_M)))
+        return UNITS_M[name], f"{name} (guessed: the file does not say; its linework spans {span:,.0f} units)"
+    hint = f"; its linework spans {span:,.0f} units ({unit_hint(span)})" if span > 0 else ""
+    raise InputError(f"{path}: the drawing units are unknown ($INSUNITS {code}){hint}; expected mm, cm, m, in or ft "
+                     "(units)", option="units")
+
+
+def unit_hint(span: float) -> str:
+    """'mm: 24.3 m, cm: 243.0 m' - what a span in drawing units would measure in the
+    units that make it a building (PLAUSIBLE_M), else in mm, cm and m."""
+    good = [(u, span * s) for u, s in UNITS_M.items() if PLAUSIBLE_M[0] <= span * s <= PLAUSIBLE_M[1] / 3]
+    return ", ".join(f"{u}: {m:,.1f} m" for u, m in (good or [(u, span * UNITS_M[u]) for u in ("mm", "cm", "m")]))
+
+
+def _span_units(doc) -> float:
+    """The larger side of the box around the modelspace's LINE and polyline vertices (drawing units)."""
+    pts = []
+    for e in doc.modelspace().query("LINE LWPOLYLINE POLYLINE"):
+        if e.dxftype() == "LINE":
+            pts += [(e.dxf.start.x, e.dxf.start.y), (e.dxf.end.x, e.dxf.end.y)]
+        elif e.dxftype() == "LWPOLYLINE":
+            pts += [p[:2] for p in e.get_points("xy")]
+        else:
+            pts += [(p.x, p.y) for p in e.points()]
+    if not pts:
+        return 0.0
+    a = np.asarray(pts, float)
+    return float((a.max(0) - a.min(0)).max())
+
+
+def check_span(span_m: float, scale: float, units: str) -> list[str]:
+    """Notes when the building's larger side (m; ``scale`` m per drawing unit) makes no
+    sense in the drawing's ``units``."""
+    if PLAUSIBLE_M[0] <= span_m <= PLAUSIBLE_M[1] or span_m <= 0:
+        return []
+    return [f"the walls span {span_m:,.2f} m in the drawing's units ({units}): are they right? In other units: "
+            f"{unit_hint(span_m / scale)} (units)"]
+
+
+def read_drawing(doc, scale: float, units: str) -> Drawing:
+    """The modelspace of ``doc`` as shapes and labels in metres (``scale`` m per unit)."""
+    hidden = {la.dxf.name for la in doc.layers if la.is_off() or la.is_frozen()}
+    out = Drawing([], [], Counter(), {}, scale, units)
+    reader = _Reader(out, scale, hidden)
+    for group, e in enumerate(doc.modelspace()):
+        reader.entity(e, e.dxf.get("layer", "0"), group, "", e.dxf.get("handle", ""), 0)
+    if hidden and out.skipped["entities on layers turned off or frozen"]:
+        out.notes.append(f"left out the layers turned off or frozen: {', '.join(sorted(hidden))}")
+    return out
+
+
+class _Reader:
+    """Walks entities into a Drawing (block references followed MAX_DEPTH deep)."""
+
+    def __init__(self, out: Drawing, scale: float, hidden: set[str]) -> None:
+        self.out, self.s, self.hidden, self.count = out, scale, hidden, 0
+        self.tol = FLATTEN_M / scale
+
+    def entity(self, e, layer: str, group: int, block: str, handle: str, depth: int) -> None:
+        kind = e.dxftype()
+        if layer in self.hidden:
+            self.out.skipped["entities on layers turned off or frozen"] += 1
+            return
+        self.count += 1
+        if self.count > MAX_ENTITIES:
+            self.out.skipped["entities past the reading limit"] += 1
+            return
+        self.out.inventory[(layer, kind)] += 1
+        try:
+            if kind == "INSERT":
+                self._insert(e, layer, group, block, handle, depth)
+            elif kind in TEXTS:
+                self._text(e, layer, group, "")
+            elif kind == "MLINE":
+                for ve in e.virtual_entities():
+                    self.entity(ve, _layer_of(ve, layer), group, block, handle, depth + 1)
+            elif kind in LINEWORK or kind in FILLED:
+                self._shape(e, kind, layer, group, block, handle)
+        except Exception:  # noqa: BLE001 - one entity ezdxf cannot take apart never fails the import
+            self.out.skipped[f"{kind} entities that could not be read"] += 1
+
+    def _insert(self, e, layer: str, group: int, block: str, handle: str, depth: int) -> None:
+        name = e.dxf.name
+        if depth == 0:
+            self.out.inserts[group] = (layer, name, handle)
+        for a in e.attribs:
+            self._text(a, _layer_of(a, layer), group, str(a.dxf.tag))
+        if depth >= MAX_DEPTH:
+            self.out.skipped["block references nested too deep"] += 1
+            return
+        doc = e.doc
+        blk = doc.blocks.get(name) if doc is not None else None
+        if blk is not None and (blk.block.is_xref or blk.block.is_xref_overlay):
+            self.out.skipped[f"external references not loaded ({name})"] += 1
+            return
+        refs = e.multi_insert() if e.mcount > 1 else [e]
+        for ref in refs:
+            for ve in ref.virtual_entities():
+                self.entity(ve, _layer_of(ve, layer), group, block or name, handle, depth + 1)
+
+    def _text(self, e, layer: str, group: int, tag: str) -> None:
+        kind = e.dxftype()
+        if kind == "MTEXT":
+            text, height, p = e.plain_text(), e.dxf.get("char_height", 0.0), e.dxf.insert
+        else:
+            text, height = e.plain_text(), e.dxf.get("height", 0.0)
+            aligned = e.dxf.get("halign", 0) or e.dxf.get("valign", 0)
+            p = e.ocs().to_wcs(e.dxf.align_point if aligned and e.dxf.hasattr("align_point") else e.dxf.insert)
+        for line in str(text).splitlines():
+            line = " ".join(line.split())
+            if line:
+                self.out.labels.append(Label(Point(p.x * self.s, p.y * self.s), line, float(height) * self.s, layer,
+                                             tag, group))
+
+    def _shape(self, e, kind: str, layer: str, group: int, block: str, handle: str) -> None:
+        s = self.s
+        if kind == "LINE":
+            a, b = e.dxf.start, e.dxf.end
+            self._add(layer, kind, LineString([(a.x * s, a.y * s), (b.x * s, b.y * s)]), False, group, block,
+                      handle)
+            return
+        if kind in ("HATCH", "MPOLYGON"):
+            from ezdxf import path as dxfpath
+
+            rings = [_xy(p.flattening(self.tol), s) for p in dxfpath.from_hatch(e)]
+            area = even_odd([Polygon(r) for r in rings if len(r) >= 3])
+            if not area.is_empty:
+                self._add(layer, kind, area, True, group, block, handle)
+            return
+        if kind == "POLYLINE" and (e.is_poly_face_mesh or e.is_polygon_mesh):
+            self.out.skipped["polyline meshes"] += 1
+            return
+        from ezdxf import path as dxfpath
+
+        p = dxfpath.make_path(e)
+        pts = _xy(p.flattening(self.tol), s)
+        if len(pts) < 2:
+            return
+        closed = bool(kind in ("CIRCLE", "SOLID", "TRACE", "3DFACE") or getattr(e, "closed", False)
+                      or getattr(e, "is_closed", False) or (len(pts) > 3 and np.allclose(pts[0], pts[-1], atol=1e-3)))
+        width = float(e.dxf.get("const_width", 0.0) or 0.0) * s if kind == "LWPOLYLINE" else 0.0
+        if kind in ("SOLID", "TRACE", "3DFACE") and len(pts) >= 3:
+            geom = shapely.make_valid(Polygon(pts))
+        elif width >= 0.02:  # a polyline drawn with a width: a filled band
+            geom = LineString(pts).buffer(width / 2, cap_style="flat", join_style="mitre")
+        else:
+            geom = LineString(pts if not closed or np.allclose(pts[0], pts[-1]) else [*pts, pts[0]])
+        self._add(layer, kind, geom, closed, group, block, handle)
+
+    def _add(self, layer, kind, geom, closed, group, block, handle) -> None:
+        if not geom.is_empty and (geom.length > 0 or geom.area > 0):
+            self.out.shapes.append(Shape(layer, kind, geom, closed, group, block, handle))
+
+
+def _layer_of(ve, parent: str) -> str:
+    """The layer an entity inside a block is drawn on: its own, or its reference's when it is on layer 0."""
+    layer = ve.dxf.get("layer", "0")
+    return parent if layer == "0" else layer
+
+
+def _xy(vertices, s: float) -> list[tuple[float, float]]:
+    return [(v.x * s, v.y * s) for v in vertices]
+
+
+def even_odd(polys: list[Polygon]):
+    """The area of nested boundary rings filled even-odd, as a HATCH fills them (an
+    island inside an outer ring is a hole; an island in that hole is filled again)."""
+    polys = [q for q in (shapely.make_valid(p) for p in polys) if q.area > 0]
+    if len(polys) <= 1:
+        return polys[0] if polys else Polygon()
+    geoms = np.array(polys, dtype=object)
+    inside = shapely.STRtree(geoms).query(shapely.point_on_surface(geoms), predicate="within")
+    depth = np.bincount(inside[0], minlength=len(polys)) - 1  # rings holding each ring, itself excluded
+    out = Polygon()
+    for d in range(int(depth.max()) + 1):
+        layer = shapely.unary_union(geoms[depth == d])
+        out = out.union(layer) if d % 2 == 0 else out.difference(layer)
+    return shapely.make_valid(out)
+
+
+def filled_polygons(shapes: list[Shape]) -> list[Polygon]:
+    """The polygons (m) of filled shapes and closed outlines."""
+    out = []
+    for sh in shapes:
+        if isinstance(sh.geom, LineString):
+            if sh.closed and len(sh.geom.coords) >= 4:
+                out += polygons_of(shapely.make_valid(Polygon(sh.geom.coords)))
+        else:
+            out += polygons_of(sh.geom)
+    return out

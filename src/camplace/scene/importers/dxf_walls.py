@@ -1,0 +1,216 @@
+"""Walls of a DXF plan from its linework (m): which layers hold walls when their names do
+not say it (parallel line pairs a wall's thickness apart), the wall solids (double lines
+closed into solids, single lines given a thickness, hatches as they are), and the main
+building (the largest cluster of walls; a title block, a legend or a second drawing on
+the sheet is left out).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import shapely
+from shapely.geometry import LineString, Polygon
+
+from camplace.scene.importers import polygons_of
+
+PAIR_M = (0.05, 0.6)  # the gap between the two faces of a wall, m
+MIN_SEGMENT_M = 0.25  # shorter straight pieces say nothing about walls
+PARALLEL_SIN = 0.05  # |sin| of the angle below which two segments are parallel (about 3 degrees)
+MIN_PAIRED_M = 4.0  # a wall layer holds at least this much paired linework, m
+MIN_PAIRED_SHARE = 0.3  # ... and at least this share of its linework is paired
+MAX_LADDER_SHARE = 0.6  # ... and at most this share of the paired lines has partners on both sides (stairs, hatching)
+MIN_LAYER_SHARE = 0.15  # a layer joins the walls with at least this share of the best layer's paired length
+MAX_WALL_WIDTH_M = 1.5  # a filled area wider than this (mean width 2 A / P) is no wall
+BUILDING_GAP_M = 5.0  # walls, glass and columns closer than this belong to one building
+
+
+@dataclass
+class LayerPairs:
+    """Parallel-pair statistics of one layer's straight linework (m): ``total`` length,
+    ``paired`` length (segments with a parallel partner PAIR_M apart on one side at
+    least), ``ladder`` length (partners on both sides), ``gaps`` the pair gaps (m),
+    ``thin`` filled area of wall-thin hatches (m²), ``lines`` the paired segments."""
+
+    total: float
+    paired: float
+    ladder: float
+    gaps: np.ndarray
+    thin: float
+    lines: list
+
+
+def segments(lines: list) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(P0 (n, 2), P1 (n, 2), owner (n,)) straight pieces of LineStrings, owner = index into ``lines``."""
+    if not lines:
+        return np.zeros((0, 2)), np.zeros((0, 2)), np.zeros(0, int)
+    coords, idx = shapely.get_coordinates(np.asarray(lines, dtype=object), return_index=True)
+    same = idx[1:] == idx[:-1]
+    return coords[:-1][same], coords[1:][same], idx[:-1][same]
+
+
+def pair_sides(p0: np.ndarray, p1: np.ndarray, group: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(left, right, gap) per segment (m): whether a parallel segment of the same
+    ``group`` lies PAIR_M apart on its left / right side, overlapping at least half the
+    shorter one (or 1 m); ``gap`` the nearest such distance (nan without one)."""
+    n = len(p0)
+    left, right, gap = np.zeros(n, bool), np.zeros(n, bool), np.full(n, np.nan)
+    if n < 2:
+        return left, right, gap
+    d = p1 - p0
+    length = np.hypot(d[:, 0], d[:, 1])
+    u = d / np.maximum(length, 1e-12)[:, None]
+    tree = shapely.STRtree(shapely.linestrings(np.stack([p0, p1], axis=1)))
+    i, j = tree.query(tree.geometries, predicate="dwithin", distance=PAIR_M[1])
+    keep = (i != j) & (group[i] == group[j])
+    i, j = i[keep], j[keep]
+    ui = u[i]
+    par = np.abs(ui[:, 0] * u[j, 1] - ui[:, 1] * u[j, 0]) < PARALLEL_SIN
+    rel = 0.5 * (p0[j] + p1[j]) - p0[i]
+    side = ui[:, 0] * rel[:, 1] - ui[:, 1] * rel[:, 0]
+    dist = np.abs(side)
+    t0 = ((p0[j] - p0[i]) * ui).sum(1)
+    t1 = ((p1[j] - p0[i]) * ui).sum(1)
+    over = np.minimum(length[i], np.maximum(t0, t1)) - np.maximum(0.0, np.minimum(t0, t1))
+    ok = par & (dist >= PAIR_M[0]) & (dist <= PAIR_M[1]) & (over > 0.1) & (
+        (over >= 0.5 * np.minimum(length[i], length[j])) | (over >= 1.0))
+    np.logical_or.at(left, i[ok & (side > 0)], True)
+    np.logical_or.at(right, i[ok & (side < 0)], True)
+    np.fmin.at(gap, i[ok], dist[ok])
+    return left, right, gap
+
+
+def layer_pairs(lines_by_layer: dict[str, list], fills_by_layer: dict[str, list]) -> dict[str, LayerPairs]:
+    """LayerPairs of every layer (straight pieces MIN_SEGMENT_M or longer; pairs within a layer only)."""
+    names = sorted(set(lines_by_layer) | set(fills_by_layer))
+    lines, layer_of = [], []
+    for k, name in enumerate(names):
+        lines += lines_by_layer.get(name, [])
+        layer_of += [k] * len(lines_by_layer.get(name, []))
+    p0, p1, owner = segments(lines)
+    length = np.hypot(*(p1 - p0).T) if len(p0) else np.zeros(0)
+    long = length >= MIN_SEGMENT_M
+    p0, p1, owner, length = p0[long], p1[long], owner[long], length[long]
+    seg_layer = np.asarray(layer_of, int)[owner] if len(owner) else np.zeros(0, int)
+    left, right, gap = pair_sides(p0, p1, seg_layer)
+    paired = left | right
+    out = {}
+    for k, name in enumerate(names):
+        m = seg_layer == k
+        pm = m & paired
+        thin = sum(q.area for q in fills_by_layer.get(name, []) if PAIR_M[0] * q.length <= 2 * q.area
+                   <= PAIR_M[1] * q.length)
+        out[name] = LayerPairs(float(length[m].sum()), float(length[pm].sum()), float(length[m & left & right].sum()),
+                               gap[pm], float(thin), list(shapely.linestrings(np.stack([p0[pm], p1[pm]], axis=1)))
+                               if pm.any() else [])
+    return out
+
+
+def wall_layers_by_geometry(stats: dict[str, LayerPairs]) -> list[str]:
+    """The layers whose linework looks like walls: enough parallel pairs a wall's
+    thickness apart, few ladders (stairs, hatching), or wall-thin filled areas; each at
+    least MIN_LAYER_SHARE of the best layer's."""
+    score = {}
+    for name, st in stats.items():
+        lines_ok = (st.paired >= MIN_PAIRED_M and st.paired >= MIN_PAIRED_SHARE * st.total
+                    and st.ladder <= MAX_LADDER_SHARE * st.paired)
+        fills_ok = st.thin >= 1.0
+        if lines_ok or fills_ok:
+            score[name] = (st.paired if lines_ok else 0.0) + (st.thin / 0.2 if fills_ok else 0.0)
+    best = max(score.values(), default=0.0)
+    return sorted((n for n, v in score.items() if v >= MIN_LAYER_SHARE * best), key=lambda n: -score[n])
+
+
+def closing_solid(lines: list, fills: list, radius: float, single: float):
+    """The solid (m) of linework and filled areas: lines closed into solids by a
+    morphological closing of ``radius`` (so the two faces of a wall up to 2 ``radius``
+    thick fill the strip between them), lines that no pair closes given the width
+    ``single``, filled areas as they are."""
+    parts = [q for q in fills if not q.is_empty]
+    if lines:
+        arr = np.asarray(lines, dtype=object)
+        grown = shapely.union_all(shapely.buffer(arr, radius, join_style="mitre"))
+        closed = shapely.make_valid(grown.buffer(-radius, join_style="mitre"))
+        parts.append(closed)
+        near = closed.buffer(single)
+        shapely.prepare(near)
+        loose = arr[~shapely.covered_by(arr, near)]
+        left = [ln for ln in loose if ln.difference(near).length > single]
+        parts += [ln.buffer(single / 2, cap_style="flat", join_style="mitre") for ln in left]
+    return shapely.make_valid(shapely.union_all(np.asarray(parts, dtype=object))) if parts else Polygon()
+
+
+def column_solid(lines: list, fills: list):
+    """Columns (m): the faces their outlines enclose, filled areas, other lines 5 cm wide."""
+    parts = [q for q in fills if not q.is_empty]
+    if lines:
+        noded = shapely.union_all(np.asarray(lines, dtype=object))
+        faces = polygons_of(shapely.polygonize(shapely.get_parts(noded)))
+        parts += faces
+        cover = shapely.union_all(np.asarray(faces, dtype=object)) if faces else Polygon()
+        rest = noded.difference(cover.buffer(1e-6))
+        if rest.length > 0:
+            parts.append(rest.buffer(0.025, cap_style="flat"))
+    return shapely.make_valid(shapely.union_all(np.asarray(parts, dtype=object))) if parts else Polygon()
+
+
+def is_wall_fill(poly: Polygon) -> bool:
+    """True for a filled area thin enough to be a wall (mean width 2 A / P at most MAX_WALL_WIDTH_M)."""
+    return poly.area > 0 and 2 * poly.area <= MAX_WALL_WIDTH_M * poly.length
+
+
+def main_building(pieces: list, weights: list[float], gap: float = BUILDING_GAP_M) -> tuple[Polygon, np.ndarray]:
+    """(region, kept) of the building: pieces (m; walls, glass, columns) closer than
+    ``gap`` join one cluster; the cluster of the most ``weights`` (wall area) is the
+    building. ``region``: its pieces grown by gap / 2, holes filled; ``kept[k]``: piece
+    k is in it."""
+    if not pieces:
+        return Polygon(), np.zeros(0, bool)
+    arr = np.asarray(pieces, dtype=object)
+    blobs = polygons_of(shapely.union_all(shapely.buffer(arr, gap / 2)))
+    tree = shapely.STRtree(np.asarray(blobs, dtype=object))
+    inside = tree.query(shapely.point_on_surface(arr), predicate="within")
+    blob_of = np.zeros(len(pieces), int)
+    blob_of[inside[0]] = inside[1]
+    total = np.bincount(blob_of, weights=np.asarray(weights, float), minlength=len(blobs))
+    best = int(np.argmax(total))
+    return Polygon(blobs[best].exterior), blob_of == best
+
+
+def fill_gap(walls, opening, reach: float, touch: float = 0.1):
+    """The wall gap beside an ``opening`` (a door's plan rectangle, m): the hull of the
+    jambs (the pieces of the walls within ``reach`` of it that come within ``touch`` of
+    it), less the walls."""
+    band = opening.buffer(reach, join_style="mitre")
+    jambs = [q for q in polygons_of(walls.intersection(band)) if q.distance(opening) <= touch]
+    return shapely.union_all(jambs).convex_hull.difference(walls) if jambs else Polygon()
+
+
+def components(geoms: list, join: float = 0.05) -> list[Polygon]:
+    """The outlines (minimum rotated rectangles, m) of the connected groups of
+    ``geoms`` (pieces closer than ``join`` m join): one per door or window drawn as loose
+    lines, arcs and blocks."""
+    if not geoms:
+        return []
+    arr = np.asarray(geoms, dtype=object)
+    blobs = polygons_of(shapely.union_all(shapely.buffer(arr, join / 2, quad_segs=2)))
+    a, b = shapely.STRtree(np.asarray(blobs, dtype=object)).query(shapely.point_on_surface(arr), predicate="within")
+    out = []
+    for k in range(len(blobs)):
+        rect = shapely.union_all(arr[a[b == k]]).minimum_rotated_rectangle
+        out.append(rect if isinstance(rect, Polygon) and rect.area > 0 else rect.buffer(join / 2))
+    return out
+
+
+def span(geom) -> float:
+    """The larger side (m) of a geometry's bounding box."""
+    if geom is None or geom.is_empty:
+        return 0.0
+    x0, y0, x1, y1 = geom.bounds
+    return max(x1 - x0, y1 - y0)
+
+
+def as_lines(geom) -> list[LineString]:
+    """The LineStrings of a (multi)line geometry."""
+    return [g for g in shapely.get_parts(geom) if isinstance(g, LineString)]

@@ -1,0 +1,114 @@
+"""The DXF importer on plans drawn as offices draw them (issue 25; tests/scene/dxf_drawings.py):
+wall layers found by their names in several conventions and languages, or by their
+geometry; walls inside nested blocks; rooms named by room-stamp attributes and texts; the
+title block, dimensions, axes and hatches never walls or footprint; a file with nothing
+wall-like ends in one line listing its layers."""
+
+from __future__ import annotations
+
+import pytest
+from shapely.geometry import Point, Polygon
+
+pytest.importorskip("ezdxf")
+
+from camplace.core.errors import InputError  # noqa: E402
+from camplace.scene.importers import read_plan  # noqa: E402
+from camplace.scene.importers.dxf_layers import layer_role  # noqa: E402
+from camplace.scene.importers.dxf_rooms import label_kind  # noqa: E402
+from tests.scene import dxf_drawings as dd  # noqa: E402
+
+
+@pytest.fixture(scope="module")
+def files(tmp_path_factory):
+    tmp = tmp_path_factory.mktemp("dxf")
+    return {"fm": dd.draw_fm_plan(tmp / "eg.dxf"), "fr": dd.draw_latin_plan(tmp / "fr.dxf", "fr"),
+            "es": dd.draw_latin_plan(tmp / "es.dxf", "es"), "r12": dd.draw_latin_plan(tmp / "r12.dxf", "es", "R12"),
+            "unnamed": dd.draw_unnamed_plan(tmp / "hall.dxf"), "none": dd.draw_no_walls(tmp / "none.dxf")}
+
+
+@pytest.fixture(scope="module")
+def fm(files):
+    return read_plan(files["fm"])
+
+
+def _prisms(got, prefix):
+    return [o for o in got.scene["obstacles"] if o["name"].startswith(prefix + "-")]
+
+
+def _area(got) -> float:
+    return Polygon(got.scene["room"]["footprint"]).area
+
+
+@pytest.mark.parametrize("name, role", [
+    ("E41_AUSSENWAENDE", "wall"), ("E62_INNENWAENDE_LEICHT", "wall"), ("Wände", "wall"), ("MURS_PORTEURS", "wall"),
+    ("Cloisons", "wall"), ("A-WALL-PATT", "wall"), ("A-221--G", "wall"), ("PARETI", "wall"), ("Walls - Exterior", "wall"),
+    ("A-WALL-IDEN", "annotation"), ("Z21_RAUMSTEMPEL", "annotation"), ("COTAS", "annotation"),
+    ("Z23_NGF-POLYGONE", "room"), ("LOCAUX", "room"), ("A-AREA", "room"), ("PORTES", "door"), ("Türen", "door"),
+    ("Crystal", "window"), ("VENTANAS", "window"), ("S-COLS", "column"), ("Stützen", "column"),
+    ("M10_MOEBEL", "furniture"), ("Flooring", "other"), ("L4", None), ("0", None)])
+def test_layer_roles_by_name(name, role):
+    assert layer_role(name) == role
+
+
+@pytest.mark.parametrize("text, tag, kind", [("Büro", "RAUMNAME", 3), ("Sitzungszimmer", "", 2), ("WC", "", 2),
+                                             ("E.012", "RAUMNUMMER", 1), ("A101", "", 1), ("24.35 m²", "", 0),
+                                             ("24.35 m²", "NGF", 0), ("+0.00", "", 0), ("", "", -1)])
+def test_label_kinds(text, tag, kind):
+    assert label_kind(text, tag) == kind
+
+
+def test_fm_plan_walls_by_name_rooms_by_stamps(fm):
+    walls = fm.used["wall layers"]
+    assert all(la in walls for la in ("E41_AUSSENWAENDE", "E61_INNENWAENDE_TRAGEND", "E62_INNENWAENDE_LEICHT"))
+    assert "by name" in walls and fm.used["units"].startswith("cm")
+    assert _area(fm) == pytest.approx(dd.FM_CLEAR_M2, rel=0.10)
+    names = [z["name"] for z in fm.scene["zones"]]
+    assert sorted(names) == sorted(n if n != "Büro" else f"{n} {k}" for n, k, *_ in dd.FM_ROOMS)
+    pieces = [Polygon(o["prism"]["polygon"], o["prism"].get("holes", [])) for o in _prisms(fm, "wall")]
+    assert any(p.contains(Point(17.0, 15.0)) for p in pieces)  # a toilet wall from the nested blocks
+
+
+def test_fm_plan_title_block_dimensions_axes_left_out(fm):
+    pieces = [Polygon(o["prism"]["polygon"]) for o in fm.scene["obstacles"]]
+    w, h = (v / 100 for v in dd.FM_OUTER)
+    assert all(-0.01 <= b[0] and b[2] <= w + 0.01 and -0.01 <= b[1] and b[3] <= h + 0.01
+               for b in (p.bounds for p in pieces))
+    assert fm.skipped["wall, glass and column pieces apart from the main building"] >= 1  # the key plan
+    assert len(_prisms(fm, "window")) == 7 and len(_prisms(fm, "pult_160")) == 4
+    assert len(fm.openings) >= 10 + 7
+
+
+@pytest.mark.parametrize("lang", ["fr", "es", "r12"])
+def test_latin_layers(files, lang):
+    got = read_plan(files[lang])
+    wall = {"fr": "MURS", "es": "MUROS", "r12": "MUROS"}[lang]
+    assert got.used["wall layers"].startswith(wall) and _area(got) == pytest.approx(dd.LATIN_CLEAR_M2, rel=0.10)
+    assert {z["name"] for z in got.scene["zones"]} == set(dd.LATIN_ROOMS["fr" if lang == "fr" else "es"])
+    if lang == "r12":  # R12 cannot say its units: guessed, and said so
+        assert "guessed" in got.used["units"] and any("units" in n for n in got.notes)
+
+
+def test_walls_found_by_geometry(files):
+    got = read_plan(files["unnamed"])
+    assert got.used["wall layers"].startswith("L4 ") and "by geometry" in got.used["wall layers"]
+    assert {o["source"]["layer"] for o in _prisms(got, "wall")} == {"L4"}  # not the shelves, stair or hatch
+    assert _area(got) == pytest.approx(dd.UNNAMED_OUTLINE_M2, rel=0.10)
+    assert any("parallel line pairs" in n for n in got.notes)
+
+
+def test_wall_layers_given_replace_the_conventions(files):
+    got = read_plan(files["fm"], wall_layers=("E41*",))
+    assert "E61" not in got.used["wall layers"] and "given" in got.used["wall layers"]
+
+
+def test_nothing_wall_like_lists_the_layers(files, tmp_path, monkeypatch, capsys):
+    from tests.conftest import run_cli
+
+    with pytest.raises(InputError) as err:
+        read_plan(files["none"])
+    assert err.value.option == "wall_layers"
+    assert "SYMBOLS (5 CIRCLE)" in str(err.value) and "SKETCH (2 LINE)" in str(err.value)
+    code, text = run_cli(["scene", "import", files["none"], "--out", tmp_path / "s.yaml"], monkeypatch, capsys)
+    lines = [ln for ln in text.strip().splitlines() if ln.strip()]
+    assert code == 2 and len(lines) == 1 and "--wall-layers" in lines[0] and "SKETCH (2 LINE)" in lines[0], text
+    assert not (tmp_path / "s.yaml").exists()
