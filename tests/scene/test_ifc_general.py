@@ -13,6 +13,7 @@ pytest.importorskip("ifcopenshell")
 
 from camplace.scene.importers import read_plan, read_storey_plans  # noqa: E402
 from camplace.scene.importers.ifc_build import GridBuilding, write_grid_building  # noqa: E402
+from camplace.scene.importers.ifc_model import unique_names  # noqa: E402
 from camplace.scene.importers.ifc_storey import join_pieces  # noqa: E402
 from camplace.spec.loading import parse_scene  # noqa: E402
 
@@ -60,3 +61,8 @@ def test_separate_blocks_join_into_one_simple_polygon_with_a_thin_seam():
     assert seam.area == pytest.approx(3 * 0.1, rel=0.01)  # 3 m between the blocks, 0.1 m wide
     assert outline.area == pytest.approx(a.area + b.area + seam.area, rel=1e-3)
     assert seam.intersection(a).area < 1e-9 and seam.intersection(b).area < 1e-9
+
+
+def test_storey_names_of_two_buildings_stay_apart():
+    assert unique_names(["Level 1", "Level 1", "Roof", "X", "X"], ["North", "South", "North", "", ""]) == [
+        "Level 1 (North)", "Level 1 (South)", "Roof", "X", "X #2"]

@@ -51,8 +51,10 @@ def _entities(model, classes) -> list:
 
 
 def _occluder_entities(model) -> list:
-    """Every element that may block a sight line or be a floor or ceiling (not openings)."""
+    """Every element that may block a sight line or be a floor or ceiling (not openings, not
+    the terrain)."""
     skip = {e.id() for e in _entities(model, NOT_ELEMENTS)}
+    skip |= {e.id() for e in _entities(model, ("IfcGeographicElement",)) if e.PredefinedType == "TERRAIN"}
     return [e for e in _entities(model, OCCLUDERS) if e.id() not in skip]
 
 

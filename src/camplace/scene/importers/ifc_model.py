@@ -166,7 +166,7 @@ def _building_of(eid: int, parent: dict[int, int], buildings: set[int]) -> int:
     return x if x in buildings else 0
 
 
-def _unique(names: list[str], suffixes: list[str]) -> list[str]:
+def unique_names(names: list[str], suffixes: list[str]) -> list[str]:
     """``names`` made unique: a repeated one gets its suffix, then #2, #3..."""
     count = Counter(names)
     out = [n if count[n] == 1 or not s else f"{n} ({s})" for n, s in zip(names, suffixes)]
@@ -190,7 +190,7 @@ def structure(model, scale: float) -> Structure:
     if not ents:
         stand = [(bid, name) for bid, name in buildings.items()] or [(0, "building")]
         sts = [Storey(n, float("nan"), k, k, "geometry") for n, (k, name) in
-               zip(_unique([name for _, name in stand], [str(k) for k, _ in stand]), stand)]
+               zip(unique_names([name for _, name in stand], [str(k) for k, _ in stand]), stand)]
         return Structure(sts, parent, True, buildings)
     placed = [_placement_z(s, scale) for s in ents]
     attrs = [None if s.Elevation is None else float(s.Elevation) * scale for s in ents]
@@ -203,7 +203,7 @@ def structure(model, scale: float) -> Structure:
             level, elev = ("placement", z) if z is not None else ("geometry", float("nan"))
         sts.append(Storey(s.Name or s.LongName or f"storey #{s.id()}", float(elev), s.id(),
                           _building_of(s.id(), parent, set(buildings)), level))
-    labels = _unique([s.name for s in sts], [buildings.get(s.building, "") for s in sts])
+    labels = unique_names([s.name for s in sts], [buildings.get(s.building, "") for s in sts])
     sts = [replace(s, name=n) for s, n in zip(sts, labels)]
     return Structure(sorted(sts, key=lambda s: (s.elevation != s.elevation, s.elevation)), parent, False, buildings)
 
