@@ -64,8 +64,13 @@ def show_summary(summary: dict, title: str) -> None:
         console.print("[yellow]no rooms found: the whole footprint is one zone of the default targets[/yellow]")
     for what, items in (("used", s["used"]), ("skipped", s["skipped"])):
         if items:
-            console.print(f"{what}: " + "; ".join(f"{escape(str(k))} {escape(str(v))}" for k, v in items.items()),
-                          soft_wrap=True)
+            grid = Table.grid(padding=(0, 2))
+            grid.add_column(style="dim", no_wrap=True)
+            grid.add_column()
+            for k, v in items.items():
+                grid.add_row(f"  {escape(str(k))}", escape(str(v)))
+            console.print(f"{what}:")
+            console.print(grid)
     if s["storeys"]:
         console.print(storeys_table(s["storeys"]))
     for note in s["notes"]:
