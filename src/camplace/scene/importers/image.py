@@ -62,7 +62,7 @@ class PlanRooms:
     ``bridges`` (bool masks in the box), free-region ``labels`` (int, in the box), the
     labels that are ``rooms`` and their ``names`` (None: not read) and printed areas, the
     pixels of its ``outline`` and the ``enclosed`` mask: the free space inside the outer
-    walls (rooms, stairs, closets) closed across the walls between them."""
+    walls (rooms, stairs, closets)."""
 
     box: tuple[slice, slice]
     walls: np.ndarray
@@ -135,10 +135,7 @@ def _plan_rooms(plan_of: np.ndarray, k: int, box, s: float, max_opening: float, 
     labels, n, outside = free_regions(walls | bridges)
     shape, _ = ndimage.label(~np.isin(labels, np.flatnonzero(outside[1:]) + 1))  # walls and what they enclose
     outline_px = int(np.bincount(shape.ravel())[1:].max(initial=0))
-    enclosed = ndimage.binary_fill_holes(square_morphology((labels > 0) & ~outside[labels], max_wall / s, "close"))
-    parts, n_parts = ndimage.label(enclosed)
-    if n_parts:
-        enclosed = parts == np.bincount(parts.ravel())[1:].argmax() + 1
+    enclosed = (labels > 0) & ~outside[labels]
     area = np.bincount(labels.ravel(), minlength=n + 1) * s * s
     inside = ~outside
     rooms = [int(r) for r in np.flatnonzero(inside & (area >= min_room_area))]
@@ -207,6 +204,16 @@ def _polygons(plan: PlanRooms, sheet: Sheet, min_area: float):
     return rooms, walls, openings
 
 
+def _inside(plan: PlanRooms, sheet: Sheet) -> np.ndarray:
+    """The plan's footprint as a mask of its box: the free space enclosed by its walls and
+    its rooms (a porch drawn by its colour too) closed across the walls between them
+    (the thickest wall), holes filled, the largest piece."""
+    inside = plan.enclosed | np.isin(plan.labels, plan.rooms)
+    inside = ndimage.binary_fill_holes(square_morphology(inside, sheet.max_wall / sheet.s, "close"))
+    parts, n = ndimage.label(inside)
+    return parts == np.bincount(parts.ravel())[1:].argmax() + 1 if n else inside
+
+
 def _storey_rows(sheet: Sheet) -> list[dict]:
     """PlanImport.storeys: every plan of the sheet with its rooms (name, area m²) and the
     area of its outline (m²: the outer face of its walls, openings bridged)."""
@@ -242,7 +249,7 @@ def plan_import(path: Path, sheet: Sheet, index: int, why: str, *, name=None, wa
     obstacles = prism_obstacles(walls, 0.0, min(float(wall_height or ceiling), ceiling), "wall", src, tolerance=0,
                                 skipped=skipped)
     at = (plan.box[0].start, plan.box[1].start)
-    footprint = footprint_of([mask_polygons(plan.enclosed, sheet.s, at, sheet.rows)], str(path))
+    footprint = footprint_of([mask_polygons(_inside(plan, sheet), sheet.s, at, sheet.rows)], str(path))
     zones = room_zones(rooms, coverage or 2, skipped=skipped)
     title = name or (path.stem if len(sheet.plans) == 1 else f"{path.stem} plan-{index + 1}")
     scene = plan_scene(title, footprint, ceiling, obstacles, zones, heights=heights, coverage=coverage, budget=budget)

@@ -52,6 +52,26 @@ def brightness(rgb: np.ndarray) -> np.ndarray:
     return rgb.max(axis=2)
 
 
+def label_sum(values: np.ndarray, labels: np.ndarray, n: int) -> np.ndarray:
+    """(n + 1,) sum of ``values`` over each label 0..n (bincount over the labelled pixels)."""
+    m = labels > 0
+    return np.bincount(labels[m], weights=values[m].astype(np.float64), minlength=n + 1)
+
+
+def label_mean(values: np.ndarray, labels: np.ndarray, n: int) -> np.ndarray:
+    """(n + 1,) mean of ``values`` over each label 0..n (0 for an empty label)."""
+    count = np.bincount(labels[labels > 0], minlength=n + 1)
+    return label_sum(values, labels, n) / np.maximum(count, 1)
+
+
+def label_max(values: np.ndarray, labels: np.ndarray, n: int) -> np.ndarray:
+    """(n + 1,) maximum of ``values`` (≥ 0) over each label 0..n (0 for an empty label)."""
+    m = labels > 0
+    out = np.zeros(n + 1, np.float64)
+    np.maximum.at(out, labels[m], values[m])
+    return out
+
+
 def otsu_threshold(values: np.ndarray) -> float:
     """The level (0..255) that best splits ``values`` into two classes (Otsu)."""
     hist = np.bincount(np.clip(values, 0, 255).astype(np.int64).ravel(), minlength=256).astype(float)
@@ -118,19 +138,18 @@ def solid_walls(ink: np.ndarray, s: float, hatch_m: float, min_wall_m: float, ma
     blab, nb = ndimage.label(bands)
     marked = np.zeros(nb + 1, bool)
     if nb:  # a strip along a wall, not a disc (the circle around a room number)
-        bidx = np.arange(1, nb + 1)
-        width = ndimage.maximum(ndimage.distance_transform_edt(bands), blab, bidx)
+        width = label_max(ndimage.distance_transform_edt(bands), blab, nb)[1:]
         marks = ink & free
         diagonal = (marks & (np.roll(marks, (1, 1), (0, 1)) | np.roll(marks, (1, -1), (0, 1)))).astype(np.int8)
         square = (marks & (np.roll(marks, 1, 0) | np.roll(marks, 1, 1))).astype(np.int8)
-        marked[1:] = ((ndimage.mean(marks, blab, bidx) >= 0.08)
+        marked[1:] = ((label_mean(marks, blab, nb)[1:] >= 0.08)
                       & (np.bincount(blab.ravel(), minlength=nb + 1)[1:] >= 8 * width ** 2)
-                      & (ndimage.sum(diagonal, blab, bidx) > ndimage.sum(square, blab, bidx)))
+                      & (label_sum(diagonal, blab, nb)[1:] > label_sum(square, blab, nb)[1:]))
     solid = ink | strokes | cells | marked[blab]
     broad = square_morphology(solid, max_wall_m / s, "open")
     if broad.any():
         blab, nb = ndimage.label(broad, EIGHT)
-        density = ndimage.mean(ink, blab, np.arange(1, nb + 1))
+        density = label_mean(ink, blab, nb)[1:]
         textured = np.r_[False, density < 0.5]
         if textured.any():
             skipped["textured areas (stairs, text blocks)"] += int(textured.sum() - 0)
@@ -167,9 +186,8 @@ def bridge_openings(walls: np.ndarray, s: float, max_opening_m: float, max_wall_
             continue
         plab, npl = ndimage.label(pieces, row if along == 1 else row.T)  # runs of the walls along the axis
         long = np.r_[False, np.bincount(plab.ravel(), minlength=npl + 1)[1:] * s >= MIN_JAMB_M][plab]
-        idx = np.arange(1, n + 1)
-        before = ndimage.maximum(added & np.roll(long, 1, axis=along), runs, idx) > 0
-        after = ndimage.maximum(added & np.roll(long, -1, axis=along), runs, idx) > 0
+        before = label_sum(added & np.roll(long, 1, axis=along), runs, n)[1:] > 0
+        after = label_sum(added & np.roll(long, -1, axis=along), runs, n)[1:] > 0
         short = np.bincount(runs.ravel(), minlength=n + 1)[1:] * s <= DOOR_M
         ends = np.r_[False, (before & after) | ((before | after) & short)][runs]
         out |= _between_rooms(ends & ~_line(ends, thick, across, "open"), walls, across)
@@ -189,8 +207,7 @@ def _between_rooms(bridges: np.ndarray, walls: np.ndarray, across: int) -> np.nd
         edge = bridges & ~np.roll(bridges, step, axis=across)
         border += edge
         wall += edge & np.roll(walls, step, axis=across)
-    idx = np.arange(1, n + 1)
-    ok = ndimage.sum(wall, lab, idx) <= 0.25 * np.maximum(ndimage.sum(border, lab, idx), 1)
+    ok = label_sum(wall, lab, n)[1:] <= 0.25 * np.maximum(label_sum(border, lab, n)[1:], 1)
     return np.r_[False, ok][lab]
 
 
@@ -218,10 +235,9 @@ def find_plans(raw: np.ndarray, ink: np.ndarray, s: float, max_opening_m: float,
     lab, n = ndimage.label(raw, EIGHT)
     if n == 0:
         return Sheet(raw, np.zeros(raw.shape, np.int32))
-    idx = np.arange(1, n + 1)
     area = np.bincount(lab.ravel(), minlength=n + 1)[1:].astype(float)
     edge = raw & ~ndimage.binary_erosion(raw)
-    drawn = (ndimage.mean(ink, np.where(edge, lab, 0), idx) >= 0.6) | (area >= 0.25 * area.max())
+    drawn = (label_mean(ink, np.where(edge, lab, 0), n)[1:] >= 0.6) | (area >= 0.25 * area.max())
     drawn &= area * s * s >= 0.05
     frame = _sheet_frames(ndimage.find_objects(lab), area, drawn, raw.shape)
     if frame.any():
@@ -232,7 +248,7 @@ def find_plans(raw: np.ndarray, ink: np.ndarray, s: float, max_opening_m: float,
     bones |= bridge_openings(bones, s, max_opening_m, max_wall_m)  # one plan across its windows and doors
     glab, ng = ndimage.label(ndimage.maximum_filter(bones, size=3), EIGHT)
     near = ndimage.maximum_filter(glab, size=odd(2 * REACH_M / s, 3), mode="constant")
-    group = ndimage.maximum(near, lab, idx).astype(np.int64)  # group of each piece (0: none)
+    group = label_max(near, lab, n)[1:].astype(np.int64)  # group of each piece (0: none)
     biggest = np.zeros(ng + 1)
     np.maximum.at(biggest, group, area)
     keep = drawn | (area >= 0.25 * biggest[group])
