@@ -217,12 +217,13 @@ def footprint_of(parts: list, source: str) -> Polygon:
     return shapely.geometry.polygon.orient(Polygon(max(polygons_of(outline), key=lambda q: q.area).exterior))
 
 
-def walls_outline(walls, gap: float = 1.5, min_share: float = 0.5) -> Polygon:
+def walls_outline(walls, gap: float = 1.5, min_share: float = 0.5, how: list | None = None) -> Polygon:
     """The building's outline (m, no holes) from its walls alone, when no closed rooms
     say it (open plans, pavilions): the area enclosed by the outer walls (the walls
     closed over openings up to ``gap`` m, holes filled, largest piece) when it covers at
     least ``min_share`` of the walls' convex hull; else that convex hull. The same rule
-    for every format, so a DXF and an IFC of one building agree."""
+    for every format, so a DXF and an IFC of one building agree. ``how`` (a list) gets
+    which it was: 'enclosed by the outer walls' or 'convex hull of the walls'."""
     hull = walls.convex_hull if walls is not None and not walls.is_empty else Polygon()
     if not isinstance(hull, Polygon) or hull.area <= 0:
         raise InputError("no walls to make a footprint of")
@@ -231,6 +232,8 @@ def walls_outline(walls, gap: float = 1.5, min_share: float = 0.5) -> Polygon:
     filled = [Polygon(q.exterior) for q in polygons_of(closed)]
     best = max(filled, key=lambda q: q.area) if filled else Polygon()
     shape = best if best.area >= min_share * hull.area else hull
+    if how is not None:
+        how.append("enclosed by the outer walls" if shape is best else "convex hull of the walls")
     return footprint_of([shape], "walls")
 
 

@@ -43,8 +43,9 @@ DOOR_MAX_M = 3.5  # a door's plan rectangle is at most this long; larger door-la
 BLOCK_MAX_M = 5.0  # a block named like a door, window or furniture is one when at most this large
 FURNITURE_MAX_M = 6.0
 COLUMN_MAX_M2 = 10.0  # larger closed shapes on column layers are no column
-ROOM_BRIDGE_M = 1.0  # doorways up to this wide are closed when rooms are found from the walls
+ROOM_BRIDGE_M = 1.05  # doorways up to this wide (a 1 m opening) are closed when rooms are found from the walls
 MAX_HANDLES = 30  # handles named in one obstacle's provenance
+MIN_NAMED_WALLS_M = 8.0  # less linework than this on the wall layers (a legend's stub): ask the geometry too
 
 
 def read(path: Path, *, name: str | None = None, units: str | None = None, wall_height: float | None = None,
@@ -85,13 +86,13 @@ def read(path: Path, *, name: str | None = None, units: str | None = None, wall_
         wall_solid = wall_solid.difference(shapely.union_all(door_rects))
     glass = glass.difference(wall_solid)
     sources = _sources(parts, role)
-    obstacles = _obstacles(wall_solid, sources, 0.0, wall_z, "wall", src, out.skipped)
-    obstacles += _obstacles(glass, sources, 0.0, wall_z, "window", src, out.skipped)
+    obstacles = _obstacles(wall_solid, sources["wall"], 0.0, wall_z, "wall", src, out.skipped)
+    obstacles += _obstacles(glass, sources["window"], 0.0, wall_z, "window", src, out.skipped)
     jambs = shapely.union_all([uncut, glass])
     gaps = shapely.union_all([fill_gap(jambs, q, max_wall_thickness) for q in door_rects] or [Polygon()])
     if doors == "closed":
-        obstacles += _obstacles(gaps.difference(jambs), sources, 0.0, wall_z, "door", src, out.skipped)
-    obstacles += _obstacles(columns, sources, 0.0, ceiling, "column", src, out.skipped)
+        obstacles += _obstacles(gaps.difference(jambs), sources["door"], 0.0, wall_z, "door", src, out.skipped)
+    obstacles += _obstacles(columns, sources["column"], 0.0, ceiling, "column", src, out.skipped)
     obstacles += _furniture(d, role, region, furniture_heights or {}, ceiling, src, out)
     out.openings = [_ring(q) for q in door_rects + polygons_of(glass)]
     for what, rects in (("door", door_rects), ("window", polygons_of(glass))):
@@ -163,31 +164,42 @@ def _wall_linework(path: Path, d: Drawing, parts: dict, role: dict, how: dict, g
     thin = [q for q in fills if is_wall_fill(q)]
     if len(fills) > len(thin):
         d.skipped["filled areas on wall layers too wide to be walls"] += len(fills) - len(thin)
-    if lines or thin:
-        return (lines, thin), _layers_of(parts["wall"], how)
-    if given is None:
-        cand = [sh for k, v in parts.items() if k in ("none", "other") for sh in v]
-        by_line, by_fill = defaultdict(list), defaultdict(list)
-        for sh in cand:
-            if isinstance(sh.geom, LineString):
-                if role.get(sh.layer) is None:
-                    by_line[sh.layer].append(sh.geom)
-            else:
-                by_fill[sh.layer] += polygons_of(sh.geom)
-        stats = layer_pairs(by_line, by_fill)
-        chosen = wall_layers_by_geometry(stats)
-        if chosen:
-            lines = [ln for n in chosen for ln in stats[n].lines]
-            fills = [q for n in chosen for q in by_fill.get(n, []) if is_wall_fill(q)]
-            gaps = np.concatenate([stats[n].gaps for n in chosen])
-            lo, hi = (np.percentile(gaps, [10, 90]) if len(gaps) else (0.0, 0.0))
-            apart = f"{lo:.2f} m apart" if hi - lo < 0.005 else f"{lo:.2f}-{hi:.2f} m apart"
-            d.notes.append(f"no layer is named like walls; took {', '.join(chosen)} by their parallel line pairs "
-                           f"({apart}); if that is wrong, name the wall layers (wall_layers)")
-            for n in chosen:
+    named = sum(ln.length for ln in lines) + sum(q.length / 2 for q in thin)
+    found = _layers_of(parts["wall"], how)
+    if given is None and named < MIN_NAMED_WALLS_M:  # nothing, or a legend's stub: what does the geometry say?
+        geo = _walls_by_geometry(d, parts, role)
+        if geo is not None and sum(ln.length for ln in geo[0]) > 2 * named:
+            d.notes.append(f"{'no layer is named like walls' if not named else 'little on the wall layers'}; took "
+                           f"{', '.join(geo[2])} by their parallel line pairs ({geo[3]}); if that is wrong, name "
+                           "the wall layers (wall_layers)")
+            for n in geo[2]:
                 role[n] = "wall"
-            return (lines, fills), {n: f"by geometry: parallel pairs {apart}" for n in chosen}
+            return (lines + geo[0], thin + geo[1]), {**found, **{n: f"by geometry: parallel pairs {geo[3]}"
+                                                               for n in geo[2]}}
+    if lines or thin:
+        return (lines, thin), found
     raise InputError(_no_walls_message(path, d, given), option="wall_layers")
+
+
+def _walls_by_geometry(d: Drawing, parts: dict, role: dict) -> tuple | None:
+    """(paired lines, wall-thin fills, layers, 'a-b m apart') of the layers no name
+    explains whose linework looks like walls (dxf_walls.wall_layers_by_geometry); None
+    when there are none."""
+    by_line, by_fill = defaultdict(list), defaultdict(list)
+    for sh in parts.get("none", []) + parts.get("other", []):
+        if not isinstance(sh.geom, LineString):
+            by_fill[sh.layer] += polygons_of(sh.geom)
+        elif role.get(sh.layer) is None:
+            by_line[sh.layer].append(sh.geom)
+    stats = layer_pairs(by_line, by_fill)
+    chosen = wall_layers_by_geometry(stats)
+    if not chosen:
+        return None
+    gaps = np.concatenate([stats[n].gaps for n in chosen])
+    lo, hi = np.percentile(gaps, [10, 90]) if len(gaps) else (0.0, 0.0)
+    apart = f"{lo:.2f} m apart" if hi - lo < 0.005 else f"{lo:.2f}-{hi:.2f} m apart"
+    return ([ln for n in chosen for ln in stats[n].lines],
+            [q for n in chosen for q in by_fill.get(n, []) if is_wall_fill(q)], chosen, apart)
 
 
 def _no_walls_message(path: Path, d: Drawing, given) -> str:
@@ -251,11 +263,15 @@ def _openings(out: PlanImport, shapes: list[Shape], region, max_m: float, too_bi
     return keep
 
 
-def _sources(parts: dict, role: dict) -> tuple:
-    """(STRtree of the building shapes, their shapes) for provenance."""
-    shapes = [sh for k in ("wall", "window", "door", "column") for sh in parts.get(k, [])]
-    shapes += [sh for sh in parts.get("none", []) + parts.get("other", []) if role.get(sh.layer) == "wall"]
-    return shapely.STRtree(np.asarray([sh.geom for sh in shapes], dtype=object)), shapes
+def _sources(parts: dict, role: dict) -> dict[str, tuple]:
+    """{'wall', 'window', 'door', 'column'} -> (STRtree of those shapes, the shapes), for provenance."""
+    out = {}
+    for kind in ("wall", "window", "door", "column"):
+        shapes = list(parts.get(kind, []))
+        if kind == "wall":  # layers taken by their geometry
+            shapes += [sh for sh in parts.get("none", []) + parts.get("other", []) if role.get(sh.layer) == "wall"]
+        out[kind] = (shapely.STRtree(np.asarray([sh.geom for sh in shapes], dtype=object)), shapes)
+    return out
 
 
 def _obstacles(geom, sources: tuple, z0: float, z1: float, prefix: str, src: str, skipped: Counter) -> list[dict]:
@@ -310,8 +326,8 @@ def _rooms_and_footprint(out: PlanImport, d: Drawing, room_shapes: list[Shape], 
     the building, named; the footprint their union closed across the walls. Without
     them (or where they cover less than half the walls' outline) the footprint is the
     walls' outline and the rooms the free pieces the walls enclose."""
-    outline = walls_outline(walls)
-    hull = walls.convex_hull
+    kind: list[str] = []
+    outline = walls_outline(walls, how=kind)
     polys = [q for q in filled_polygons(room_shapes) if region.contains(q.representative_point())]
     rooms = room_polygons(polys, out.skipped)
     labels = [lb for lb in d.labels if region.contains(lb.point)]
@@ -323,8 +339,7 @@ def _rooms_and_footprint(out: PlanImport, d: Drawing, room_shapes: list[Shape], 
             out.notes.append(f"the room outlines cover {footprint.area:.0f} m² of the walls' {outline.area:.0f} m²: "
                              "the footprint is the walls' outline")
         footprint = outline
-        kind = "convex hull of the walls" if outline.area >= 0.999 * hull.area else "enclosed by the outer walls"
-        out.used["footprint"] = f"{footprint.area:.1f} m², {kind}"
+        out.used["footprint"] = f"{footprint.area:.1f} m², {kind[0]}"
         if not rooms:
             barrier = shapely.union_all([walls, glass, columns])
             rooms = enclosed_rooms(footprint, barrier, ROOM_BRIDGE_M)

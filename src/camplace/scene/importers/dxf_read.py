@@ -27,6 +27,8 @@ MAX_ENTITIES = 2_000_000  # exploded entities read at most (a guard against runa
 LINEWORK = {"LINE", "LWPOLYLINE", "POLYLINE", "ARC", "CIRCLE", "ELLIPSE", "SPLINE"}
 FILLED = {"HATCH", "MPOLYGON", "SOLID", "TRACE", "3DFACE"}
 TEXTS = {"TEXT", "MTEXT", "ATTRIB"}
+ANNOTATION = {"DIMENSION", "ARC_DIMENSION", "LARGE_RADIAL_DIMENSION", "LEADER", "MLEADER", "MULTILEADER",
+              "ACAD_TABLE", "TOLERANCE", "VIEWPORT"}  # never taken apart into linework
 PLAUSIBLE_M = (3.0, 1500.0)  # the span of a building plan that makes sense, m
 TYPICAL_SPAN_M = 30.0  # a file without units is read in the unit (mm, cm, m) that makes its span nearest this
 
@@ -176,11 +178,12 @@ class _Reader:
                 self._insert(e, layer, group, block, handle, depth)
             elif kind in TEXTS:
                 self._text(e, layer, group, "")
-            elif kind == "MLINE":
-                for ve in e.virtual_entities():
-                    self.entity(ve, _layer_of(ve, layer), group, block, handle, depth + 1)
             elif kind in LINEWORK or kind in FILLED:
                 self._shape(e, kind, layer, group, block, handle)
+            elif kind not in ANNOTATION and hasattr(e, "virtual_entities") and depth < MAX_DEPTH:
+                # MLINE, and custom objects with proxy graphics (AutoCAD Architecture walls, ...)
+                for ve in e.virtual_entities():
+                    self.entity(ve, _layer_of(ve, layer), group, block, handle, depth + 1)
         except Exception:  # noqa: BLE001 - one entity ezdxf cannot take apart never fails the import
             self.out.skipped[f"{kind} entities that could not be read"] += 1
 

@@ -32,11 +32,15 @@ def room_polygons(polys: list[Polygon], skipped: Counter) -> list[Polygon]:
     polys = sorted((q for p in polys for q in polygons_of(shapely.make_valid(p)) if q.area >= MIN_ROOM_M2),
                    key=lambda q: q.area)
     kept: list[Polygon] = []
-    for q in polys:
-        if any(k.intersection(q).area > 0.9 * max(k.area, q.area) for k in kept):
-            skipped["room outlines drawn twice"] += 1
-            continue
-        kept.append(q)
+    if polys:
+        arr = np.asarray(polys, dtype=object)
+        a, b = shapely.STRtree(arr).query(arr, predicate="intersects")
+        a, b = a[a > b], b[a > b]  # each pair once: b the smaller (sorted by area), kept first
+        same = shapely.area(shapely.intersection(arr[a], arr[b])) > 0.9 * shapely.area(arr[a])
+        twice = set(a[same].tolist())
+        kept = [q for k, q in enumerate(polys) if k not in twice]
+        if twice:
+            skipped["room outlines drawn twice"] += len(twice)
     if len(kept) < 3:
         return reading_order(kept)
     arr = np.asarray(kept, dtype=object)

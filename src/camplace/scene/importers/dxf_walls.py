@@ -130,7 +130,7 @@ def closing_solid(lines: list, fills: list, radius: float, single: float):
     parts = [q for q in fills if not q.is_empty]
     if lines:
         arr = np.asarray(lines, dtype=object)
-        grown = shapely.union_all(shapely.buffer(arr, radius, join_style="mitre"))
+        grown = shapely.union_all(shapely.buffer(arr, radius, join_style="mitre")).simplify(1e-6)  # (no spikes)
         closed = shapely.make_valid(grown.buffer(-radius, join_style="mitre"))
         parts.append(closed)
         near = closed.buffer(single)
@@ -183,8 +183,9 @@ def fill_gap(walls, opening, reach: float, touch: float = 0.1):
     jambs (the pieces of the walls within ``reach`` of it that come within ``touch`` of
     it), less the walls."""
     band = opening.buffer(reach, join_style="mitre")
-    jambs = [q for q in polygons_of(walls.intersection(band)) if q.distance(opening) <= touch]
-    return shapely.union_all(jambs).convex_hull.difference(walls) if jambs else Polygon()
+    local = shapely.make_valid(shapely.clip_by_rect(walls, *band.bounds))
+    jambs = [q for q in polygons_of(local.intersection(band)) if q.distance(opening) <= touch]
+    return shapely.union_all(jambs).convex_hull.difference(local) if jambs else Polygon()
 
 
 def components(geoms: list, join: float = 0.05) -> list[Polygon]:
