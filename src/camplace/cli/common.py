@@ -9,6 +9,7 @@ import os
 import re
 import signal
 import sys
+import time
 from contextlib import contextmanager
 from pathlib import Path
 from typing import Callable, Optional
@@ -81,20 +82,82 @@ def word_error(err: CamplaceError) -> str:
     return f"{flag}: {msg}" if flag else msg
 
 
+REPORT_AFTER_STOP_S = 6.0  # after the first Ctrl-C the report set may run until this many seconds after it
+PREPARE_STAGES = ("scene", "targets", "candidates")  # before visibility: nothing to keep, Ctrl-C ends them at once
+
+
 class StopFlag:
-    """Ctrl-C handling: the first SIGINT only sets a flag (polled by the pipeline and the
-    solver, which then return the best placement so far); the second aborts."""
+    """Ctrl-C handling, by phase (``phase``, set from the progress stages and by the writer):
+
+    - ``prepare`` (scene, targets, candidates): nothing to keep, Ctrl-C aborts at once;
+    - ``visibility``: the first Ctrl-C stops after the current chunk (finished chunks stay
+      cached), the second aborts;
+    - ``keep`` (solve, beyond the grid, metrics, the contract files): the first Ctrl-C
+      only sets the flag (the solver returns its best placement, the contract files are
+      written); the second (``hurry()``) stops waiting for a solver and skips the report set;
+    - ``report`` (after the contract files): the report set runs while it fits
+      REPORT_AFTER_STOP_S after the first Ctrl-C (``report_deadline()``); a second Ctrl-C
+      ends it at once.
+
+    REPORT_AFTER_STOP_S after the first Ctrl-C a second one is simulated, so that a command
+    always leaves soon after an interrupt."""
 
     def __init__(self) -> None:
         self.count = 0
+        self.first_at: float | None = None  # time.perf_counter() of the first Ctrl-C
+        self.phase = "keep"
+        self._timer = None
 
     def __call__(self) -> bool:
         return self.count > 0
 
-    def _handler(self, signum, frame) -> None:  # noqa: ARG002 - signal handler signature
-        self.count += 1
+    def hurry(self) -> bool:
+        """True after a second Ctrl-C: leave as soon as the contract files are written."""
+        return self.count > 1
+
+    def report_deadline(self) -> float | None:
+        """The perf_counter() time the report set must end by after an interrupt (None: not interrupted)."""
+        return None if self.first_at is None else self.first_at + REPORT_AFTER_STOP_S
+
+    def stage(self, name: str) -> None:
+        """Follow the pipeline's progress stages (RichProgress): sets ``phase``."""
+        if self.phase in ("report", "done"):
+            return
+        self.phase = "prepare" if name in PREPARE_STAGES else "visibility" if name == "visibility" else "keep"
+        if self.phase == "prepare" and self.count:
+            raise KeyboardInterrupt
+
+    def contract_written(self) -> None:
+        """The contract files are in place: from now on a second Ctrl-C ends the command at once."""
+        self.phase = "report"
         if self.count > 1:
             raise KeyboardInterrupt
+
+    def finished(self) -> None:
+        """Every output is written: a Ctrl-C from now on changes nothing."""
+        self.phase = "done"
+        if self._timer is not None:
+            self._timer.cancel()
+
+    def _handler(self, signum, frame) -> None:  # noqa: ARG002 - signal handler signature
+        self.count += 1
+        if self.phase == "done":
+            return
+        if self.first_at is None:
+            import threading
+
+            self.first_at = time.perf_counter()
+            self._timer = threading.Timer(REPORT_AFTER_STOP_S, self._late)
+            self._timer.daemon = True
+            self._timer.start()
+        if self.phase == "prepare" or (self.count > 1 and self.phase in ("visibility", "report")):
+            raise KeyboardInterrupt
+
+    def _late(self) -> None:
+        """REPORT_AFTER_STOP_S after the first Ctrl-C: act as a second one."""
+        import _thread
+
+        _thread.interrupt_main(signal.SIGINT)
 
     @contextmanager
     def installed(self):
@@ -106,6 +169,8 @@ class StopFlag:
         try:
             yield self
         finally:
+            if self._timer is not None:
+                self._timer.cancel()
             signal.signal(signal.SIGINT, prev)
 
 
@@ -131,11 +196,15 @@ class RichProgress:
             console.print(f"[dim]incumbent: {text}[/dim]", highlight=False)
 
     def __call__(self, stage: str, done: int, total: int) -> None:
+        if self.stop is not None:
+            self.stop.stage(stage)
         if self.stop is not None and self.stop() and not self.told_stop:
             self.told_stop = True
             what = ("after the current visibility chunk (finished chunks stay cached)" if stage == "visibility"
                     else "the solver; the best placement so far will be written")
-            console.print(f"[yellow]interrupt: stopping {what} (Ctrl-C again to abort)[/yellow]")
+            again = ("Ctrl-C again to abort" if stage == "visibility"
+                     else "Ctrl-C again to write only placement.json / metrics.json and leave")
+            console.print(f"[yellow]interrupt: stopping {what} ({again})[/yellow]")
         if stage not in self.tasks:
             if not console.is_terminal and not state["quiet"]:
                 console.print(f"stage: {stage}", highlight=False)

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import os
 import sys
+import time
 from pathlib import Path
 from typing import Optional
 
@@ -28,10 +29,11 @@ from camplace.core.errors import InputError
 def run_pipeline(scene, budget: Optional[int], solver: Optional[str], out: Optional[Path],
                  time_limit: Optional[float] = None, require_feasible: bool = False,
                  max_memory_gb: Optional[float] = None, repeatable: bool = False, frame: str = "scene",
-                 plan: bool = True, paper: str = "A3", preview=None, **options) -> None:
+                 plan: bool = True, paper: str = "A3", preview=None, leave: bool = True, **options) -> None:
     """camplace.workflows.run.run with progress bars and Ctrl-C handling; writes the outputs
     into ``out`` (default camplace-out/<scene>, poses in ``frame``; a plan's ``preview``
-    as preview.png / preview.svg) and prints the summary."""
+    as preview.png / preview.svg) and prints the summary. Interrupted: exit 130 at once
+    (``leave``; else typer.Exit(130))."""
     from camplace.outputs.plan_data import check_paper
     from camplace.outputs.write import check_frame
     from camplace.workflows.run import run
@@ -48,24 +50,25 @@ def run_pipeline(scene, budget: Optional[int], solver: Optional[str], out: Optio
                          time_limit_s=time_limit, should_stop=stop, require_feasible=require_feasible,
                          max_memory_bytes=memory_bytes(max_memory_gb), **options)
         out_dir = out or Path("camplace-out") / result.scene.name
-        write_and_summarise(result, out_dir, repeatable, frame, plan, paper, extra=run_extra(preview, out_dir))
+        write_and_summarise(result, out_dir, repeatable, frame, plan, paper, extra=run_extra(preview, out_dir),
+                            stop=stop)
     if stop():
+        took = "" if stop.first_at is None else f" {time.perf_counter() - stop.first_at:.1f} s after the Ctrl-C"
         console.print(f"[yellow]interrupted: wrote the best placement found so far (status "
-                      f"'{result.placement.status}') to {escape(str(out_dir))}[/yellow]")
-        _exit_if_solver_left_running(130)
+                      f"'{result.placement.status}') to {escape(str(out_dir))}{took}[/yellow]")
+        if leave:
+            _leave(130)
         raise typer.Exit(130)
 
 
-def _exit_if_solver_left_running(code: int) -> None:
-    """A solver thread that ignored the interrupt (camplace.workflows.run.solve_stoppable) may
-    still run native code; interpreter shutdown under it can abort the process. The
-    outputs are written (atomically, fsynced), so leave at once with ``code``."""
-    import threading
-
-    if any(t.is_alive() and t.name.startswith("camplace-solve-") for t in threading.enumerate()):
-        sys.stdout.flush()
-        sys.stderr.flush()
-        os._exit(code)
+def _leave(code: int) -> None:
+    """Exit with ``code`` at once after an interrupt: the outputs are written (atomically,
+    fsynced), and a solver thread that ignored the interrupt (camplace.workflows.run.solve_stoppable)
+    may still run native code, under which interpreter shutdown can abort the process; a
+    normal shutdown would also spend seconds tearing down what the run built."""
+    sys.stdout.flush()
+    sys.stderr.flush()
+    os._exit(code)
 
 
 def scene_from_space_file(path: Path, budget: Optional[int], save_scene: Optional[Path] = None,
@@ -242,7 +245,7 @@ def run_storeys(path: Path, scenes: list):
             show_summary(storey_preview.summary, f"{path.name}, storey '{name}'")
             try:
                 run_pipeline(parse_scene(data, f"{path} (storey '{name}')"), budget, solver, out_dir / slug, *args,
-                             preview=storey_preview, **options)
+                             preview=storey_preview, leave=False, **options)
             except typer.Exit:  # interrupted: that storey's best placement is written; summarise the ones done
                 rows.append(storey_row(name, out_dir / slug, elev, data["room"]["height"]))
                 storeys_summary(out_dir, path.name, rows)

@@ -48,7 +48,7 @@ def _show_log(result, paths: dict, out_dir: Path) -> None:
         console.print(f"[dim]wrote {escape(str(where))}{more}[/dim]")
 
 
-def _table(result, out_dir: Path, paths: dict) -> Table:
+def _table(result, out_dir: Path, paths: dict, skipped: list[str] = ()) -> Table:
     p, m = result.placement, result.metrics
     t = Table(title=f"camplace - {result.scene.name}", show_header=False)
     t.add_row("solver / status", f"{p.solver} / {p.status}")
@@ -72,6 +72,8 @@ def _table(result, out_dir: Path, paths: dict) -> Table:
         t.add_row("report", str(paths["report.html"]))
     if "preview.png" in paths:
         t.add_row("plan preview", str(paths["preview.png"]))
+    if skipped:
+        t.add_row("skipped (interrupted)", ", ".join(skipped))
     return t
 
 
@@ -94,23 +96,32 @@ def crowd_rows(m) -> list[tuple[str, str]]:
 
 
 def write_and_summarise(result, out_dir: Path, repeatable: bool = False, frame: str = "scene", plan: bool = True,
-                        paper: str = "A3", extra: dict | None = None) -> None:
+                        paper: str = "A3", extra: dict | None = None, stop=None) -> None:
     """Write every output of ``result`` into ``out_dir`` (poses in ``frame``; the plan set on
     ``paper`` unless not ``plan``) and print the summary; ``extra``: files written besides
-    ({'files': {name: path}, 'plan': a plan's import summary}, camplace.cli.plan_preview.run_extra)."""
+    ({'files': {name: path}, 'plan': a plan's import summary}, camplace.cli.plan_preview.run_extra).
+    ``stop`` (camplace.cli.common.StopFlag): after a Ctrl-C the contract files come first and
+    fast, then the report set as far as it fits the time after the interrupt (the parts left
+    out are listed as skipped)."""
     from camplace.outputs.write import write_outputs
 
     p = result.placement
     t0 = time.perf_counter()
+    skipped: list[str] = []
+    watch = {} if stop is None else {"compressed": not stop(), "on_contract": stop.contract_written,
+                                     "deadline": stop.report_deadline, "skipped": skipped}
     paths = write_outputs(out_dir, result.scene.name, result.visibility, p, result.problem.budget, result.metrics,
                           result.timings_s, repeatable=repeatable, scene=result.scene, frame=frame, plan=plan,
-                          paper=paper)
+                          paper=paper, **watch)
+    if stop is not None:
+        stop.finished()
     result.timings_s["report"] = time.perf_counter() - t0
     paths.update((extra or {}).get("files", {}))
     _show_log(result, paths, out_dir)
     if state["json"]:
-        typer.echo(json.dumps(json_summary(result, out_dir, paths, (extra or {}).get("plan")), indent=2))
+        summary = json_summary(result, out_dir, paths, (extra or {}).get("plan"))
+        typer.echo(json.dumps(dict(summary, **({"skipped": skipped} if skipped else {})), indent=2))
     elif state["quiet"]:
         typer.echo(str(out_dir))
     else:
-        Console().print(_table(result, out_dir, paths))
+        Console().print(_table(result, out_dir, paths, skipped))

@@ -30,14 +30,14 @@ Progress = Callable[[str, int, int], None]
 
 
 def swap_descent(problem: PlacementProblem, selected: np.ndarray, time_limit_s: float | None = 30.0,
-                 max_passes: int = 1000) -> tuple[np.ndarray, dict]:
+                 max_passes: int = 1000, should_stop: Callable[[], bool] | None = None) -> tuple[np.ndarray, dict]:
     """Best-improvement local search from ``selected`` (camplace.solvers.local_search): each
     pass tries, for every selected camera i, removing it and adding the best candidate j
     (any location not used by the others, money budget kept), plus plain additions while
     below the budget; applies the single best move if it lowers the cost. One pass = k
     sparse mat-vecs. Returns the sorted selection and info (moves, passes, seconds)."""
     sel, info = swap_search(problem, np.asarray(selected, np.int64), NominalObjective(problem),
-                            end=deadline(time_limit_s), max_passes=max_passes)
+                            end=deadline(time_limit_s), max_passes=max_passes, should_stop=should_stop)
     return np.array(sorted(sel), np.int64), {k: info[k] for k in ("moves", "passes", "seconds")}
 
 
@@ -92,10 +92,12 @@ class AdaptiveResult:
 def adaptive_rounds(scene: Scene, vis: Visibility, problem: PlacementProblem, placement: Placement,
                     rounds: int = 3, time_limit_s: float | None = 120.0, solver: str | None = None,
                     solver_time_s: float = 10.0, progress: Progress | None = None,
-                    guard: PoseGuard | None = None, row_map: RowMap | None = None) -> AdaptiveResult:
+                    guard: PoseGuard | None = None, row_map: RowMap | None = None,
+                    should_stop: Callable[[], bool] | None = None) -> AdaptiveResult:
     """Up to ``rounds`` rounds of finer candidates around the current selection, each
-    solved again warm-started; stops early when a round does not lower the cost.
-    ``guard``: see camplace.improve.refine.refine_poses."""
+    solved again warm-started; stops early when a round does not lower the cost, and
+    when ``should_stop()`` turns true (between the steps of a round; the best selection
+    so far is kept). ``guard``: see camplace.improve.refine.refine_poses."""
     t0 = time.perf_counter()
     sel = np.asarray(placement.selected, np.int64)
     grid_cost = problem.cost(sel)
@@ -103,18 +105,21 @@ def adaptive_rounds(scene: Scene, vis: Visibility, problem: PlacementProblem, pl
     hist = [{"round": 0, "candidates": int(problem.n_candidates), "new_candidates": 0, "nnz": int(problem.V.nnz),
              "cost": grid_cost, "seconds": round(placement.seconds, 3)}]
     cur_vis, cur_prob, cur_sel = vis, problem, sel
+    stop = (lambda: False) if should_stop is None else should_stop
     for r in range(1, rounds + 1):
-        if time_limit_s is not None and time.perf_counter() - t0 > time_limit_s:
+        if (time_limit_s is not None and time.perf_counter() - t0 > time_limit_s) or stop():
             break
         tr = time.perf_counter()
         poses, cids = finer_poses(scene, cur_vis, cur_sel, r, guard)
         if len(poses) == 0:
             break
         new_vis, _ = append_candidates(cur_vis, scene.occupancy, poses, cids)
+        if stop():
+            break
         new_prob = extend_problem(cur_prob, new_vis, row_map)
         left = None if time_limit_s is None else max(1.0, time_limit_s - (time.perf_counter() - t0))
-        new_sel, info = swap_descent(new_prob, cur_sel, time_limit_s=left)
-        if solver:
+        new_sel, info = swap_descent(new_prob, cur_sel, time_limit_s=left, should_stop=should_stop)
+        if solver and not stop():
             from camplace.solvers import SOLVERS
 
             p = SOLVERS[solver](new_prob, time_limit_s=min(solver_time_s, left or solver_time_s), initial=new_sel)

@@ -237,14 +237,17 @@ def refine_poses(scene: Scene, vis: Visibility, problem: PlacementProblem, selec
                  time_limit_s: float | None = 60.0, levels: int = 4, max_sweeps: int = 50,
                  progress: Progress | None = None,
                  guard: PoseGuard | None = None,
-                 row_map: RowMap | None = None) -> tuple[np.ndarray, np.ndarray, list[sp.csr_matrix], dict]:
+                 row_map: RowMap | None = None,
+                 should_stop: Callable[[], bool] | None = None) -> tuple[np.ndarray, np.ndarray, list[sp.csr_matrix], dict]:
     """Compass search over each selected camera's pose (see module doc).
 
     Returns (poses (k, 7) x, y, z, yaw, pitch, roll, focal_mm; moved (k,) bool; rows: the k
     V rows of the final poses; info). Step sizes start at half the box half-range and halve
     ``levels`` times; a sweep visits every camera once; sweeps repeat while one helps. A
     varifocal lens's focal length is one more variable (``focal_box``; issue 27).
-    ``guard`` rejects trial poses before they are raycast (e.g. poses that see a privacy zone)."""
+    ``guard`` rejects trial poses before they are raycast (e.g. poses that see a privacy zone).
+    ``should_stop()`` is polled before each poll of trial poses (stopped 'interrupted': the
+    poses reached so far are kept, each of them an accepted improvement)."""
     t0 = time.perf_counter()
     deadline = None if time_limit_s is None else t0 + float(time_limit_s)
     sel = np.asarray(selected, np.int64)
@@ -264,6 +267,9 @@ def refine_poses(scene: Scene, vis: Visibility, problem: PlacementProblem, selec
             if deadline is not None and time.perf_counter() > deadline:
                 stopped = "time_limit"
                 break
+            if should_stop is not None and should_stop():
+                stopped = "interrupted"
+                break
             box = boxes[k]
             cid = int(cands.camera_ids[i])
             half = np.r_[box.half, fbox[k, 1]]
@@ -279,7 +285,8 @@ def refine_poses(scene: Scene, vis: Visibility, problem: PlacementProblem, selec
             step = half / 2.0
             for _ in range(levels):
                 while True:
-                    if deadline is not None and time.perf_counter() > deadline:
+                    if (deadline is not None and time.perf_counter() > deadline) or (
+                            should_stop is not None and should_stop()):
                         break
                     trial = []
                     for d in dims:
@@ -314,7 +321,7 @@ def refine_poses(scene: Scene, vis: Visibility, problem: PlacementProblem, selec
             cov[rows[k].indices] += 1
             if progress:
                 progress("refine", k + 1, len(sel))
-        if stopped == "time_limit" or not improved_any:
+        if stopped in ("time_limit", "interrupted") or not improved_any:
             break
     info = {"trials": trials, "accepted_moves": accepted, "sweeps": sweeps, "stopped": stopped,
             "seconds": time.perf_counter() - t0}
@@ -332,7 +339,8 @@ def _guarded(guard: PoseGuard, cands: Candidates, cid: int, trial: np.ndarray) -
 def refine_placement(scene: Scene, vis: Visibility, problem: PlacementProblem, placement: Placement,
                      time_limit_s: float | None = 60.0, progress: Progress | None = None,
                      **search_options) -> RefineResult:
-    """Refine the placement's poses and append the moved ones to V (see module doc).
+    """Refine the placement's poses and append the moved ones to V (see module doc);
+    ``search_options``: refine_poses' (levels, max_sweeps, guard, should_stop).
 
     The returned placement selects, for every camera, its refined row (a new row of V when
     it moved, its grid row otherwise); its objective is recomputed from the extended V."""

@@ -277,7 +277,7 @@ def write_report(out_dir: str | Path, targets, coverage: np.ndarray, placement: 
                  html_report: bool = True, figures: bool = True, exports: bool = True,
                  scene=None, vis=None, selected: np.ndarray | None = None,
                  repeatable: bool = False, extra_html: str = "",
-                 rendered_views: tuple[list[dict], int] | None = None) -> dict[str, Path]:
+                 rendered_views: tuple[list[dict], int] | None = None, written: tuple[str, ...] = ()) -> dict[str, Path]:
     """Write exports (opencv/, colmap/), PNG figures and report.html into out_dir.
 
     targets: camplace.targets.build.Targets (N_p); coverage: (N_p,) achieved coverage of the
@@ -287,7 +287,8 @@ def write_report(out_dir: str | Path, targets, coverage: np.ndarray, placement: 
     fit VIEW_BUDGET_S seconds). ``repeatable``: every view and no date, so that the page
     depends only on the inputs (byte-identical between identical runs). ``extra_html``: sections
     placed before the camera views (the plan view, camplace.outputs.handover); ``rendered_views``:
-    camera_views' result when already rendered. Returns file name (relative to out_dir) -> path."""
+    camera_views' result when already rendered; ``written``: names of files an earlier call wrote
+    (report.html links them too). Returns file name (relative to out_dir) -> path."""
     from camplace.outputs.exports import write_exports
     from camplace.outputs.figures import write_figures
 
@@ -307,8 +308,10 @@ def write_report(out_dir: str | Path, targets, coverage: np.ndarray, placement: 
         paths.update(write_figures(out, view, targets.positions, is_surface, coverage, cameras,
                                    hists or {"all targets": metrics.get("coverage_histogram", {})}, gammas, slices))
     if html_report:
+        names = [*written, *paths]
         files = ["placement.csv", "placement.json", "metrics.json", "visibility.npz",
-                 *sorted(p for p in paths if p.endswith(".png")), *(["opencv/", "colmap/"] if exports else [])]
+                 *sorted({p for p in names if p.endswith(".png")}),
+                 *(["opencv/", "colmap/"] if exports or "colmap/images.txt" in names else [])]
         views, skipped = rendered_views or (None, 0)
         if rendered_views is None and scene is not None and vis is not None and selected is not None:
             views, skipped = camera_views(scene, vis, selected,

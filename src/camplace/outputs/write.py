@@ -10,6 +10,7 @@ import csv
 import io
 import time
 from pathlib import Path
+from typing import Callable
 
 import numpy as np
 
@@ -155,7 +156,9 @@ def visibility_arrays(vis: Visibility) -> dict[str, np.ndarray]:
 def write_outputs(out_dir: str | Path, scene_name: str, vis: Visibility, placement: Placement, budget: int,
                   metrics: Metrics, timings: dict[str, float], scene=None, report: bool = True,
                   repeatable: bool = False, frame: str = "scene", plan: bool = True,
-                  paper: str = "A3") -> dict[str, Path]:
+                  paper: str = "A3", compressed: bool = True, on_contract: Callable[[], None] | None = None,
+                  deadline: Callable[[], float | None] | None = None,
+                  skipped: list[str] | None = None) -> dict[str, Path]:
     """Write the contract files into out_dir and, with ``report``, the report set
     (report.html, PNG figures, opencv/ and colmap/ exports; camplace.outputs.report_html);
     ``scene`` (camplace.scene.build.Scene) adds the room and obstacles to the pictures;
@@ -176,7 +179,14 @@ def write_outputs(out_dir: str | Path, scene_name: str, vis: Visibility, placeme
     after them, so a report that fails or is interrupted cannot cost the new placement.
     Then a report.html left from an earlier run (it would show another placement) is
     removed, and a KeyboardInterrupt comes out as camplace.core.errors.Interrupted saying so;
-    metrics.json is rewritten at the end with the report's time in ``timings_s.report``."""
+    metrics.json is rewritten at the end with the report's time in ``timings_s.report``.
+
+    After an interrupt (the caller's choice): ``compressed`` False writes visibility.npz
+    uncompressed (ten times faster); ``on_contract()`` is called once the contract files
+    are in place; ``deadline()`` (a perf_counter() time or None) ends the report set: a
+    part (exports, figures, plan set, report.html) starts only before it, and with a
+    ``deadline`` a KeyboardInterrupt during the report set only ends it. The parts not
+    written are appended to ``skipped``."""
     t0 = time.perf_counter()
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
@@ -188,7 +198,8 @@ def write_outputs(out_dir: str | Path, scene_name: str, vis: Visibility, placeme
     report_timings = {k: 0.0 if repeatable else round(float(v), 4) for k, v in timings.items()}
     with AtomicBatch() as batch:  # the contract files replace the old ones together, once all are written
         paths = {
-            "visibility.npz": batch.stage_savez(out / "visibility.npz", **visibility_arrays(vis)),
+            "visibility.npz": batch.stage_savez(out / "visibility.npz", compressed=compressed,
+                                                **visibility_arrays(vis)),
             "placement.json": batch.stage_json(out / "placement.json", pdict),
             "placement.csv": batch.stage_text(out / "placement.csv", placement_csv(pdict["cameras"])),
         }
@@ -202,28 +213,73 @@ def write_outputs(out_dir: str | Path, scene_name: str, vis: Visibility, placeme
         from camplace.outputs.plan_data import check_paper
 
         paper = check_paper(paper)
+    skipped = [] if skipped is None else skipped
+    parts = ReportParts(deadline, skipped, [p for p in REPORT_PARTS if p != PLAN_SET or (plan and scene is not None)])
     try:
+        if on_contract is not None:
+            on_contract()
         # the report's pictures and mount table are drawn in the scene frame; exports follow ``frame``
         shown = pdict if frame == "scene" else placement_dict(scene_name, placement, budget, vis.candidates, T,
                                                               retention_days=days)
-        paths.update(_write_report_set(out, vis, placement, shown, metrics, report_timings, scene, repeatable,
-                                       paper if plan else None, T if frame == "input" else None))
+        _write_report_set(out, vis, placement, shown, metrics, report_timings, scene, repeatable,
+                          paper if plan else None, T if frame == "input" else None, parts)
+        paths.update(parts.paths)
         if frame != "scene" and "colmap/images.txt" in paths:
             from camplace.outputs.exports import write_exports
 
             paths.update(write_exports(out, pdict["cameras"]))
     except BaseException as err:
+        paths.update(parts.paths)
         if "report.html" not in paths:  # an earlier run's page would contradict the new contract files
             _unlink_quietly(out / "report.html")
+        if isinstance(err, KeyboardInterrupt) and deadline is not None:
+            parts.cut()
+            return paths
         if isinstance(err, KeyboardInterrupt):
             raise Interrupted(f"stopped during the report: the contract files (placement.json, metrics.json, "
                               f"visibility.npz, placement.csv) are written to {out}; the report set is "
                               f"incomplete") from err
         raise
-    if not repeatable:  # repeatable: every timing is 0.0, metrics.json is already final
+    if not repeatable and not skipped:  # repeatable: every timing is 0.0, metrics.json is already final
         timings["report"] = time.perf_counter() - t0
         atomic_write_json(out / "metrics.json", _metrics_dict(metrics, timings, repeatable))
     return paths
+
+
+EXPORTS, FIGURES, HTML = "exports (opencv/, colmap/)", "figures (PNG)", "report.html"
+PLAN_SET = "plan set (plan.pdf, plan.svg, plan.dxf, scene.glb)"
+REPORT_PARTS = (EXPORTS, FIGURES, PLAN_SET, HTML)  # in the order they are written
+
+
+class ReportParts:
+    """The parts of the report set (``planned``, REPORT_PARTS names), written in order while
+    they fit the deadline (``deadline()``: a perf_counter() time or None); ``skipped``
+    collects the names of the parts not written, ``paths`` what was."""
+
+    def __init__(self, deadline: Callable[[], float | None] | None, skipped: list[str],
+                 planned: tuple[str, ...] | list[str] = REPORT_PARTS) -> None:
+        self.deadline = deadline
+        self.skipped = skipped
+        self.planned = list(planned)
+        self.done: list[str] = []
+        self.paths: dict[str, Path] = {}
+
+    def fits(self) -> bool:
+        end = None if self.deadline is None else self.deadline()
+        return end is None or time.perf_counter() < end
+
+    def run(self, name: str, write: Callable[[], dict[str, Path]]) -> bool:
+        """Write the part ``name`` (``write()`` returns its paths) if it fits; True when written."""
+        if not self.fits():
+            self.skipped.append(name)
+            return False
+        self.paths.update(write())
+        self.done.append(name)
+        return True
+
+    def cut(self) -> None:
+        """The report set was stopped: the part in progress and those after it are skipped."""
+        self.skipped.extend(n for n in self.planned if n not in self.done and n not in self.skipped)
 
 
 def _timeless(value):
@@ -245,26 +301,41 @@ def _metrics_dict(metrics: Metrics, timings: dict[str, float], repeatable: bool)
 
 def _write_report_set(out: Path, vis: Visibility, placement: Placement, pdict: dict, metrics: Metrics,
                       timings: dict[str, float], scene, repeatable: bool = False,
-                      paper: str | None = None, input_T: np.ndarray | None = None) -> dict[str, Path]:
+                      paper: str | None = None, input_T: np.ndarray | None = None,
+                      parts: ReportParts | None = None) -> dict[str, Path]:
     """report.html, PNG figures and exports (camplace.outputs.report_html.write_report); with
     ``repeatable`` every camera view is rendered (no time budget), so the page depends only on
-    the inputs. ``paper`` (with a scene): the hand-over plan set on that paper, first (plan.dxf
-    in the frame of ``input_T``, 4x4, when given)."""
+    the inputs. ``paper`` (with a scene): the hand-over plan set on that paper (plan.dxf
+    in the frame of ``input_T``, 4x4, when given). Written part by part through ``parts``
+    (ReportParts: exports, figures, the plan set, report.html, each while it fits its deadline)."""
     from camplace.outputs.figures import SceneView
     from camplace.outputs.report_html import write_report
 
+    parts = ReportParts(None, []) if parts is None else parts
     sel = np.asarray(placement.selected, np.int64)
     cov = np.bincount(vis.V[sel].indices, minlength=vis.V.shape[1]).astype(np.int64)
     m = dict(metrics.to_dict(), timings_s=timings)
-    paths, extra, views = {}, "", None
+    view = SceneView.from_scene(scene) if scene else None
+
+    def report(**what) -> dict[str, Path]:
+        opts = dict(html_report=False, figures=False, exports=False) | what
+        return write_report(out, vis.targets, cov, pdict, m, view, n_candidates=int(vis.V.shape[0]), scene=scene,
+                            vis=vis, selected=sel, repeatable=repeatable, written=tuple(parts.paths), **opts)
+
+    parts.run(EXPORTS, lambda: report(exports=True))
+    parts.run(FIGURES, lambda: report(figures=True))
+    plan: dict = {"extra": "", "views": None}
     if paper is not None and scene is not None:  # the hand-over set renders the camera views once for both
         from camplace.outputs.handover import write_plan_set
 
-        paths, extra, views = write_plan_set(out, scene, vis, pdict, m, sel, paper=paper, repeatable=repeatable,
-                                             input_from_scene=input_T)
-    return {**paths, **write_report(out, vis.targets, cov, pdict, m, SceneView.from_scene(scene) if scene else None,
-                                    n_candidates=int(vis.V.shape[0]), scene=scene, vis=vis, selected=sel,
-                                    repeatable=repeatable, extra_html=extra, rendered_views=views)}
+        def plan_set() -> dict[str, Path]:
+            paths, plan["extra"], plan["views"] = write_plan_set(out, scene, vis, pdict, m, sel, paper=paper,
+                                                                 repeatable=repeatable, input_from_scene=input_T)
+            return paths
+
+        parts.run(PLAN_SET, plan_set)
+    parts.run(HTML, lambda: report(html_report=True, extra_html=plan["extra"], rendered_views=plan["views"]))
+    return parts.paths
 
 
 def _unlink_quietly(path: Path) -> None:

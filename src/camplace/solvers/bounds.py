@@ -315,14 +315,22 @@ def convex_start(problem: PlacementProblem, x: np.ndarray) -> np.ndarray:
 
 def build_highs(problem: PlacementProblem, *, integer: bool, threads: int | None = 1, time_limit_s: float | None = None,
                 log_file: str | None = None, solver: str | None = None, seed: int = 0,
-                forced_locations: np.ndarray | None = None):
-    """A highspy.Highs holding the convex model (x integer if `integer`)."""
+                forced_locations: np.ndarray | None = None, x_cost: np.ndarray | None = None):
+    """A highspy.Highs holding the convex model (x integer if `integer`; ``x_cost``: (N_g,)
+    costs of the x columns instead of 0)."""
     import highspy
 
-    from camplace.solvers.highs_util import new_highs
+    from camplace.solvers.highs_util import MilpArrays, highs_from_arrays
 
     A, cost, clo, chi, rlo, rhi, n_x = tight_model_arrays(problem, forced_locations)
-    h = new_highs()
+    if x_cost is not None:
+        cost = np.array(cost, np.float64)
+        cost[:n_x] = x_cost
+    inf = highspy.kHighsInf
+    integrality = np.zeros(A.shape[1], np.int32)
+    integrality[:n_x] = 1 if integer else 0
+    h = highs_from_arrays(MilpArrays(cost, A, np.where(np.isinf(rlo), -inf, rlo), np.where(np.isinf(rhi), inf, rhi),
+                                     clo, chi, integrality, n_x), integer=integer)
     h.setOptionValue("output_flag", bool(log_file))
     if log_file:
         h.setOptionValue("log_file", str(log_file))
@@ -334,35 +342,17 @@ def build_highs(problem: PlacementProblem, *, integer: bool, threads: int | None
         h.setOptionValue("time_limit", float(time_limit_s))
     if solver:
         h.setOptionValue("solver", solver)
-    lp = highspy.HighsLp()
-    lp.num_col_ = A.shape[1]
-    lp.num_row_ = A.shape[0]
-    lp.col_cost_ = cost
-    lp.col_lower_ = clo
-    lp.col_upper_ = chi
-    inf = highspy.kHighsInf
-    lp.row_lower_ = np.where(np.isinf(rlo), -inf, rlo)
-    lp.row_upper_ = np.where(np.isinf(rhi), inf, rhi)
-    lp.a_matrix_.format_ = highspy.MatrixFormat.kColwise
-    lp.a_matrix_.start_ = A.indptr.astype(np.int32)
-    lp.a_matrix_.index_ = A.indices.astype(np.int32)
-    lp.a_matrix_.value_ = A.data.astype(np.float64)
-    if integer:
-        integrality = np.zeros(A.shape[1], np.int32)
-        integrality[:n_x] = 1
-        lp.integrality_ = [highspy.HighsVarType(int(v)) for v in integrality]
-    h.passModel(lp)
     return h, n_x
 
 
 def lp_bound(problem: PlacementProblem, *, time_limit_s: float | None = None, threads: int | None = 1,
-             method: str = "ipm", end: float = float("inf")) -> BoundResult:
+             method: str = "ipm", end: float = float("inf"), should_stop: StopFn | None = None) -> BoundResult:
     """The LP relaxation of the convex model by HiGHS (interior point + crossover by
     default). The bound is the dual objective when HiGHS reports optimality, so it is
-    valid; on a time limit, or no time to start before the deadline ``end``, the bound is 0."""
+    valid; on a time limit or a stop, or no time to start before the deadline ``end``, the bound is 0."""
     import highspy
 
-    from camplace.solvers.highs_util import convex_model_nnz, limit_to_deadline, model_fits, subscribe_stop
+    from camplace.solvers.highs_util import convex_model_nnz, limit_to_deadline, model_fits, run_model
 
     t0 = time.perf_counter()
     end = min(end, t0 + time_limit_s) if time_limit_s is not None else end
@@ -371,19 +361,14 @@ def lp_bound(problem: PlacementProblem, *, time_limit_s: float | None = None, th
         h, n_x = build_highs(problem, integer=False, threads=threads, time_limit_s=None, solver=method)
     if h is None or not limit_to_deadline(h, end):
         return BoundResult(0.0, "lp", time.perf_counter() - t0, None, {"status": "skipped: no time left"})
-    subscribe_stop(h, None, end)
-    h.run()
-    status = h.getModelStatus()
-    if status == highspy.HighsModelStatus.kOptimal:
-        info = h.getInfo()
+    run = run_model(h, should_stop=should_stop, end=end, duals=True)
+    if run.model_status == highspy.HighsModelStatus.kOptimal:
         # the dual objective equals this up to HiGHS's tolerances; shave 1e-7 relative
-        val = float(info.objective_function_value)
+        val = float(run.info.objective_function_value)
         val -= 1e-7 * max(1.0, abs(val))
-        sol = h.getSolution()
-        x = np.array(sol.col_value[:n_x])
         return BoundResult(max(val, 0.0), "lp", time.perf_counter() - t0, None,
-                           {"status": "optimal", "x": x, "row_dual": np.array(sol.row_dual)})
-    return BoundResult(0.0, "lp", time.perf_counter() - t0, None, {"status": h.modelStatusToString(status)})
+                           {"status": "optimal", "x": np.array(run.col_value[:n_x]), "row_dual": run.row_dual})
+    return BoundResult(0.0, "lp", time.perf_counter() - t0, None, {"status": run.status_text})
 
 
 # ------------------------------------------------- fixing + exact reduced MIP --
@@ -428,8 +413,7 @@ def solve_reduced_mip(problem: PlacementProblem, red: Reduction, incumbent: np.n
     import highspy
 
     from camplace.problem.model import reduce_problem
-    from camplace.solvers.highs_util import (convex_model_nnz, limit_to_deadline, model_fits, set_start,
-                                            subscribe_stop)
+    from camplace.solvers.highs_util import convex_model_nnz, limit_to_deadline, model_fits, run_model, set_start
 
     t0 = time.perf_counter()
     end = min(end, t0 + time_limit_s)
@@ -480,13 +464,11 @@ def solve_reduced_mip(problem: PlacementProblem, red: Reduction, incumbent: np.n
             set_start(h, convex_start(small, x))
             # with a near-optimal start the proof is the work: spend nothing on heuristics
             h.setOptionValue("mip_heuristic_effort", 0.0)
-    subscribe_stop(h, should_stop, end)
-    h.run()
-    status = h.getModelStatus()
-    hinfo = h.getInfo()
-    info.update({"status": h.modelStatusToString(status), "nodes": int(hinfo.mip_node_count),
+    run = run_model(h, should_stop=should_stop, end=end)
+    hinfo = run.info
+    info.update({"status": run.status_text, "nodes": int(hinfo.mip_node_count),
                  "seconds": round(time.perf_counter() - t0, 2)})
-    if status == highspy.HighsModelStatus.kInfeasible:
+    if run.model_status == highspy.HighsModelStatus.kInfeasible:
         return red.ub, None, info  # nothing at or below the cutoff: ub is optimal
     dual = float(hinfo.mip_dual_bound)
     if not np.isfinite(dual):
@@ -494,7 +476,7 @@ def solve_reduced_mip(problem: PlacementProblem, red: Reduction, incumbent: np.n
     # HiGHS stops at mip_abs_gap; its dual bound is the proven one
     bound = min(red.ub, const + dual)
     sel = None
-    if hinfo.primal_solution_status == 2:  # feasible solution available
-        col = np.asarray(h.getSolution().col_value[:n_x])
+    if hinfo.primal_solution_status == 2 and run.col_value is not None:  # feasible solution available
+        col = np.asarray(run.col_value[:n_x])
         sel = np.sort(keep_ids[rsub.lift(np.flatnonzero(col > 0.5))])
     return bound, sel, info

@@ -179,7 +179,8 @@ def solve_certify(problem: PlacementProblem, *, time_limit_s: float | None = Non
         if want_lp and not stop_now() and board.gap() > 0:
             remaining = end - time.perf_counter()
             # under 5 minutes the LP is the best bound in reach: give it most of the time
-            lpr = lp_bound(problem, time_limit_s=(0.5 if T >= 300 else 0.75) * remaining, threads=1, end=end)
+            lpr = lp_bound(problem, time_limit_s=(0.5 if T >= 300 else 0.75) * remaining, threads=1, end=end,
+                           should_stop=stop_now)
             lp_info = {"status": lpr.info.get("status"), "seconds": round(lpr.seconds, 2)}
             if lpr.info.get("status") == "optimal":
                 board.offer_bound(lpr.bound, "lp")

@@ -13,7 +13,9 @@ import highspy
 import numpy as np
 import scipy.sparse as sp
 
-from camplace.solvers.base import OnIncumbent, ShouldStop, out_of_time, stopped, time_left
+from camplace.solvers.base import OnIncumbent, ShouldStop, out_of_time, time_left
+from camplace.solvers.highs_process import (FINISH_S_PER_NNZ, HighsRun, remember_model, remember_start, run_model,
+                                            subscribe_stop)
 
 INF = highspy.kHighsInf
 
@@ -24,7 +26,6 @@ INF = highspy.kHighsInf
 # is not started at all.
 BUILD_S_PER_NNZ = 0.4e-6  # seconds per nonzero to build the arrays and pass them to HiGHS
 SETUP_S_PER_NNZ = 0.6e-6  # seconds per nonzero HiGHS spends before it polls its time limit
-FINISH_S_PER_NNZ = 0.5e-6  # seconds per nonzero from an interrupt to the solution read back (2 s measured)
 
 
 @dataclass
@@ -138,6 +139,8 @@ def highs_from_arrays(m: MilpArrays, *, integer: bool = True) -> highspy.Highs:
                          A.indices.astype(np.int32), A.data.astype(np.float64), integ)
     if status == highspy.HighsStatus.kError:
         raise RuntimeError("HiGHS rejected the model")
+    remember_model(h, n_col, n_row, A, m.c, m.col_lower, m.col_upper, m.row_lower, m.row_upper, integ, m.sense,
+                   m.offset)
     return h
 
 
@@ -178,36 +181,13 @@ def skipped_outcome(reason: str) -> HighsOutcome:
     return HighsOutcome("time_limit", None, None, None, None, 0.0, 0, f"skipped: {reason}")
 
 
-def subscribe_stop(h: highspy.Highs, should_stop: ShouldStop | None, end: float = float("inf")) -> dict:
-    """Poll should_stop and the perf_counter() deadline ``end`` from HiGHS' MIP, simplex
-    and IPM interrupt callbacks. Returns a dict whose "stop" (should_stop) or "deadline"
-    turns True once HiGHS was interrupted for that reason."""
-    flag = {"stop": False, "deadline": False}
-    timed = bool(np.isfinite(end))
-    if timed:  # HiGHS takes a while to return once interrupted: ask early enough
-        end = end - FINISH_S_PER_NNZ * int(h.getNumNz())
-
-    def interrupt(e) -> None:
-        if stopped(should_stop):
-            flag["stop"] = True
-            e.interrupt()
-        elif timed and time.perf_counter() >= end:
-            flag["deadline"] = True
-            e.interrupt()
-
-    if should_stop is not None or timed:
-        h.cbMipInterrupt.subscribe(interrupt)
-        h.cbSimplexInterrupt.subscribe(interrupt)
-        h.cbIpmInterrupt.subscribe(interrupt)
-    return flag
-
-
 def set_start(h: highspy.Highs, values: np.ndarray) -> None:
     """Hand HiGHS a full column vector as its starting solution."""
     sol = highspy.HighsSolution()
     sol.col_value = list(map(float, values))
     sol.value_valid = True
     h.setSolution(sol)
+    remember_start(h, values)
 
 
 def run_highs(h: highspy.Highs, *, time_limit_s: float | None = None, threads: int | None = None, seed: int = 0,
@@ -235,38 +215,28 @@ def run_highs(h: highspy.Highs, *, time_limit_s: float | None = None, threads: i
         h.setOptionValue(key, value)
     if verbose:
         h.setOptionValue("output_flag", True)
-    flag = subscribe_stop(h, should_stop, end)
-    if on_incumbent is not None:
-        def improving(e) -> None:
-            out = e.data_out
-            on_incumbent(float(out.objective_function_value), float(out.mip_dual_bound))
-
-        h.cbMipImprovingSolution.subscribe(improving)
     if start is not None:
         set_start(h, start)
+    is_mip = h.getLp().integrality_ is not None and len(h.getLp().integrality_) > 0
     t0 = time.perf_counter()
-    h.run()
+    run = run_model(h, should_stop=should_stop, end=end, on_improving=on_incumbent)
     seconds = time.perf_counter() - t0
-    ms = h.getModelStatus()
-    info = h.getInfo()
-    has_sol = info.primal_solution_status >= 1 if hasattr(info, "primal_solution_status") else True
-    values = np.asarray(h.getSolution().col_value, np.float64) if has_sol else None
-    if values is not None and len(values) == 0:
-        values = None
+    ms, info = run.model_status, run.info
+    has_sol = info.primal_solution_status >= 1
+    values = run.col_value if has_sol else None
     MS = highspy.HighsModelStatus
     if ms in (MS.kOptimal, MS.kModelEmpty):
         status = "optimal"
     elif ms == MS.kTimeLimit:
         status = "time_limit"
-    elif flag["deadline"] and not flag["stop"]:
+    elif run.deadline and not run.stopped:
         status = "time_limit"
-    elif ms in (MS.kInterrupt, MS.kHighsInterrupt) or flag["stop"]:
+    elif ms in (MS.kInterrupt, MS.kHighsInterrupt) or run.stopped:
         status = "interrupted"
     elif ms in (MS.kInfeasible,):
         status = "infeasible"
     else:
-        status = f"other:{h.modelStatusToString(ms)}"
-    is_mip = h.getLp().integrality_ is not None and len(h.getLp().integrality_) > 0
+        status = f"other:{run.status_text}"
     if is_mip:
         bound = float(info.mip_dual_bound)
         objective = float(info.objective_function_value) if values is not None else None
@@ -279,4 +249,4 @@ def run_highs(h: highspy.Highs, *, time_limit_s: float | None = None, threads: i
         nodes = 0
     if bound is not None and not np.isfinite(bound):
         bound = None
-    return HighsOutcome(status, values, objective, bound, gap, seconds, nodes, h.modelStatusToString(ms))
+    return HighsOutcome(status, values, objective, bound, gap, seconds, nodes, run.status_text)

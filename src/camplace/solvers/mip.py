@@ -252,10 +252,13 @@ def _solve_fixed(problem: PlacementProblem, start: np.ndarray, *, end: float, ti
                           coverage=problem.coverage(best), should_stop=should_stop, lagr=lagr)
     red = reduce_by_fixing(problem, lb.multipliers, best_cost, lagr)
     bound = min(best_cost, lb.bound)
+    if on_incumbent:
+        on_incumbent(best_cost, bound)
     if problem.V.nnz <= LP_DUALS_MAX_NNZ and not (should_stop is not None and should_stop()):
         # the exact LP's duals are Lagrange multipliers too (certify.md §1); their fixing
         # differs from the subgradient's, and intersecting two valid reductions is valid
-        lp = lp_bound(problem, time_limit_s=share(0.15, 10.0) or None, threads=threads, end=end)
+        lp = lp_bound(problem, time_limit_s=share(0.15, 10.0) or None, threads=threads, end=end,
+                      should_stop=should_stop)
         if lp.info.get("status") == "optimal":
             lam = np.maximum(lp.info["row_dual"][:problem.n_targets], 0.0)
             red2 = reduce_by_fixing(problem, lam, best_cost, lagr)

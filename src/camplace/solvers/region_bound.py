@@ -35,7 +35,7 @@ import scipy.sparse as sp
 
 from camplace.problem.model import PlacementProblem
 from camplace.solvers.bounds import BoundResult, Lagrangian, _u_part, build_highs, convex_start, lagrangian_bound
-from camplace.solvers.highs_util import set_start, subscribe_stop
+from camplace.solvers.highs_util import run_model, set_start
 
 StopFn = Callable[[], bool]
 METHOD = "region decomposition (Lagrangian + HiGHS on target regions)"
@@ -202,17 +202,15 @@ class RegionDecomposition:
         h.setOptionValue("time_limit", float(max(0.01, time_limit_s)))
         if start is not None:
             set_start(h, convex_start(reg.sub, start))
-        subscribe_stop(h, should_stop)
-        h.run()
-        info = h.getInfo()
-        status = h.getModelStatus()
-        optimal = status == highspy.HighsModelStatus.kOptimal
+        run = run_model(h, should_stop=should_stop, in_child=False)  # a small model, changed in place between runs
+        info = run.info
+        optimal = run.model_status == highspy.HighsModelStatus.kOptimal
         dual = float(info.mip_dual_bound)
         if not np.isfinite(dual):
             dual = -np.inf
         y = None
-        if info.primal_solution_status == 2:
-            y = np.round(np.asarray(h.getSolution().col_value[:n_x]))
+        if info.primal_solution_status == 2 and run.col_value is not None:
+            y = np.round(np.asarray(run.col_value[:n_x]))
         return dual, y, optimal
 
 
@@ -336,13 +334,11 @@ def partial_lagrangian_bound(problem: PlacementProblem, lam: np.ndarray, region:
     dual = -np.inf
     left = time_limit_s - (time.perf_counter() - t0)
     if left > 0.05 and problem.n_candidates:
-        h, n_x = build_highs(sub, integer=True, threads=threads, seed=seed, time_limit_s=left)
+        h, n_x = build_highs(sub, integer=True, threads=threads, seed=seed, time_limit_s=left, x_cost=-r)
         h.setOptionValue("mip_rel_gap", 1e-6)
-        h.changeColsCost(n_x, np.arange(n_x, dtype=np.int32), -r)
-        subscribe_stop(h, should_stop)
-        h.run()
-        hinfo = h.getInfo()
-        info.update(status=h.modelStatusToString(h.getModelStatus()), nodes=int(hinfo.mip_node_count))
+        run = run_model(h, should_stop=should_stop, end=t0 + time_limit_s)
+        hinfo = run.info
+        info.update(status=run.status_text, nodes=int(hinfo.mip_node_count))
         d = float(hinfo.mip_dual_bound)
         if np.isfinite(d):
             dual = d

@@ -172,7 +172,7 @@ def _stoppable(progress: Progress | None, should_stop: Callable[[], bool]) -> Pr
     return cb
 
 
-STOP_GRACE_S = 2.0  # seconds a solver gets to honour should_stop() before the pipeline stops waiting
+STOP_GRACE_S = 1.0  # seconds a solver gets to honour should_stop() before the pipeline stops waiting
 
 
 def solve_stoppable(problem: PlacementProblem, solver: str, *, log: list | None = None,
@@ -181,15 +181,18 @@ def solve_stoppable(problem: PlacementProblem, solver: str, *, log: list | None 
     ``options['should_stop']()`` turns true.
 
     The solver runs in a worker thread (HiGHS and numba release the GIL); this thread
-    polls should_stop(). A solver that does not return within ``grace_s`` after the stop
-    request (e.g. HiGHS inside a root LP, which polls no callback) is left behind and
-    the greedy placement is returned instead, with status 'interrupted' and
-    the best lower bound the solver reported through on_incumbent (or None)."""
+    polls should_stop(). Every built-in solver returns its best placement and bound
+    within ``grace_s`` of the request. One that does not (a solver stuck in a phase that
+    polls nothing) is left behind, or at once when ``should_stop.hurry()`` (an optional
+    method: the user asked twice) turns true: the greedy placement is returned instead
+    (1 s at most), with status 'interrupted' and the best lower bound the solver reported
+    through on_incumbent (or None)."""
     import threading
 
     should_stop = options.get("should_stop")
     if should_stop is None:
         return solve(problem, solver, **options)
+    hurry = getattr(should_stop, "hurry", lambda: False)
     bound: dict[str, float | None] = {"bound": None}
     user_cb = options.get("on_incumbent")
 
@@ -215,14 +218,14 @@ def solve_stoppable(problem: PlacementProblem, solver: str, *, log: list | None 
         th.join(0.05)
         if asked is None and should_stop():
             asked = time.perf_counter()
-        if asked is not None and time.perf_counter() - asked > grace_s:
+        if asked is not None and (time.perf_counter() - asked > grace_s or hurry()):
             break
     if "error" in out:
         raise out["error"]
     if "placement" in out:
         return out["placement"]
     fallback_opts = {k: options[k] for k in ("threads", "seed") if k in options}  # the common options only
-    g = solve(problem, "greedy", time_limit_s=5.0, **fallback_opts)
+    g = solve(problem, "greedy", time_limit_s=1.0, **fallback_opts)
     b = bound["bound"]
     if b is not None and b > g.objective:  # cannot happen for a valid bound; never report one above the cost
         b = None
@@ -305,7 +308,7 @@ def improve_placement(sc: Scene, vis: Visibility, problem: PlacementProblem, pla
 
         t = time.perf_counter()
         ar = adaptive_rounds(sc, vis, problem, placement, rounds=adaptive, time_limit_s=time_limit_s or 120.0,
-                             progress=progress, guard=guard, row_map=row_map)
+                             progress=progress, guard=guard, row_map=row_map, should_stop=should_stop)
         vis, problem, placement = ar.visibility, ar.problem, ar.placement
         timings["adaptive"] = time.perf_counter() - t
         for h in ar.rounds:
@@ -315,7 +318,7 @@ def improve_placement(sc: Scene, vis: Visibility, problem: PlacementProblem, pla
 
         t = time.perf_counter()
         rf = refine_placement(sc, vis, problem, placement, time_limit_s=refine_time_s, progress=progress,
-                              guard=guard, row_map=row_map)
+                              guard=guard, row_map=row_map, should_stop=should_stop)
         vis, problem, placement = rf.visibility, rf.problem, rf.placement
         timings["refine"] = time.perf_counter() - t
         log.append(f"refine: cost {rf.grid_cost:.6g} -> {rf.refined_cost:.6g} ({rf.info['moved']} cameras moved, "

@@ -13,7 +13,7 @@ from camplace.core.files import atomic_write_json
 from camplace.metrics.coverage import compute_metrics
 from camplace.problem.instance import load_problem_npz
 from camplace.problem.model import PlacementProblem
-from camplace.solvers import solve
+from camplace.workflows.run import solve_stoppable
 
 
 def instance_name(path: str | Path) -> str:
@@ -58,7 +58,7 @@ def solve_instance(path: str | Path, budget: int, solver: str = "greedy", **solv
     problem, arrays = load_problem_npz(path, budget)
     timings["load"] = time.perf_counter() - t
     t = time.perf_counter()
-    placement = solve(problem, solver, **solver_options)
+    placement = solve_stoppable(problem, solver, **solver_options)  # comes back soon after should_stop()
     timings["solve"] = time.perf_counter() - t
     t = time.perf_counter()
     region_ids = arrays.get("target_region_ids")
