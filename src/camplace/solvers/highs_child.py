@@ -2,7 +2,8 @@
 it imports no camplace module, so it starts in a fraction of a second.
 
 stdin: one pickled job (the model arrays, the options, the start, the seconds left), then
-any byte or the end of the file asks HiGHS to stop (through its interrupt callbacks).
+the end of the file (the parent closed it, or is gone) asks HiGHS to stop (through its
+interrupt callbacks).
 stdout (the file descriptor it was started with; HiGHS' own output goes to /dev/null):
 pickled messages ``("bound", dual_bound)``, ``("solution", objective, dual_bound, col_value)``
 and at the end ``("done", result)``.
@@ -57,7 +58,7 @@ def main() -> None:
     stop = threading.Event()
 
     def watch() -> None:
-        inp.read(1)  # a byte, or the end of the file when the parent is gone
+        inp.read(1)  # returns at the end of the file: the parent asks to stop, or is gone
         stop.set()
 
     threading.Thread(target=watch, daemon=True).start()

@@ -158,8 +158,7 @@ def _run_in_child(h, model: dict, should_stop, end: float, on_improving, duals: 
             pickle.dump(job, proc.stdin, protocol=pickle.HIGHEST_PROTOCOL)
             proc.stdin.flush()
             ask.wait()
-            proc.stdin.write(b"x")
-            proc.stdin.flush()
+            proc.stdin.close()  # the end of the file: the child's stop request
         except (OSError, ValueError):  # the child is gone
             pass
 
