@@ -61,3 +61,9 @@ def test_room_numbers_read_by_ocr(storeys):
     read = [n for n in names if re.sub(r"\D", "", n) in digits]
     assert len(read) >= 8, names  # 8 px digits in circles: Tesseract reads some, the dot is often lost
     assert any("printed" in n for g in storeys.values() for n in g.notes)
+
+
+def test_scale_read_from_the_dimension_lines():
+    need_ocr()
+    got = read_plan(HOUSE, ocr=True)  # neither scale nor ref: '10700', '3900', ... over their lines
+    assert float(got.used["scale"].split()[0]) == pytest.approx(SCALE, rel=0.02), got.used["scale"]

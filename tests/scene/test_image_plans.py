@@ -117,3 +117,12 @@ def test_two_plans_side_by_side_are_two_storeys(tmp_path):
     assert second.storeys[1]["chosen"] and len(second.scene["zones"]) == 5
     with pytest.raises(InputError, match="plan-1, plan-2"):
         read_plan(sheet, scale=PX, ocr=False, storey="Level 3")
+
+
+def test_scale_read_from_the_dimension_lines(apartment):
+    need_ocr()
+    got = read_plan(apartment[0].path)  # neither scale nor ref
+    s = float(got.used["scale"].split()[0])
+    assert s == pytest.approx(PX, rel=0.01) and "dimension lines" in got.used["scale"]
+    assert any("check it" in n for n in got.notes)
+    assert len(got.scene["zones"]) == 5

@@ -33,8 +33,9 @@ from camplace.scene.importers import (DEFAULT_CEILING_M, PlanImport, clean_polyg
                                       polygons_of, prism_obstacles, room_zones)
 from camplace.scene.importers.image_ocr import ocr_engine, read_lines, room_name, text_lines_mask
 from camplace.scene.importers.image_rooms import colour_rooms, free_regions, mask_polygons
-from camplace.scene.importers.image_walls import (bridge_openings, brightness, find_plans, ink_threshold, read_image,
-                                                  solid_walls, square_morphology)
+from camplace.scene.importers.image_scale import scale_from_dimensions
+from camplace.scene.importers.image_walls import (bridge_openings, brightness, find_plans, ink_threshold, otsu_threshold,
+                                                  read_image, solid_walls, square_morphology)
 
 OPTIONS = ("scale", "ref", "threshold", "storey", "min_wall_thickness", "max_wall_thickness", "hatch_spacing",
            "max_opening", "min_room_area", "ocr")
@@ -53,7 +54,7 @@ def metres_per_pixel(path: Path, scale: float | None, ref) -> tuple[float, str]:
             raise InputError(f"ref: expected two distinct points and a distance > 0 m, got {list(ref)}", option="ref")
         return dist / px, f"reference: {dist:g} m over {px:.1f} px"
     raise InputError(f"{path}: the plan's scale is unknown; give metres per pixel (scale) or two reference points "
-                     "and their distance (ref)", option="scale")
+                     "and their distance (ref)", option="scale")  # (read: analyse tries the dimension lines first)
 
 
 @dataclass
@@ -98,7 +99,16 @@ def analyse(path: Path, scale=None, ref=None, threshold=None, min_wall_thickness
     """The plans, walls, openings, rooms and room names of a plan image."""
     rgb = read_image(path)
     dark = brightness(rgb)
-    s, scale_from = metres_per_pixel(path, scale, ref)
+    engine, ocr_line = ocr_engine() if ocr else (None, "off")
+    if scale is None and ref is None:
+        read = scale_from_dimensions(engine, dark, dark < otsu_threshold(dark)) if engine is not None else None
+        if read is None:
+            why = "no dimension line could be read" if engine is not None else f"OCR not available: {ocr_line}"
+            raise InputError(f"{path}: the plan's scale is unknown ({why}); give metres per pixel (scale) or two "
+                             "reference points and their distance (ref)", option="scale")
+        s, scale_from = read
+    else:
+        s, scale_from = metres_per_pixel(path, scale, ref)
     if threshold is None:
         t, how = ink_threshold(dark, s, max_wall_thickness)
     else:
@@ -118,7 +128,6 @@ def analyse(path: Path, scale=None, ref=None, threshold=None, min_wall_thickness
     if not any(p.rooms for p in plans):
         raise InputError(f"{path}: no closed room found (no free region of at least {min_room_area} m² "
                          "enclosed by walls)")
-    engine, ocr_line = ocr_engine() if ocr else (None, "off")
     if engine is not None:
         _name_rooms(engine, dark, ink, plans)
     return Sheet(s, scale_from, t, how, plans, dark.shape[0], ocr_line, skipped, max_wall_thickness)
@@ -175,7 +184,7 @@ def _name_rooms(engine, dark: np.ndarray, ink: np.ndarray, plans: list[PlanRooms
             if 0 <= r < room_at.shape[0] and 0 <= c < room_at.shape[1] and room_at[r, c]:
                 where[k] = (i, int(room_at[r, c]))
     found: dict[tuple[int, int], list] = {}
-    for ln in read_lines(engine, dark, lines, sorted(where), hc):
+    for ln in read_lines(engine, dark, ink, lines, sorted(where), hc):
         k = int(np.max(lines[ln.box[0]:ln.box[2], ln.box[1]:ln.box[3]]))
         found.setdefault(where[k], []).append(ln)
     for (i, room), got in found.items():
@@ -263,6 +272,8 @@ def plan_import(path: Path, sheet: Sheet, index: int, why: str, *, name=None, wa
             "ocr": sheet.ocr if not sheet.ocr.startswith("tesseract") else
             f"{sheet.ocr}: {named} of {len(plan.rooms)} rooms named"}
     notes = []
+    if sheet.scale_from.startswith("read from"):
+        notes.append(f"scale {sheet.s:.5g} m/px {sheet.scale_from} against a length you know (or give scale or ref)")
     if len(sheet.plans) > 1:
         notes.append(f"{len(sheet.plans)} plans side by side on the sheet (" + ", ".join(
             f"{s['name']}: {len(s['rooms'])} rooms" for s in storeys) + f"): plan-{index + 1} taken ({why}); "

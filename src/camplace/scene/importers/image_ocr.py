@@ -90,7 +90,8 @@ def text_lines_mask(ink: np.ndarray) -> tuple[np.ndarray, int, float]:
     return np.where(text, lines, 0), m, hc
 
 
-def read_lines(engine, dark: np.ndarray, lines: np.ndarray, wanted: list[int], hc: float) -> list[TextLine]:
+def read_lines(engine, dark: np.ndarray, ink: np.ndarray, lines: np.ndarray, wanted: list[int],
+               hc: float) -> list[TextLine]:
     """The text of the lines ``wanted`` (labels of ``lines``), read by one Tesseract call
     on a mosaic of the lines stacked top to bottom (each scaled to OCR_HEIGHT_PX; grey
     levels of ``dark`` kept around the line's marks, everything else white)."""
@@ -132,20 +133,21 @@ def read_lines(engine, dark: np.ndarray, lines: np.ndarray, wanted: list[int], h
         if got:
             out.append(TextLine(" ".join(t for _, t, _ in got), float(np.mean([c for _, _, c in got])),
                                 (b[0].start, b[1].start, b[0].stop, b[1].stop), b[0].stop - b[0].start,
-                                _on_dimension_line(dark < 128, b, hc)))
+                                dimension_row(ink, b, hc) is not None))
     return out
 
 
-def _on_dimension_line(ink: np.ndarray, b: tuple[slice, slice], hc: float) -> bool:
-    """True when a row of ink just below or above the text box ``b`` runs along most of
-    it (a dimension line, or an underline)."""
+def dimension_row(ink: np.ndarray, b: tuple[slice, slice], hc: float) -> int | None:
+    """The row of a line of ink just below or above the text box ``b`` running along most
+    of it (a dimension line, or an underline); None when there is none."""
     reach = max(2, int(hc * 0.6))
     c0, c1 = max(0, b[1].start - 2), min(ink.shape[1], b[1].stop + 2)
     for r0, r1 in ((b[0].stop, b[0].stop + reach), (b[0].start - reach, b[0].start)):
-        rows = ink[max(0, r0):max(0, r1), c0:c1]
+        r0, r1 = max(0, r0), min(ink.shape[0], max(0, r1))
+        rows = ink[r0:r1, c0:c1]
         if rows.size and (rows.mean(axis=1) >= 0.8).any():
-            return True
-    return False
+            return r0 + int(np.argmax(rows.mean(axis=1)))
+    return None
 
 
 def printed_area(text: str) -> float | None:
