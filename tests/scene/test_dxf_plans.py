@@ -112,3 +112,16 @@ def test_nothing_wall_like_lists_the_layers(files, tmp_path, monkeypatch, capsys
     lines = [ln for ln in text.strip().splitlines() if ln.strip()]
     assert code == 2 and len(lines) == 1 and "--wall-layers" in lines[0] and "SKETCH (2 LINE)" in lines[0], text
     assert not (tmp_path / "s.yaml").exists()
+
+
+def test_wall_like_layer_besides_the_named_ones_gets_a_note(files, tmp_path):
+    import ezdxf
+
+    doc = ezdxf.readfile(files["fm"])
+    for e in doc.modelspace():
+        if e.dxf.layer == "E62_INNENWAENDE_LEICHT":
+            e.dxf.layer = "X62_LEICHTBAU"
+    doc.saveas(tmp_path / "renamed.dxf")
+    got = read_plan(tmp_path / "renamed.dxf")
+    assert "X62" not in got.used["wall layers"]  # not taken on a guess ...
+    assert any(n.startswith("X62_LEICHTBAU also holds parallel line pairs") for n in got.notes)  # ... but said

@@ -46,6 +46,7 @@ COLUMN_MAX_M2 = 10.0  # larger closed shapes on column layers are no column
 ROOM_BRIDGE_M = 1.05  # doorways up to this wide (a 1 m opening) are closed when rooms are found from the walls
 MAX_HANDLES = 30  # handles named in one obstacle's provenance
 MIN_NAMED_WALLS_M = 8.0  # less linework than this on the wall layers (a legend's stub): ask the geometry too
+ALSO_WALLS_SHARE = 0.2  # wall-like pairs elsewhere, this share of the named walls' linework or more, get a note
 
 
 def read(path: Path, *, name: str | None = None, units: str | None = None, wall_height: float | None = None,
@@ -177,6 +178,13 @@ def _wall_linework(path: Path, d: Drawing, parts: dict, role: dict, how: dict, g
             return (lines + geo[0], thin + geo[1]), {**found, **{n: f"by geometry: parallel pairs {geo[3]}"
                                                                for n in geo[2]}}
     if lines or thin:
+        if given is None:  # walls on a layer no name explains besides the named ones? say so, take nothing
+            geo = _walls_by_geometry(d, parts, role)
+            extra = sum(ln.length for ln in geo[0]) if geo else 0.0
+            if extra >= ALSO_WALLS_SHARE * named:
+                d.notes.append(f"{', '.join(geo[2])} also hold{'s' if len(geo[2]) == 1 else ''} parallel line pairs "
+                               f"like walls ({extra:.0f} m, {geo[3]}); if they are walls, name every wall layer "
+                               "(wall_layers)")
         return (lines, thin), found
     raise InputError(_no_walls_message(path, d, given), option="wall_layers")
 
