@@ -31,10 +31,13 @@ def test_the_example_catalogue_and_the_built_in_scene():
     vari = next(r for r in rows if r["name"] == "vari-4mp-2.8-12")
     assert vari == {"name": "vari-4mp-2.8-12", "model": "pinhole", "resolution": [2688, 1520], "pixel_um": 2.0,
                     "focal_mm": [2.8, 12.0], "focal_steps": 4, "price": 2.4, "bitrate_mbps": 6.0, "ir_range_m": 50.0}
-    spec, _, _ = resolve_scene("lens-store")  # the catalogue beside the built-in scenes
-    assert [c.name for c in spec.cameras] == [r["name"] for r in rows] and spec.recording.retention_days == 30
-    fish = spec.cameras[-1]
-    assert fish.model == "fisheye" and fish.cost == 3.0 and fish.max_fov_deg == 180.0
+    fish = rows[-1]
+    assert fish["model"] == "fisheye" and fish["price"] == 3.0 and fish["max_fov_deg"] == 180.0
+    spec, _, _ = resolve_scene("lens-store")  # the catalogue beside the built-in scenes, its models: but the fisheye
+    assert [c.name for c in spec.cameras] == [r["name"] for r in rows[:-1]] and spec.recording.retention_days == 30
+    assert spec.cameras[-1].focal_range_mm == (2.8, 12.0)
+    assert spec.mounts[0].camera_names == [c.name for c in spec.cameras]
+
 
 
 def test_csv_and_yaml_catalogues_give_the_same_cameras(tmp_path):

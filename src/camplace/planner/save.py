@@ -41,8 +41,10 @@ def session_poses(session) -> Poses:
     """The session's cameras as Poses (ids = the session's camera ids)."""
     vis, _ = session.visibility()
     c = vis.candidates
+    models = [session.lenses[k] for k in c.camera_ids]
     return Poses(tuple(cam.id for cam in session.cams), c.positions.copy(), c.rotations.copy(), c.angles_deg.copy(),
-                 tuple(session.lenses[k].name for k in c.camera_ids), "planner")
+                 tuple(m.name for m in models), "planner",
+                 focal_mm=tuple(None if m.lens is None else m.focal_mm for m in models))  # a lens as sold (issue 27)
 
 
 def save_session(session, name: str | None, *, repeatable: bool = False) -> dict:
