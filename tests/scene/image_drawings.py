@@ -48,9 +48,10 @@ def font(size: int, bold: bool = False):
 
 
 def draw_apartment(path: str | Path, *, jpeg_quality: int | None = None, noise: float = 0.0, seed: int = 0,
-                   labels: bool = True) -> Sheet:
+                   labels: bool = True, hatch: bool = True) -> Sheet:
     """The apartment sheet as PNG (or JPEG with ``jpeg_quality``; ``noise``: the grey
-    level std of a scan's noise on a slightly grey paper)."""
+    level std of a scan's noise on a slightly grey paper; ``hatch=False``: the outer
+    walls as two lines with paper between them, as many CAD exports draw them)."""
     import numpy as np
     from PIL import Image, ImageDraw
 
@@ -73,8 +74,8 @@ def draw_apartment(path: str | Path, *, jpeg_quality: int | None = None, noise: 
     ring = [(-t, -t, W + t, 0), (-t, D, W + t, D + t), (-t, -t, 0, D + t), (W, -t, W + t, D + t)]
     for r in ring:
         box(*r, fill="white")
-    hatch = Image.new("L", im.size, 0)
-    hd = ImageDraw.Draw(hatch)
+    hatch_lines = Image.new("L", im.size, 0)
+    hd = ImageDraw.Draw(hatch_lines)
     for k in range(-height, width, 6):
         hd.line([(k, height), (k + height, 0)], fill=255, width=1)
     mask = Image.new("L", im.size, 0)
@@ -82,7 +83,8 @@ def draw_apartment(path: str | Path, *, jpeg_quality: int | None = None, noise: 
     for x0, y0, x1, y1 in ring:
         (c0, r1), (c1, r0) = p(x0, y0), p(x1, y1)
         md.rectangle([c0, r0, c1 - 1, r1 - 1], fill=255)
-    im.paste((0, 0, 0), (0, 0), Image.fromarray(np.minimum(np.asarray(hatch), np.asarray(mask))))
+    if hatch:
+        im.paste((0, 0, 0), (0, 0), Image.fromarray(np.minimum(np.asarray(hatch_lines), np.asarray(mask))))
     d.rectangle([*p(-t, D + t), *p(W + t, -t)], outline="black", width=2)
     d.rectangle([*p(0, D), *p(W, 0)], outline="black", width=2)
     # inner walls (solid), door gaps cut later

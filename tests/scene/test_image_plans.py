@@ -1,8 +1,9 @@
 """Plan images as they come (issue 25): a generated apartment sheet (hatched outer walls,
 solid inner walls, windows as white gaps, doors with swings, labels in a TTF font,
 dimension lines, scale bar, title block, sheet frame) gives its five rooms with their
-areas and names, the openings, and a grid-only run inside the footprint; a scan of it
-(grey paper, noise, JPEG) the same rooms; two plans side by side are two storeys."""
+areas and names, the openings, the scale read from its dimension lines, and a grid-only
+run inside the footprint; a scan of it (grey paper, noise, JPEG) and a drawing of its
+outer walls as two lines give the same rooms; two plans side by side are two storeys."""
 
 from __future__ import annotations
 
@@ -81,8 +82,10 @@ def test_without_ocr_rooms_are_numbered_with_a_note(apartment, monkeypatch):
     assert any("OCR not available" in n for n in got.notes)
 
 
-def test_a_noisy_jpeg_scan_gives_the_same_rooms(tmp_path):
-    sheet = draw_apartment(tmp_path / "scan.jpg", jpeg_quality=70, noise=8.0, seed=3)
+@pytest.mark.parametrize("name, style", [("scan.jpg", {"jpeg_quality": 70, "noise": 8.0, "seed": 3}),
+                                         ("two-lines.png", {"hatch": False})])
+def test_a_noisy_jpeg_scan_and_unhatched_walls_give_the_same_rooms(tmp_path, name, style):
+    sheet = draw_apartment(tmp_path / name, **style)
     got = read_plan(sheet.path, scale=PX, ocr=False)
     areas = sorted(p.area for p in _zones(got).values())
     assert areas == pytest.approx(sorted(room_area(n) for n in ROOMS), rel=0.1), areas
