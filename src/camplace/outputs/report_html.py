@@ -197,13 +197,14 @@ def render_report(view: SceneView, placement: dict, metrics: dict, positions: np
                   region_kinds=(), n_candidates: int | None = None, files: list[str] = (),
                   slices: list[CoverageSlice] | None = None, max_points: int = MAX_POINTS,
                   views: list[dict] | None = None, views_skipped: int = 0, dated: bool = True,
-                  extra_html: str = "") -> str:
+                  extra_html: str = "", extra_figures: dict | None = None, extra_traces: list | None = None) -> str:
     """The report page as one HTML string (plotly.js embedded).
 
     positions: (N_p, 3) m; is_surface, coverage, gamma, region_ids: (N_p,);
     placement / metrics: the placement.json / metrics.json dicts; files: names of
     sibling output files to link; ``dated``: say when the page was written (off for repeatable
-    runs, so that the page depends only on the inputs)."""
+    runs, so that the page depends only on the inputs); ``extra_figures``: more plotly specs by the
+    id of a div in ``extra_html``; ``extra_traces``: more 3D-view traces (one sampled crowd)."""
     positions = np.asarray(positions, float)
     coverage = np.asarray(coverage, np.int64)
     cameras = placement.get("cameras", [])
@@ -215,6 +216,7 @@ def render_report(view: SceneView, placement: dict, metrics: dict, positions: np
               if np.any(region_ids == r)}
     kinds = dict(zip(region_names, region_kinds))
     fig3d, shown = view3d_figure(view, positions, coverage, gamma, region_ids, region_names, cameras, max_points)
+    fig3d["data"].extend(extra_traces or [])
     figs = {"view3d": fig3d}
     for k, sl in enumerate(slices):
         figs[f"slice{k}"] = slice_figure(sl, view, cameras)
@@ -222,6 +224,7 @@ def render_report(view: SceneView, placement: dict, metrics: dict, positions: np
     if not hists:
         hists = {"all targets": metrics.get("coverage_histogram", {})}
     figs["histogram"] = histogram_figure(hists, gammas)
+    figs.update(extra_figures or {})
 
     legend = "".join(f"<span><i style='background:{c}'></i>{html.escape(lab)}</span>" for lab, c in COVERAGE_CLASSES)
     sub = (f"showing {shown} of {len(positions)} targets" if shown < len(positions)
@@ -277,7 +280,8 @@ def write_report(out_dir: str | Path, targets, coverage: np.ndarray, placement: 
                  html_report: bool = True, figures: bool = True, exports: bool = True,
                  scene=None, vis=None, selected: np.ndarray | None = None,
                  repeatable: bool = False, extra_html: str = "",
-                 rendered_views: tuple[list[dict], int] | None = None, written: tuple[str, ...] = ()) -> dict[str, Path]:
+                 rendered_views: tuple[list[dict], int] | None = None, written: tuple[str, ...] = (),
+                 extra_figures: dict | None = None, extra_traces: list | None = None) -> dict[str, Path]:
     """Write exports (opencv/, colmap/), PNG figures and report.html into out_dir.
 
     targets: camplace.targets.build.Targets (N_p); coverage: (N_p,) achieved coverage of the
@@ -288,7 +292,8 @@ def write_report(out_dir: str | Path, targets, coverage: np.ndarray, placement: 
     depends only on the inputs (byte-identical between identical runs). ``extra_html``: sections
     placed before the camera views (the plan view, camplace.outputs.handover); ``rendered_views``:
     camera_views' result when already rendered; ``written``: names of files an earlier call wrote
-    (report.html links them too). Returns file name (relative to out_dir) -> path."""
+    (report.html links them too); ``extra_figures`` / ``extra_traces``: as for render_report.
+    Returns file name (relative to out_dir) -> path."""
     from camplace.outputs.exports import write_exports
     from camplace.outputs.figures import write_figures
 
@@ -318,6 +323,7 @@ def write_report(out_dir: str | Path, targets, coverage: np.ndarray, placement: 
                                           budget_s=float("inf") if repeatable else VIEW_BUDGET_S)
         text = render_report(view, placement, metrics, targets.positions, is_surface, coverage, targets.gamma,
                              targets.region_ids, targets.region_names, targets.region_kinds, n_candidates, files,
-                             slices, views=views, views_skipped=skipped, dated=not repeatable, extra_html=extra_html)
+                             slices, views=views, views_skipped=skipped, dated=not repeatable, extra_html=extra_html,
+                             extra_figures=extra_figures, extra_traces=extra_traces)
         paths["report.html"] = atomic_write_text(out / "report.html", text)
     return paths

@@ -334,7 +334,20 @@ def _write_report_set(out: Path, vis: Visibility, placement: Placement, pdict: d
             return paths
 
         parts.run(PLAN_SET, plan_set)
-    parts.run(HTML, lambda: report(html_report=True, extra_html=plan["extra"], rendered_views=plan["views"]))
+
+    def html() -> dict[str, Path]:
+        extra, figs, traces = plan["extra"], None, None
+        if getattr(metrics, "crowd", None) is not None:  # issue 28: the placement in held-out crowds
+            from camplace.outputs.report_crowd import crowd_report
+
+            shown = view or SceneView.from_targets(str(pdict.get("scene", "scene")), vis.targets.positions,
+                                                   pdict.get("cameras", []))
+            cr = crowd_report(shown, vis.targets, metrics.crowd, m, pdict.get("cameras", []))
+            extra, figs, traces = cr.section + extra, cr.figures, cr.traces
+        return report(html_report=True, extra_html=extra, rendered_views=plan["views"], extra_figures=figs,
+                      extra_traces=traces)
+
+    parts.run(HTML, html)
     return parts.paths
 
 
