@@ -125,3 +125,13 @@ def test_wall_like_layer_besides_the_named_ones_gets_a_note(files, tmp_path):
     got = read_plan(tmp_path / "renamed.dxf")
     assert "X62" not in got.used["wall layers"]  # not taken on a guess ...
     assert any(n.startswith("X62_LEICHTBAU also holds parallel line pairs") for n in got.notes)  # ... but said
+
+
+def test_declared_units_that_make_no_sense_get_a_note(files, tmp_path):
+    import ezdxf
+
+    doc = ezdxf.readfile(files["fm"])
+    doc.header["$INSUNITS"] = 1  # inches, for a drawing in cm
+    doc.saveas(tmp_path / "inches.dxf")
+    got = read_plan(tmp_path / "inches.dxf")
+    assert any("the doors measure 2.29 m" in n and "cm: 0.90 m" in n for n in got.notes), got.notes

@@ -40,6 +40,7 @@ OPTIONS = ("wall_layers", "door_layers", "window_layers", "column_layers", "furn
 DEFAULT_FURNITURE_M = 0.9
 GLASS_M = 0.05  # width of a glass pane drawn as one line, m
 DOOR_MAX_M = 3.5  # a door's plan rectangle is at most this long; larger door-layer groups cut nothing
+DOOR_M = (0.6, 1.6)  # the typical (median) door rectangle's length that makes sense, m (a leaf and its swing)
 BLOCK_MAX_M = 5.0  # a block named like a door, window or furniture is one when at most this large
 FURNITURE_MAX_M = 6.0
 COLUMN_MAX_M2 = 10.0  # larger closed shapes on column layers are no column
@@ -81,7 +82,7 @@ def read(path: Path, *, name: str | None = None, units: str | None = None, wall_
     ceiling = float(ceiling_height or DEFAULT_CEILING_M)
     wall_z = min(float(wall_height or ceiling), ceiling)
     out.notes += check_span(span(wall_solid), scale, unit_text)
-    door_rects = _openings(out, parts["door"], region, DOOR_MAX_M, "door outlines too large for one door")
+    door_rects = _doors(out, parts["door"], region, scale, unit_text)
     uncut = wall_solid
     if doors == "open" and door_rects:
         wall_solid = wall_solid.difference(shapely.union_all(door_rects))
@@ -260,14 +261,16 @@ def _main_building(out: PlanImport, walls, glass, columns):
     return region, *picked
 
 
-def _openings(out: PlanImport, shapes: list[Shape], region, max_m: float, too_big: str | None) -> list[Polygon]:
-    """Plan rectangles (m) of the doors / windows drawn in ``shapes`` inside ``region``,
-    at most ``max_m`` long (larger groups counted under ``too_big``)."""
-    geoms = [sh.geom for sh in shapes if sh.geom.intersects(region)]
-    rects = components(geoms)
-    keep = [q for q in rects if span(q) <= max_m]
-    if too_big and len(rects) > len(keep):
-        out.skipped[too_big] += len(rects) - len(keep)
+def _doors(out: PlanImport, shapes: list[Shape], region, scale: float, units: str) -> list[Polygon]:
+    """Plan rectangles (m) of the doors drawn in ``shapes`` inside ``region``: one per
+    group of touching pieces (leaf, swing, frame), at most DOOR_MAX_M long (larger groups
+    counted); a note when the doors' typical size makes no sense in the drawing's units."""
+    rects = components([sh.geom for sh in shapes if sh.geom.intersects(region)])
+    keep = [q for q in rects if span(q) <= DOOR_MAX_M]
+    if len(rects) > len(keep):
+        out.skipped["door outlines too large for one door"] += len(rects) - len(keep)
+    if len(rects) >= 3:
+        out.notes += check_span(float(np.median([span(q) for q in rects])), scale, units, DOOR_M, "doors")
     return keep
 
 

@@ -29,7 +29,7 @@ FILLED = {"HATCH", "MPOLYGON", "SOLID", "TRACE", "3DFACE"}
 TEXTS = {"TEXT", "MTEXT", "ATTRIB"}
 ANNOTATION = {"DIMENSION", "ARC_DIMENSION", "LARGE_RADIAL_DIMENSION", "LEADER", "MLEADER", "MULTILEADER",
               "ACAD_TABLE", "TOLERANCE", "VIEWPORT"}  # never taken apart into linework
-PLAUSIBLE_M = (3.0, 1500.0)  # the span of a building plan that makes sense, m
+PLAUSIBLE_M = (3.0, 500.0)  # the span of a building plan that makes sense, m
 TYPICAL_SPAN_M = 30.0  # a file without units is read in the unit (mm, cm, m) that makes its span nearest this
 
 
@@ -135,13 +135,18 @@ def _span_units(doc) -> float:
     return float((a.max(0) - a.min(0)).max())
 
 
-def check_span(span_m: float, scale: float, units: str) -> list[str]:
-    """Notes when the building's larger side (m; ``scale`` m per drawing unit) makes no
-    sense in the drawing's ``units``."""
-    if PLAUSIBLE_M[0] <= span_m <= PLAUSIBLE_M[1] or span_m <= 0:
+def check_span(span_m: float, scale: float, units: str, plausible: tuple = PLAUSIBLE_M,
+               what: str = "walls") -> list[str]:
+    """Notes when a length (m; ``scale`` m per drawing unit) that should lie in
+    ``plausible`` (the walls' larger side, a typical door) makes no sense in the drawing's
+    ``units``, with what the other units would make of it."""
+    if plausible[0] <= span_m <= plausible[1] or span_m <= 0:
         return []
-    return [f"the walls span {span_m:,.2f} m in the drawing's units ({units}): are they right? In other units: "
-            f"{unit_hint(span_m / scale)} (units)"]
+    span = span_m / scale
+    other = ", ".join(f"{u}: {span * s:,.2f} m" for u, s in UNITS_M.items()
+                      if plausible[0] <= span * s <= plausible[1]) or "none fits"
+    return [f"the {what} measure {span_m:,.2f} m in the drawing's units ({units}): are they right? In other "
+            f"units: {other} (units)"]
 
 
 def read_drawing(doc, scale: float, units: str) -> Drawing:
