@@ -61,18 +61,22 @@ def colour_keys(rgb: np.ndarray) -> np.ndarray:
 def colour_rooms(rgb: np.ndarray, ink: np.ndarray, walls: np.ndarray, labels: np.ndarray, rooms: list[int],
                  s: float, min_room_area: float) -> tuple[np.ndarray, list[int], int]:
     """Rooms of a coloured plan (each room a flat fill): (labels, room labels, rooms added).
-    A region enclosed by walls that holds two or more fills of at least ``min_room_area``
-    (and a tenth of it) is split between them (each pixel to the nearest fill: a hall and
+    A fill is a colour's piece between walls (text and dimension lines crossing it do not
+    part it). A region enclosed by walls that holds two or more fills of at least
+    ``min_room_area`` is split between them (each pixel to the nearest fill: a hall and
     a kitchen drawn without a wall between them); a fill outside every region beside the
     ``walls`` (a porch drawn without walls) is a room of its own. ``rgb`` (h, w, 3),
-    ``ink``, ``walls`` and ``labels`` cover the plan's box; the fills are told apart from the paper (the commonest colour)."""
+    ``ink``, ``walls`` and ``labels`` cover the plan's box; the fills are told apart from
+    the paper (the commonest colour)."""
     keys = colour_keys(rgb)
     paper = np.bincount(keys[~ink].ravel()).argmax() if (~ink).any() else -1
     px_min = min_room_area / (s * s)
     counts = np.bincount(keys[(labels > 0) & ~ink & (keys != paper)].ravel(), minlength=512)
-    fill = np.zeros(labels.shape, np.int32)  # 1 + index of the fill colour, 0: no fill
-    for i, key in enumerate(np.flatnonzero(counts >= px_min), 1):
-        fill[square_morphology((keys == key) & (labels > 0), 0.25 / s, "open")] = i  # lines in a colour: not fills
+    fill = np.zeros(labels.shape, np.int32)  # one number per fill (a colour's piece between walls), 0: none
+    for key in np.flatnonzero(counts >= px_min):
+        solid = square_morphology((keys == key) & (labels > 0), 0.25 / s, "open")  # lines in a colour: not fills
+        pieces, n = ndimage.label(square_morphology(solid, 0.3 / s, "close") & (labels > 0) & ~walls)
+        fill[solid] = np.where(pieces[solid] > 0, pieces[solid] + fill.max(), 0)  # across dimension lines, not walls
     if not fill.any():
         return labels, rooms, 0
     out = np.where(np.isin(labels, rooms), labels, 0)
