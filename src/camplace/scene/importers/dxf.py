@@ -131,19 +131,37 @@ def _layer_roles(d: Drawing, given: dict) -> tuple[dict[str, str | None], dict[s
 
 
 def _by_role(d: Drawing, role: dict) -> dict[str, list[Shape]]:
-    """Shapes per role: the layer's role, or the block's where a small block is named
-    like a door, window or furniture."""
-    groups: dict[int, list[Shape]] = defaultdict(list)
-    for sh in d.shapes:
-        groups[sh.group].append(sh)
+    """Shapes per role: the role of the innermost block reference around them that is
+    named like a door, window or furniture and at most BLOCK_MAX_M large, else their
+    layer's."""
+    size = _part_sizes(d)
+    named: dict[int, str | None] = {}
     out: dict[str, list[Shape]] = defaultdict(list)
-    for g, shapes in groups.items():
-        named = block_role(shapes[0].block) if shapes[0].block else None
-        if named and _extent([sh.geom for sh in shapes]) > BLOCK_MAX_M:
-            named = None
-        for sh in shapes:
-            out[named or role.get(sh.layer) or "none"].append(sh)
+    for sh in d.shapes:
+        if sh.part not in named:
+            named[sh.part] = next((r for p in _chain(d, sh.part) if size[p] <= BLOCK_MAX_M
+                                   for r in [block_role(d.parts[p][1])] if r), None)
+        out[named[sh.part] or role.get(sh.layer) or "none"].append(sh)
     return out
+
+
+def _chain(d: Drawing, part: int):
+    """The block references around a shape's ``part``, innermost first."""
+    while part >= 0:
+        yield part
+        part = d.parts[part][3]
+
+
+def _part_sizes(d: Drawing) -> np.ndarray:
+    """The larger side (m) of each block reference's content, nested ones included."""
+    lo, hi = np.full((len(d.parts), 2), np.inf), np.full((len(d.parts), 2), -np.inf)
+    if d.shapes and d.parts:
+        b = shapely.bounds(np.asarray([sh.geom for sh in d.shapes], dtype=object))
+        for sh, (x0, y0, x1, y1) in zip(d.shapes, b):
+            for p in _chain(d, sh.part):
+                lo[p] = np.minimum(lo[p], (x0, y0))
+                hi[p] = np.maximum(hi[p], (x1, y1))
+    return np.nan_to_num((hi - lo).max(axis=1) if len(d.parts) else np.zeros(0), nan=np.inf, neginf=np.inf)
 
 
 def _extent(geoms: list) -> float:
@@ -304,20 +322,26 @@ def _obstacles(geom, sources: tuple, z0: float, z1: float, prefix: str, src: str
 def _furniture(d: Drawing, role: dict, region, heights: dict, ceiling: float, src: str,
                out: PlanImport) -> list[dict]:
     """Prisms of the furniture blocks (block references on furniture layers or named
-    like furniture) inside the building: their plan hull, floor to the height of the
-    first ``heights`` pattern matching the layer (default 0.9 m)."""
+    like furniture, the outermost such one up to FURNITURE_MAX_M) inside the building:
+    their plan hull, floor to the height of the first ``heights`` pattern matching the
+    reference's layer (default 0.9 m)."""
+    size = _part_sizes(d)
+
+    def furniture(p: int) -> bool:
+        return size[p] <= FURNITURE_MAX_M and (role.get(d.parts[p][0]) == "furniture"
+                                               or block_role(d.parts[p][1]) == "furniture")
+
     groups: dict[int, list] = defaultdict(list)
     for sh in d.shapes:
-        if sh.group in d.inserts:
-            groups[sh.group].append(sh.geom)
+        outer = [p for p in _chain(d, sh.part) if furniture(p)]
+        if outer:
+            groups[outer[-1]].append(sh.geom)
     obstacles = []
-    for g, geoms in groups.items():
-        layer, block, handle = d.inserts[g]
-        if role.get(layer) != "furniture" and block_role(block) != "furniture":
-            continue
+    for p, geoms in groups.items():
+        layer, block, handle, _ = d.parts[p]
         hull = shapely.union_all(geoms).convex_hull
-        if not hull.intersects(region) or span(hull) > FURNITURE_MAX_M:
-            out.skipped["furniture blocks outside the building or too large"] += 1
+        if not hull.intersects(region):
+            out.skipped["furniture blocks outside the building"] += 1
             continue
         hull = hull if isinstance(hull, Polygon) else hull.buffer(0.01)
         h = next((float(v) for k, v in heights.items() if matches(layer, [k])), DEFAULT_FURNITURE_M)

@@ -38,15 +38,16 @@ class Shape:
     """One piece of plan geometry (m). ``geom``: a LineString (linework) or a Polygon
     (a filled HATCH / SOLID, a polyline drawn with a width); ``closed``: an outline that
     closes on itself (a closed polyline, circle); ``group``: index of the modelspace
-    entity it came from (one block reference = one group), ``block`` that entity's block
-    name ('' for plain entities), ``handle`` its handle."""
+    entity it came from (one block reference = one group), ``handle`` that entity's
+    handle; ``part``: the innermost block reference it was drawn in (an index into
+    Drawing.parts; -1 for an entity drawn in the modelspace itself)."""
 
     layer: str
     kind: str
     geom: Any
     closed: bool
     group: int
-    block: str
+    part: int
     handle: str
 
 
@@ -66,14 +67,15 @@ class Label:
 @dataclass
 class Drawing:
     """The plan content of a DXF file in metres: ``shapes``, ``labels``, entity counts
-    per (layer, type) after exploding blocks (``inventory``), block references per group
-    (``inserts``: group -> (layer, block name, handle)), ``scale`` m per drawing unit,
+    per (layer, type) after exploding blocks (``inventory``), every block reference at any
+    depth (``parts``: (layer, block name, handle of its modelspace entity, the part it
+    lies in or -1)), ``scale`` m per drawing unit,
     ``units`` (how the unit was found), ``skipped`` counts, ``notes``."""
 
     shapes: list[Shape]
     labels: list[Label]
     inventory: Counter
-    inserts: dict[int, tuple[str, str, str]]
+    parts: list[tuple[str, str, str, int]]
     scale: float
     units: str
     skipped: Counter = field(default_factory=Counter)
@@ -152,10 +154,10 @@ def check_span(span_m: float, scale: float, units: str, plausible: tuple = PLAUS
 def read_drawing(doc, scale: float, units: str) -> Drawing:
     """The modelspace of ``doc`` as shapes and labels in metres (``scale`` m per unit)."""
     hidden = {la.dxf.name for la in doc.layers if la.is_off() or la.is_frozen()}
-    out = Drawing([], [], Counter(), {}, scale, units)
+    out = Drawing([], [], Counter(), [], scale, units)
     reader = _Reader(out, scale, hidden)
     for group, e in enumerate(doc.modelspace()):
-        reader.entity(e, e.dxf.get("layer", "0"), group, "", e.dxf.get("handle", ""), 0)
+        reader.entity(e, e.dxf.get("layer", "0"), group, -1, e.dxf.get("handle", ""), 0)
     if hidden and out.skipped["entities on layers turned off or frozen"]:
         out.notes.append(f"left out the layers turned off or frozen: {', '.join(sorted(hidden))}")
     return out
@@ -168,7 +170,7 @@ class _Reader:
         self.out, self.s, self.hidden, self.count = out, scale, hidden, 0
         self.tol = FLATTEN_M / scale
 
-    def entity(self, e, layer: str, group: int, block: str, handle: str, depth: int) -> None:
+    def entity(self, e, layer: str, group: int, part: int, handle: str, depth: int) -> None:
         kind = e.dxftype()
         if layer in self.hidden:
             self.out.skipped["entities on layers turned off or frozen"] += 1
@@ -180,22 +182,20 @@ class _Reader:
         self.out.inventory[(layer, kind)] += 1
         try:
             if kind == "INSERT":
-                self._insert(e, layer, group, block, handle, depth)
+                self._insert(e, layer, group, part, handle, depth)
             elif kind in TEXTS:
                 self._text(e, layer, group, "")
             elif kind in LINEWORK or kind in FILLED:
-                self._shape(e, kind, layer, group, block, handle)
+                self._shape(e, kind, layer, group, part, handle)
             elif kind not in ANNOTATION and hasattr(e, "virtual_entities") and depth < MAX_DEPTH:
                 # MLINE, and custom objects with proxy graphics (AutoCAD Architecture walls, ...)
                 for ve in e.virtual_entities():
-                    self.entity(ve, _layer_of(ve, layer), group, block, handle, depth + 1)
+                    self.entity(ve, _layer_of(ve, layer), group, part, handle, depth + 1)
         except Exception:  # noqa: BLE001 - one entity ezdxf cannot take apart never fails the import
             self.out.skipped[f"{kind} entities that could not be read"] += 1
 
-    def _insert(self, e, layer: str, group: int, block: str, handle: str, depth: int) -> None:
+    def _insert(self, e, layer: str, group: int, parent: int, handle: str, depth: int) -> None:
         name = e.dxf.name
-        if depth == 0:
-            self.out.inserts[group] = (layer, name, handle)
         for a in e.attribs:
             self._text(a, _layer_of(a, layer), group, str(a.dxf.tag))
         if depth >= MAX_DEPTH:
@@ -208,8 +208,10 @@ class _Reader:
             return
         refs = e.multi_insert() if e.mcount > 1 else [e]
         for ref in refs:
+            self.out.parts.append((layer, name, handle, parent))
+            part = len(self.out.parts) - 1
             for ve in ref.virtual_entities():
-                self.entity(ve, _layer_of(ve, layer), group, block or name, handle, depth + 1)
+                self.entity(ve, _layer_of(ve, layer), group, part, handle, depth + 1)
 
     def _text(self, e, layer: str, group: int, tag: str) -> None:
         kind = e.dxftype()
@@ -225,11 +227,11 @@ class _Reader:
                 self.out.labels.append(Label(Point(p.x * self.s, p.y * self.s), line, float(height) * self.s, layer,
                                              tag, group))
 
-    def _shape(self, e, kind: str, layer: str, group: int, block: str, handle: str) -> None:
+    def _shape(self, e, kind: str, layer: str, group: int, part: int, handle: str) -> None:
         s = self.s
         if kind == "LINE":
             a, b = e.dxf.start, e.dxf.end
-            self._add(layer, kind, LineString([(a.x * s, a.y * s), (b.x * s, b.y * s)]), False, group, block,
+            self._add(layer, kind, LineString([(a.x * s, a.y * s), (b.x * s, b.y * s)]), False, group, part,
                       handle)
             return
         if kind in ("HATCH", "MPOLYGON"):
@@ -238,7 +240,7 @@ class _Reader:
             rings = [_xy(p.flattening(self.tol), s) for p in dxfpath.from_hatch(e)]
             area = even_odd([Polygon(r) for r in rings if len(r) >= 3])
             if not area.is_empty:
-                self._add(layer, kind, area, True, group, block, handle)
+                self._add(layer, kind, area, True, group, part, handle)
             return
         if kind == "POLYLINE" and (e.is_poly_face_mesh or e.is_polygon_mesh):
             self.out.skipped["polyline meshes"] += 1
@@ -258,11 +260,11 @@ class _Reader:
             geom = LineString(pts).buffer(width / 2, cap_style="flat", join_style="mitre")
         else:
             geom = LineString(pts if not closed or np.allclose(pts[0], pts[-1]) else [*pts, pts[0]])
-        self._add(layer, kind, geom, closed, group, block, handle)
+        self._add(layer, kind, geom, closed, group, part, handle)
 
-    def _add(self, layer, kind, geom, closed, group, block, handle) -> None:
+    def _add(self, layer, kind, geom, closed, group, part, handle) -> None:
         if not geom.is_empty and (geom.length > 0 or geom.area > 0):
-            self.out.shapes.append(Shape(layer, kind, geom, closed, group, block, handle))
+            self.out.shapes.append(Shape(layer, kind, geom, closed, group, part, handle))
 
 
 def _layer_of(ve, parent: str) -> str:
