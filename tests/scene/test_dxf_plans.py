@@ -135,3 +135,12 @@ def test_declared_units_that_make_no_sense_get_a_note(files, tmp_path):
     doc.saveas(tmp_path / "inches.dxf")
     got = read_plan(tmp_path / "inches.dxf")
     assert any("the doors measure 2.29 m" in n and "cm: 0.90 m" in n for n in got.notes), got.notes
+
+
+def test_damaged_file_read_in_recover_mode_with_a_note(files, tmp_path):
+    text = files["fm"].read_text(encoding="utf-8").rstrip().splitlines()
+    assert text[-1].strip() == "EOF"
+    (tmp_path / "cut.dxf").write_text("\n".join(text[:-2]) + "\n", encoding="utf-8")  # the EOF tag lost
+    got = read_plan(tmp_path / "cut.dxf")
+    assert any("structure errors" in n and "recover" in n for n in got.notes)
+    assert _area(got) == pytest.approx(dd.FM_CLEAR_M2, rel=0.10)

@@ -60,9 +60,10 @@ def read(path: Path, *, name: str | None = None, units: str | None = None, wall_
     role)."""
     if doors not in ("open", "closed"):
         raise InputError(f"doors: expected open or closed, got '{doors}'", option="doors")
-    doc = read_dxf(path)
+    doc, damaged = read_dxf(path)
     scale, unit_text = drawing_units(doc, path, units)
     d = read_drawing(doc, scale, unit_text)
+    d.notes += [damaged] if damaged else []
     if "guessed" in unit_text:
         d.notes.append(f"units {unit_text}; if that is wrong, give them (units)")
     given = {"wall": wall_layers, "door": door_layers, "window": window_layers, "column": column_layers,

@@ -83,16 +83,26 @@ class Drawing:
 
 
 def read_dxf(path: Path):
-    """The ezdxf document of ``path`` (InputError naming the file when it is no DXF)."""
+    """(ezdxf document of ``path``, a note or None): a file with structure errors is read
+    again by ezdxf's recover mode (what it could rebuild, said in the note); InputError
+    naming the file when it is no DXF or nothing of its modelspace survives."""
     import ezdxf
+    from ezdxf import recover
 
     try:
-        return ezdxf.readfile(str(path))
+        return ezdxf.readfile(str(path)), None
     except (OSError, UnicodeDecodeError) as err:
         raise InputError(f"{path}: cannot read the file ({err})") from None
-    except ezdxf.DXFError as err:
-        raise InputError(f"{path}: not a DXF file ({str(err).splitlines()[0] if str(err) else type(err).__name__})"
-                         ) from None
+    except Exception as err:  # noqa: BLE001 - ezdxf.DXFError, or a ValueError on a broken handle, ...
+        first = str(err).splitlines()[0] if str(err) else type(err).__name__
+    try:
+        doc, auditor = recover.readfile(str(path))
+    except Exception:  # noqa: BLE001 - recover gives up on anything: the file is no DXF
+        doc = None
+    if doc is None or not len(doc.modelspace()):
+        raise InputError(f"{path}: not a DXF file ({first})")
+    return doc, (f"the file has structure errors ({first}); read what ezdxf's recover mode rebuilt "
+                 f"({len(auditor.fixes)} fixes, {len(auditor.errors)} errors left)")
 
 
 def drawing_units(doc, path: Path, units: str | None) -> tuple[float, str]:
