@@ -31,7 +31,8 @@ class LayerPairs:
     """Parallel-pair statistics of one layer's straight linework (m): ``total`` length,
     ``paired`` length (segments with a parallel partner PAIR_M apart on one side at
     least), ``ladder`` length (partners on both sides), ``gaps`` the pair gaps (m),
-    ``thin`` filled area of wall-thin hatches (m²), ``lines`` the paired segments."""
+    ``thin`` filled area of wall-thin hatches (m²), ``lines`` the segments paired on one
+    side only (a wall's faces; the inner rungs of a ladder left out)."""
 
     total: float
     paired: float
@@ -101,9 +102,10 @@ def layer_pairs(lines_by_layer: dict[str, list], fills_by_layer: dict[str, list]
         pm = m & paired
         thin = sum(q.area for q in fills_by_layer.get(name, []) if PAIR_M[0] * q.length <= 2 * q.area
                    <= PAIR_M[1] * q.length)
+        face = m & (left ^ right)  # a wall's face: a partner on one side (ladders' inner rungs are left out)
         out[name] = LayerPairs(float(length[m].sum()), float(length[pm].sum()), float(length[m & left & right].sum()),
-                               gap[pm], float(thin), list(shapely.linestrings(np.stack([p0[pm], p1[pm]], axis=1)))
-                               if pm.any() else [])
+                               gap[pm], float(thin), list(shapely.linestrings(np.stack([p0[face], p1[face]], axis=1)))
+                               if face.any() else [])
     return out
 
 
