@@ -9,7 +9,7 @@ from camplace.visibility.registry import get_engine
 sc, t, c = builtin_inputs("standard-store")
 keep = np.zeros(len(c), bool); keep[::35] = True
 sub = c.subset(keep)
-eng = get_engine("pixel", voxel_size=sc.spec.voxel_size, stride=1, probe=1.0)
+eng = get_engine("pixel", stride=1, probe=1.0)
 compute_visibility(eng, sc.occupancy, t, sub.subset(np.arange(len(sub)) < 2))  # compile
 t0, w0 = time.process_time(), time.perf_counter()
 v = compute_visibility(eng, sc.occupancy, t, sub)

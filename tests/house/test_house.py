@@ -133,3 +133,17 @@ def test_library_strings_name_no_cli_flag():
                 for flag in FLAG.findall(node.value):
                     hits.append(f"{m}:{node.lineno}: {flag}")
     assert not hits, "library strings that name CLI flags (word them in camplace.cli):\n" + "\n".join(hits)
+
+
+def test_package_docstrings_and_the_design_table_agree_on_the_layers():
+    """Each package's ``__init__`` docstring opens with 'camplace.<pkg> (layer N)' and
+    docs/design.md's layer table gives the same N: the numbers cannot drift apart."""
+    table = (SRC.parent / "docs" / "design.md").read_text()
+    rows = dict((pkg, int(n)) for n, pkg in re.findall(r"^\| (\d+) \| `(\w+)/` \|", table, re.M))
+    assert rows == {pkg: n for n, pkg in enumerate(LAYERS)}, rows
+    wrong = []
+    for n, pkg in enumerate(LAYERS):
+        doc = ast.get_docstring(ast.parse((SRC / "camplace" / pkg / "__init__.py").read_text())) or ""
+        if not doc.startswith(f"camplace.{pkg} (layer {n})"):
+            wrong.append(f"{pkg}: {doc[:60]!r}")
+    assert not wrong, "package docstrings that do not open with 'camplace.<pkg> (layer N)':\n" + "\n".join(wrong)

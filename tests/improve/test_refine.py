@@ -164,3 +164,30 @@ def test_a_moved_pose_keeps_the_mount_clearance():
     sel = r.placement.selected
     d = occupied_distance(r.scene.occupancy, c.positions[sel], CEILING_BACK, reach=0.1)
     assert np.all(d >= 0.1 - 1e-6)
+
+
+@pytest.mark.parametrize("mode, params", [("pixel", {"stride": 16}), ("voxel", {"probe": 1.0})])
+def test_refined_rows_follow_the_runs_engine(mode, params):
+    """A pixel-mode run and a probe-1 run: every row refinement added to V equals the run's
+    engine's own rows for those poses (not the voxel engine's defaults)."""
+    from conftest import box_room
+
+    from camplace.visibility import compute_visibility as engine_visibility, get_engine
+    from camplace.workflows.run import run
+
+    spec = box_room(obstacles=[{"name": "box", "box": {"min": [1.5, 1.5, 0.0], "max": [2.5, 2.5, 1.5]}}],
+                    targets=[{"name": "walkable", "kind": "volume", "heights": [1.0], "coverage": 2}],
+                    cameras=[{"name": "cam", "resolution": [320, 240], "fov_deg": [60, 45], "max_range": 6.0}],
+                    mounts=[{"kind": "ceiling_grid", "camera": "cam", "spacing": 1.0, "yaw_deg": [0, 90, 180, 270],
+                             "pitch_deg": [45]}])
+    r = run(spec, budget=3, visibility_mode=mode, refine=True, refine_time_s=2.0, **params)
+    vis = r.visibility
+    engine = get_engine(mode, **params)
+    assert vis.engine == engine
+    n_grid = vis.V.shape[0] - vis.info.get("appended", 0)
+    new = np.asarray([i for i in r.placement.selected if i >= n_grid], np.int64)
+    assert len(new), "refinement moved no camera: the test would check nothing"
+    own = engine_visibility(engine, r.scene.occupancy, vis.targets, vis.candidates.subset(new)).V
+    assert (vis.V[new] != own).nnz == 0
+    default = engine_visibility(get_engine("voxel"), r.scene.occupancy, vis.targets, vis.candidates.subset(new)).V
+    assert (default != own).nnz > 0  # the rule matters here: rows under the voxel defaults would differ

@@ -91,7 +91,7 @@ def test_density_limit_drops_far_targets(corridor, mode):
         sc, t = make(limit)
         if mode == "voxel":
             return t, compute_visibility(sc.occupancy, t, cands).V.toarray()[0].astype(bool)
-        return t, compute_pixel_visibility(sc.occupancy, t, cands, 0.25, stride=2, probe=0.0).V.toarray()[0].astype(bool)
+        return t, compute_pixel_visibility(sc.occupancy, t, cands, stride=2, probe=0.0).V.toarray()[0].astype(bool)
 
     t, free = V(None)
     t2, ident = V("identify")

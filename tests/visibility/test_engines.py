@@ -42,7 +42,7 @@ def small_scene():
 @pytest.mark.parametrize("mode, params", [(m, FAST[m]) for m in sorted(ENGINES)] + sorted(PROBED.items()))
 def test_every_engine_conforms(mode, params, small_scene, tmp_path):
     sc, t, c = small_scene
-    engine = get_engine(mode, voxel_size=sc.spec.voxel_size, **params)
+    engine = get_engine(mode, **params)
     checks = check_engine(engine, sc.occupancy, t, c, tmp_path)
     by_name = {k.name: k for k in checks}
     assert all(k.status in ("ok", "skipped") for k in checks)
@@ -91,45 +91,42 @@ def test_csr_problems():
 
 def test_registry_parameters_and_refusals():
     assert get_engine("voxel") == VoxelEngine() and get_engine("voxel", probe=None, stride=None) == VoxelEngine()
-    px = get_engine("pixel", voxel_size=0.25, stride=None, probe=None)
-    assert px == PixelEngine(0.25) and px.stride == 4 and px.probe == 1.0
+    px = get_engine("pixel", stride=None, probe=None)
+    assert px == PixelEngine() and px.stride == 4 and px.probe == 1.0
     with pytest.raises(InputError, match="^stride: the voxel engine takes no stride .*pixel") as err:
         get_engine("voxel", stride=2)
     assert err.value.option == "stride"
     with pytest.raises(InputError, match="^probe: expected a fraction in \\[0, 1\\], got 1.5") as err:
         get_engine("voxel", probe=1.5)
     assert err.value.option == "probe"
-    with pytest.raises(InputError, match="^voxel_size: a probe > 0 needs") as err:
-        get_engine("voxel", probe=1.0)  # the any-part rule needs the voxel edge
-    assert err.value.option == "voxel_size"
-    assert get_engine("voxel", probe=1.0, voxel_size=0.25) == VoxelEngine(1.0, 0.25)
-    with pytest.raises(InputError, match="^visibility_mode: expected one of 'voxel', 'pixel', got 'raster'") as err:
+    assert get_engine("voxel", probe=1.0) == VoxelEngine(1.0)  # the voxel edge comes with the targets
+    with pytest.raises(InputError, match="^voxel_size: the voxel engine takes no voxel_size \\(no engine takes it\\)"):
+        get_engine("voxel", voxel_size=0.25)  # no hidden parameter every engine must take
+    with pytest.raises(InputError, match="^visibility_mode: expected one of 'voxel', 'pixel'.*, got 'raster'") as err:
         get_engine("raster")
     assert err.value.option == "visibility_mode"
     with pytest.raises(InputError, match="^stride: expected a positive integer") as err:
-        get_engine("pixel", voxel_size=0.25, stride=0)
+        get_engine("pixel", stride=0)
     assert err.value.option == "stride"
     with pytest.raises(InputError, match="^probe: expected a fraction") as err:
-        get_engine("pixel", voxel_size=0.25, probe=2.0)
+        get_engine("pixel", probe=2.0)
     assert err.value.option == "probe"
-    with pytest.raises(InputError, match="voxel_size"):
-        get_engine("pixel")
     with pytest.raises(InputError, match="^chunk_size: ") as err:
         VoxelEngine(chunk_size=0)
     assert err.value.option == "chunk_size"
 
 
 def test_cache_tags_name_the_parameters():
-    assert VoxelEngine().cache_tag() == VoxelEngine(voxel_size=0.25).cache_tag() == "voxel:probe=0.0"
-    assert VoxelEngine(1.0, 0.25).cache_tag() == "voxel:probe=1.0:voxel=0.25:lattice=5x3"
-    assert PixelEngine(0.25, 8, 0.5).cache_tag() == "pixel:stride=8:probe=0.5:voxel=0.25:skip=True"
-    assert PixelEngine(0.25, 8).cache_tag() != PixelEngine(0.25, 4).cache_tag()
+    assert VoxelEngine().cache_tag() == "voxel:probe=0.0"
+    assert VoxelEngine(1.0).cache_tag() == "voxel:probe=1.0:lattice=5x3"
+    assert PixelEngine(8, 0.5).cache_tag() == "pixel:stride=8:probe=0.5:skip=True"
+    assert PixelEngine(8).cache_tag() != PixelEngine(4).cache_tag()
 
 
 def test_old_entry_points_equal_the_engine_loop(small_scene):
     sc, t, c = small_scene
     same_csr(voxel.compute_visibility(sc.occupancy, t, c).V, compute_visibility(VoxelEngine(), sc.occupancy, t, c).V)
-    old = compute_pixel_visibility(sc.occupancy, t, c, 0.25, stride=32)
-    new = compute_visibility(PixelEngine(0.25, 32), sc.occupancy, t, c)
+    old = compute_pixel_visibility(sc.occupancy, t, c, stride=32)
+    new = compute_visibility(PixelEngine(32), sc.occupancy, t, c)
     same_csr(old.V, new.V)
     assert old.mode == new.mode == "pixel" and old.info["rays"] == new.info["rays"] == new.info["rays_cast"] > 0

@@ -4,6 +4,8 @@ a voxel hidden at its centre but visible at a corner, a voxel at the image edge.
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 import pytest
 
@@ -50,9 +52,8 @@ def probe_scene():
 @pytest.mark.parametrize("probe", [0.0, 1.0])
 def test_voxel_agrees_with_pixel_at_stride_1(probe_scene, probe):
     sc, t, c = probe_scene
-    v = sc.spec.voxel_size
-    vox = compute_visibility(VoxelEngine(probe, v), sc.occupancy, t, c).V
-    pix = compute_visibility(PixelEngine(v, stride=1, probe=probe), sc.occupancy, t, c).V
+    vox = compute_visibility(VoxelEngine(probe), sc.occupancy, t, c).V
+    pix = compute_visibility(PixelEngine(stride=1, probe=probe), sc.occupancy, t, c).V
     assert pix.nnz > 1000
     assert jaccard(vox, pix) >= 0.99, (probe, vox.nnz, pix.nnz)
     for surface, least in ((False, 0.99), (True, 0.96)):  # ~430 surface entries: 13 differ under probe 0
@@ -62,10 +63,9 @@ def test_voxel_agrees_with_pixel_at_stride_1(probe_scene, probe):
 
 def test_the_any_part_rule_contains_the_centre_rule(probe_scene):
     sc, t, c = probe_scene
-    v = sc.spec.voxel_size
     centre = compute_visibility(VoxelEngine(), sc.occupancy, t, c).V
-    half = compute_visibility(VoxelEngine(0.5, v), sc.occupancy, t, c).V
-    part = compute_visibility(VoxelEngine(1.0, v), sc.occupancy, t, c).V
+    half = compute_visibility(VoxelEngine(0.5), sc.occupancy, t, c).V
+    part = compute_visibility(VoxelEngine(1.0), sc.occupancy, t, c).V
     assert centre.nnz < half.nnz < part.nnz
     assert centre.multiply(half).nnz == centre.nnz and half.multiply(part).nnz == half.nnz
 
@@ -74,7 +74,7 @@ def one_target(position, normal=(0.0, 0.0, 0.0)) -> Targets:
     """A single target (volume when normal is zero)."""
     kind = "surface" if any(normal) else "volume"
     return Targets(np.array([position], float), np.array([normal], float), np.ones(1, np.int64), np.ones(1),
-                   np.zeros(1, np.int32), ("t",), (kind,), np.array([90.0]), np.array([0.0]))
+                   np.zeros(1, np.int32), ("t",), (kind,), np.array([90.0]), np.array([0.0]), 0.25)
 
 
 def one_camera(position, spec=SMALL_CAM) -> Candidates:
@@ -95,10 +95,10 @@ def test_centre_hidden_behind_a_box_edge_corner_visible():
                               cameras=[SMALL_CAM]))
     t, c = one_target([3.0, 1.98, 1.0]), one_camera([0.5, 1.98, 1.0])
     for probe, expect in ((0.0, False), (1.0, True)):
-        assert seen(VoxelEngine(probe, 0.25), sc.occupancy, t, c) is expect, probe
-        assert seen(PixelEngine(0.25, stride=1, probe=probe), sc.occupancy, t, c) is expect, probe
+        assert seen(VoxelEngine(probe), sc.occupancy, t, c) is expect, probe
+        assert seen(PixelEngine(stride=1, probe=probe), sc.occupancy, t, c) is expect, probe
     far = one_target([3.0, 1.7, 1.0])  # 0.3 m behind the edge: every part hidden
-    assert not seen(VoxelEngine(1.0, 0.25), sc.occupancy, far, c)
+    assert not seen(VoxelEngine(1.0), sc.occupancy, far, c)
 
 
 def test_voxel_at_the_image_edge():
@@ -108,10 +108,10 @@ def test_voxel_at_the_image_edge():
     c = one_camera([0.5, 3.0, 1.0])
     t = one_target([2.5, 3.0 - 2.0 * np.tan(np.radians(45.5)), 1.0])
     for probe, expect in ((0.0, False), (1.0, True)):
-        assert seen(VoxelEngine(probe, 0.25), sc.occupancy, t, c) is expect, probe
-        assert seen(PixelEngine(0.25, stride=1, probe=probe), sc.occupancy, t, c) is expect, probe
+        assert seen(VoxelEngine(probe), sc.occupancy, t, c) is expect, probe
+        assert seen(PixelEngine(stride=1, probe=probe), sc.occupancy, t, c) is expect, probe
     outside = one_target([2.5, 3.0 - 2.0 * np.tan(np.radians(52.0)), 1.0])  # nearest corner at 48 deg
-    assert not seen(VoxelEngine(1.0, 0.25), sc.occupancy, outside, c)
+    assert not seen(VoxelEngine(1.0), sc.occupancy, outside, c)
 
 
 def test_a_voxel_part_within_range():
@@ -120,18 +120,21 @@ def test_a_voxel_part_within_range():
     c = one_camera([0.5, 2.0, 1.0])
     t = one_target([4.6, 2.0, 1.0])
     assert not seen(VoxelEngine(), sc.occupancy, t, c)
-    assert seen(VoxelEngine(1.0, 0.25), sc.occupancy, t, c)
-    assert not seen(VoxelEngine(0.2, 0.25), sc.occupancy, t, c)  # the central 5 cm cube ends at 4.075 m
+    assert seen(VoxelEngine(1.0), sc.occupancy, t, c)
+    assert not seen(VoxelEngine(0.2), sc.occupancy, t, c)  # the central 5 cm cube ends at 4.075 m
 
 
 def test_probe_parameters():
     with pytest.raises(InputError, match="^probe: expected a fraction") as err:
-        VoxelEngine(-0.1, 0.25)
+        VoxelEngine(-0.1)
     assert err.value.option == "probe"
-    with pytest.raises(InputError, match="^voxel_size: ") as err:
-        VoxelEngine(0.5)
-    assert err.value.option == "voxel_size"
-    assert VoxelEngine(0.5, 0.25).cache_tag() != VoxelEngine(1.0, 0.25).cache_tag() != VoxelEngine().cache_tag()
+    sc = build_scene(box_room(cameras=[SMALL_CAM]))
+    bare = replace(one_target([2.0, 2.0, 1.0]), voxel_size=None)  # targets that do not say their voxel edge
+    for engine, option in ((VoxelEngine(0.5), "probe"), (PixelEngine(), "visibility_mode")):
+        with pytest.raises(InputError, match="needs the targets' voxel edge") as err:
+            seen(engine, sc.occupancy, bare, one_camera([0.5, 2.0, 1.0]))
+        assert err.value.option == option
+    assert VoxelEngine(0.5).cache_tag() != VoxelEngine(1.0).cache_tag() != VoxelEngine().cache_tag()
 
 
 def test_footprint_lattices():

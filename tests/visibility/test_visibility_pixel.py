@@ -47,7 +47,7 @@ def test_pixel_mode_covers_exactly_the_hand_computed_voxels(down_room):
     so at the cube bottom (depth 1.925) the view spans 2 +- 1.094 m: lattice columns
     i = 3..12 (cells [0.75, 1.0] .. [3.0, 3.25]) on both axes = 100 voxels."""
     sc, t, cands = down_room
-    vis = compute_pixel_visibility(sc.occupancy, t, cands, 0.25, stride=1, probe=1.0)
+    vis = compute_pixel_visibility(sc.occupancy, t, cands, stride=1, probe=1.0)
     assert isinstance(vis, Visibility) and vis.mode == "pixel" and vis.V.shape == (1, len(t))
     ij = _lattice_index(t)
     want = np.all((ij >= 3) & (ij <= 12), axis=1)
@@ -60,7 +60,7 @@ def test_centre_probe_matches_the_centre_test(down_room):
     """probe 0: the centre must be in a ray's footprint: |c - 2| <= 1.9 tan 30 = 1.097 m,
     columns i = 4..11 = 64 voxels, the same as voxel mode."""
     sc, t, cands = down_room
-    vis = compute_pixel_visibility(sc.occupancy, t, cands, 0.25, stride=1, probe=0.0)
+    vis = compute_pixel_visibility(sc.occupancy, t, cands, stride=1, probe=0.0)
     vox = compute_visibility(sc.occupancy, t, cands)
     ij = _lattice_index(t)
     want = np.all((ij >= 4) & (ij <= 11), axis=1)
@@ -75,7 +75,7 @@ def test_occluder_hides_voxels_behind_it():
     t = build_targets(sc)
     cam = CameraModel.pinhole_from_fov("down", (64, 64), (60, 60), max_range=10)
     cands = _poses(cam, [[2.0, 2.0, 2.8]], [[0.0, 90.0, 0.0]])
-    got = compute_pixel_visibility(sc.occupancy, t, cands, 0.25, stride=1, probe=1.0).V.toarray()[0].astype(bool)
+    got = compute_pixel_visibility(sc.occupancy, t, cands, stride=1, probe=1.0).V.toarray()[0].astype(bool)
     ij = _lattice_index(t)
     # voxel columns whose whole cube lies in the table's shadow: the shadow of the table edge
     # (1.5 / 2.5 at depth 1.3) at the cube top (depth 1.675) is 2 +- 0.5 * 1.675 / 1.3 = 2 +- 0.644
@@ -106,8 +106,8 @@ def test_surface_patches_hit_within_incidence_limit(wall_face):
     centre_in = np.hypot(dy, dz) <= R
     rect_in = np.hypot(np.maximum(dy - 0.125, 0), np.maximum(dz - 0.125, 0)) <= R
     assert centre_in.sum() == 52 and rect_in.sum() == 60  # hand count (margins >= 4 cm)
-    any_part = compute_pixel_visibility(sc.occupancy, t, cands, 0.25, stride=1, probe=1.0).V.toarray()[0]
-    centre = compute_pixel_visibility(sc.occupancy, t, cands, 0.25, stride=1, probe=0.0).V.toarray()[0]
+    any_part = compute_pixel_visibility(sc.occupancy, t, cands, stride=1, probe=1.0).V.toarray()[0]
+    centre = compute_pixel_visibility(sc.occupancy, t, cands, stride=1, probe=0.0).V.toarray()[0]
     voxel = compute_visibility(sc.occupancy, t, cands).V.toarray()[0]
     assert np.array_equal(any_part.astype(bool), rect_in)
     assert np.array_equal(centre.astype(bool), centre_in)
@@ -118,7 +118,7 @@ def test_back_of_surface_is_not_seen(wall_face):
     sc, t, _ = wall_face
     cam = CameraModel.pinhole_from_fov("c", (200, 200), (90, 90), max_range=10)
     behind = _poses(cam, [[3.8, 2.0, 1.0]], [[180.0, 0.0, 0.0]])  # inside the room, behind the slab, facing it
-    assert compute_pixel_visibility(sc.occupancy, t, behind, 0.25, stride=1).V.nnz == 0
+    assert compute_pixel_visibility(sc.occupancy, t, behind, stride=1).V.nnz == 0
 
 
 def test_modes_agree_on_a_grid_of_candidates():
@@ -140,8 +140,8 @@ def test_modes_agree_on_a_grid_of_candidates():
 
 def test_stride_reduces_rays(down_room):
     sc, t, cands = down_room
-    v1 = compute_pixel_visibility(sc.occupancy, t, cands, 0.25, stride=1)
-    v4 = compute_pixel_visibility(sc.occupancy, t, cands, 0.25, stride=4)
+    v1 = compute_pixel_visibility(sc.occupancy, t, cands, stride=1)
+    v4 = compute_pixel_visibility(sc.occupancy, t, cands, stride=4)
     assert v1.info["rays"] == 64 * 64 and v4.info["rays"] == 16 * 16
     assert entry_agreement(v1.V, v4.V)["jaccard"] > 0.95
 
@@ -149,9 +149,9 @@ def test_stride_reduces_rays(down_room):
 def test_bad_options(down_room):
     sc, t, cands = down_room
     with pytest.raises(InputError, match="stride"):
-        compute_pixel_visibility(sc.occupancy, t, cands, 0.25, stride=0)
+        compute_pixel_visibility(sc.occupancy, t, cands, stride=0)
     with pytest.raises(InputError, match="probe"):
-        compute_pixel_visibility(sc.occupancy, t, cands, 0.25, probe=1.5)
+        compute_pixel_visibility(sc.occupancy, t, cands, probe=1.5)
 
 
 def test_entry_agreement_counts():
@@ -170,8 +170,8 @@ def test_empty_space_skipping_gives_the_same_v():
     sc, t, cams, _ = scene_inputs("demo")
     c = build_candidates(sc, cams)
     c = c.subset(np.arange(0, len(c), 23))
-    a = compute_pixel_visibility(sc.occupancy, t, c, 0.25, stride=8, skip_empty=True).V
-    b = compute_pixel_visibility(sc.occupancy, t, c, 0.25, stride=8, skip_empty=False).V
+    a = compute_pixel_visibility(sc.occupancy, t, c, stride=8, skip_empty=True).V
+    b = compute_pixel_visibility(sc.occupancy, t, c, stride=8, skip_empty=False).V
     assert a.nnz > 0 and (a != b).nnz == 0
 
 
@@ -184,18 +184,18 @@ def test_workers_and_cache_give_the_same_v(demo_inputs, tmp_path):
     sc, t, c = demo_inputs
     c = c.subset(np.arange(0, len(c), 4))
     kw = dict(stride=16, chunk_size=16)
-    ref = compute_pixel_visibility(sc.occupancy, t, c, 0.25, **kw)
+    ref = compute_pixel_visibility(sc.occupancy, t, c, **kw)
     assert ref.V.nnz > 1000 and ref.info["chunks"] >= 4 and ref.info["executor"] == "in-process"
     with ProcessPoolChunkExecutor(2) as ex:
-        pooled = compute_pixel_visibility(sc.occupancy, t, c, 0.25, executor=ex, cache_dir=tmp_path, **kw)
+        pooled = compute_pixel_visibility(sc.occupancy, t, c, executor=ex, cache_dir=tmp_path, **kw)
     assert pooled.info["executor"] == "process-pool" and pooled.info["cached_chunks"] == 0
-    again = compute_pixel_visibility(sc.occupancy, t, c, 0.25, executor=InProcessExecutor(), cache_dir=tmp_path, **kw)
+    again = compute_pixel_visibility(sc.occupancy, t, c, executor=InProcessExecutor(), cache_dir=tmp_path, **kw)
     assert again.info["cached_chunks"] == again.info["chunks"] and again.info["rays_cast"] == 0
     assert again.info["rays"] == ref.info["rays"] == ref.info["rays_cast"]
     for v in (pooled, again):
         same_csr(v.V, ref.V)
     # other pixel parameters, or voxel mode, never reuse these blocks
-    other = compute_pixel_visibility(sc.occupancy, t, c, 0.25, probe=0.5, cache_dir=tmp_path, **kw)
+    other = compute_pixel_visibility(sc.occupancy, t, c, probe=0.5, cache_dir=tmp_path, **kw)
     assert other.info["cached_chunks"] == 0 and other.info["cache"] != again.info["cache"]
     from camplace.visibility.voxel import compute_visibility
 

@@ -1,4 +1,4 @@
-"""camplace.cli: the command line (typer), a thin layer over camplace.workflows: one
+"""camplace.cli (layer 13): the command line (typer), a thin layer over camplace.workflows: one
 module per command, the app in camplace.cli.app, shared options and error wording in
 camplace.cli.common."""
 

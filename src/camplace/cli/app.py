@@ -5,7 +5,8 @@ from __future__ import annotations
 
 import typer
 
-from camplace.cli import bench, common, compare, demo, essential, evaluate, render, run, scan, scenes, serve, solve
+from camplace.cli import (bench, common, compare, demo, essential, evaluate, render, run, scan, scenes, serve, solve,
+                          solvers)
 from camplace.cli.common import StopFlag as _StopFlag  # noqa: F401 - the Ctrl-C flag, imported here by older tests
 from camplace.cli.scene_import import scene_app
 
@@ -33,6 +34,7 @@ app.command("render")(render.render)
 app.command("scan")(scan.scan)
 app.command("essential")(essential.essential)
 app.command("scenes")(scenes.scenes)
+app.command("solvers")(solvers.solvers)
 app.command("serve")(serve.serve)
 app.add_typer(scene_app, name="scene")
 

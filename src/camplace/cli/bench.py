@@ -9,7 +9,8 @@ from typing import Optional
 import typer
 from rich.markup import escape
 
-from camplace.cli.common import THREADS_OPT, RichProgress, StopFlag, check_options, console, progress_bars, state
+from camplace.cli.common import (THREADS_OPT, RichProgress, StopFlag, check_options, console, progress_bars,
+                                 solver_option_values, state)
 
 
 def bench(scene: str = typer.Argument(..., help="Scene YAML file or built-in name."),
@@ -21,7 +22,12 @@ def bench(scene: str = typer.Argument(..., help="Scene YAML file or built-in nam
           targets: str = typer.Option("volume", "--targets", help="volume (the paper's walkable grid) or all."),
           certify: Optional[float] = typer.Option(None, "--certify", help="Also run solver 'certify' for SECONDS per "
                                                   "budget: best placement, proven bound and gap."),
-          out: Optional[Path] = typer.Option(None, "--out", help="Output folder (default camplace-out/bench-<scene>).")) -> None:
+          out: Optional[Path] = typer.Option(None, "--out", help="Output folder (default camplace-out/bench-<scene>)."),
+          option: Optional[list[str]] = typer.Option(None, "--option", "-o", metavar="KEY=VALUE",
+                                                     help="A solver option (repeatable), given to every method that "
+                                                          "takes it; camplace solvers lists them."),
+          seed: Optional[int] = typer.Option(None, "--seed", help="Seed of randomized solvers (methods that take "
+                                             "seed: all).")) -> None:
     """The paper's experiments: every method at every budget on the same V; writes bench.csv,
     bench.md (beside the paper's Tables I/II) and bench.png (gap and % non-triangulatable)."""
     from camplace.workflows.bench import parse_budgets, run_bench, write_bench
@@ -35,7 +41,7 @@ def bench(scene: str = typer.Argument(..., help="Scene YAML file or built-in nam
         name, info, rows = run_bench(scene, budget_list, method_list, time_limit_s=time_limit, threads=threads,
                                      targets=targets, progress=RichProgress(prog, stop), should_stop=stop,
                                      on_row=lambda rows: write_bench(out_dir, Path(scene).stem, {}, rows),
-                                     certify_s=certify)
+                                     certify_s=certify, options=solver_option_values(option, seed))
     paths = write_bench(out_dir, name, info, rows)
     if state["json"]:
         from dataclasses import asdict

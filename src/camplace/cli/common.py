@@ -70,7 +70,7 @@ def word_error(err: CamplaceError) -> str:
     msg = str(err)
     opt = getattr(err, "option", None)
     if opt is None or opt not in FLAGS:
-        return msg
+        return f"--option {msg}" if opt and msg.startswith(f"{opt}:") and _solver_option(opt, msg) else msg
     flag = FLAGS[opt]
     msg = _PARAM_VALUE.sub(_flag_for, msg)
     if flag:
@@ -84,6 +84,14 @@ def word_error(err: CamplaceError) -> str:
 
 REPORT_AFTER_STOP_S = 6.0  # after the first Ctrl-C the report set may run until this many seconds after it
 PREPARE_STAGES = ("scene", "targets", "candidates")  # before visibility: nothing to keep, Ctrl-C ends them at once
+
+
+def _solver_option(name: str, msg: str) -> bool:
+    """True when ``name`` is some solver's option (given with --option) or the message
+    refuses it as one."""
+    from camplace.solvers.registry import SOLVERS
+
+    return f"option '{name}'" in msg or any(name in s.option_names for s in SOLVERS.values())
 
 
 class StopFlag:
@@ -244,6 +252,33 @@ PAPER_OPT = typer.Option("A3", "--paper", help="Paper of plan.pdf (landscape): A
 FRAME_OPT = typer.Option("scene", "--frame", help="Frame of the written poses (placement.json/.csv, OpenCV, COLMAP): "
                          "scene (levelled, z up) or input (the scanned / meshed file's own frame; placement.json "
                          "input_from_scene maps one to the other).")
+
+OPTION_OPT = typer.Option(None, "--option", "-o", metavar="KEY=VALUE",
+                          help="A solver option (repeatable), e.g. --option restarts=50; camplace solvers lists "
+                               "each solver's options, types and defaults. Named flags win over it.")
+
+
+NOT_OPTIONS = {"budget": "use --budget", "solver": "use --solver", "should_stop": "a callback",
+               "progress": "a callback", "on_incumbent": "a callback"}
+SEED_OPT = typer.Option(None, "--seed", help="Seed of randomized solvers (default: the scene's placement.options, "
+                        "else 0).")
+
+
+def solver_option_values(pairs: Optional[list[str]], seed: Optional[int] = None) -> dict:
+    """--option KEY=VALUE pairs (and --seed) -> {key: 'value'} (dashes in KEY read as
+    underscores; the value is converted to the option's declared type by the solver's options)."""
+    out: dict = {}
+    for pair in pairs or []:
+        key, sep, value = pair.partition("=")
+        key = key.strip().replace("-", "_")
+        if not sep or not key.isidentifier():
+            raise InputError(f"--option: expected KEY=VALUE (e.g. restarts=50), got '{pair}'")
+        if key in NOT_OPTIONS:
+            raise InputError(f"--option: '{key}' is not a solver option ({NOT_OPTIONS[key]})")
+        out[key] = value.strip()
+    if seed is not None:
+        out["seed"] = seed
+    return out
 
 
 def scale_options(workers: int, scheduler: Optional[str], cache: Optional[Path], no_cache: bool) -> dict:

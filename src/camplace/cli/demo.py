@@ -7,9 +7,9 @@ from typing import Optional
 
 import typer
 
-from camplace.cli.common import (CACHE_OPT, FRAME_OPT, NO_CACHE_OPT, NO_PLAN_OPT, PAPER_OPT, REPEATABLE_OPT,
-                                 SCHEDULER_OPT, TIME_LIMIT_OPT,
-                                 WORKERS_OPT, scale_options)
+from camplace.cli.common import (CACHE_OPT, FRAME_OPT, NO_CACHE_OPT, NO_PLAN_OPT, OPTION_OPT, PAPER_OPT,
+                                 REPEATABLE_OPT, SCHEDULER_OPT, SEED_OPT, TIME_LIMIT_OPT, WORKERS_OPT, scale_options,
+                                 solver_option_values)
 from camplace.cli.run import REFINE_OPT, run_pipeline
 
 
@@ -20,10 +20,11 @@ def demo(out: Optional[Path] = typer.Option(None, "--out", help="Output folder (
          cache: Optional[Path] = CACHE_OPT, no_cache: bool = NO_CACHE_OPT,
          time_limit: Optional[float] = TIME_LIMIT_OPT, repeatable: bool = REPEATABLE_OPT,
          frame: str = FRAME_OPT, no_plan: bool = NO_PLAN_OPT, paper: str = PAPER_OPT,
-         refine: Optional[bool] = REFINE_OPT) -> None:
+         refine: Optional[bool] = REFINE_OPT, option: Optional[list[str]] = OPTION_OPT,
+         seed: Optional[int] = SEED_OPT) -> None:
     """Run the whole pipeline on the built-in standard-store and print a summary (the grid
     solution refined off the grid unless --grid-only)."""
     run_pipeline("standard-store", budget, solver, out, time_limit, repeatable=repeatable, frame=frame,
                  plan=not no_plan, paper=paper,
                  **scale_options(workers, scheduler, cache, no_cache),
-                 **({"refine": True} if refine is not False else {}))
+                 **({"refine": True} if refine is not False else {}), options=solver_option_values(option, seed))

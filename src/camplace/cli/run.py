@@ -13,8 +13,8 @@ import typer
 from rich.markup import escape
 
 from camplace.cli import crowd
-from camplace.cli.common import (CACHE_OPT, FRAME_OPT, MAX_MEMORY_OPT, NO_CACHE_OPT, NO_PLAN_OPT, PAPER_OPT,
-                                 REPEATABLE_OPT, SCHEDULER_OPT,
+from camplace.cli.common import (CACHE_OPT, FRAME_OPT, MAX_MEMORY_OPT, NO_CACHE_OPT, NO_PLAN_OPT, OPTION_OPT,
+                                 PAPER_OPT, REPEATABLE_OPT, SCHEDULER_OPT, SEED_OPT, solver_option_values,
                                  TIME_LIMIT_OPT, WORKERS_OPT, RichProgress, StopFlag, certify_solver, check_options,
                                  console, memory_bytes, progress_bars, repeatable_requested, scale_options, state)
 from camplace.cli.space import (CEILING_OPT, REF_OPT, SCALE_OPT, STOREY_OPT, UNITS_OPT, WALL_HEIGHT_OPT,
@@ -129,7 +129,8 @@ def run_cmd(scene: Optional[str] = typer.Argument(None, help="Scene YAML file, b
                                                   "XYZ/CSV, LAS/LAZ), a mesh (OBJ, PLY with faces, STL, GLB), an "
                                                   "OctoMap (.bt/.ot) or a plan (DXF, PNG/JPG/TIFF image, IFC)."),
             budget: Optional[int] = typer.Option(None, "--budget", help="Number of cameras N_s (default: the scene's)."),
-            solver: Optional[str] = typer.Option(None, "--solver", help="Solver (default: the scene's)."),
+            solver: Optional[str] = typer.Option(None, "--solver", help="Solver (default: the scene's); "
+                                                 "camplace solvers lists them with their options."),
             out: Optional[Path] = typer.Option(None, "--out", help="Output folder (default camplace-out/<scene>)."),
             workers: int = WORKERS_OPT, scheduler: Optional[str] = SCHEDULER_OPT,
             cache: Optional[Path] = CACHE_OPT, no_cache: bool = NO_CACHE_OPT,
@@ -167,6 +168,7 @@ def run_cmd(scene: Optional[str] = typer.Argument(None, help="Scene YAML file, b
             certify: Optional[float] = typer.Option(None, "--certify", help="Spend SECONDS on both sides: tabu search "
                                                     "for the placement, Lagrangian/LP/exact bounds for a proven gap "
                                                     "(solver 'certify')."),
+            option: Optional[list[str]] = OPTION_OPT, seed: Optional[int] = SEED_OPT,
             units: Optional[str] = UNITS_OPT, wall_height: Optional[float] = WALL_HEIGHT_OPT,
             ceiling_height: Optional[float] = CEILING_OPT, scale: Optional[float] = SCALE_OPT,
             ref: Optional[str] = REF_OPT, storey: Optional[str] = STOREY_OPT,
@@ -225,7 +227,8 @@ def run_cmd(scene: Optional[str] = typer.Argument(None, help="Scene YAML file, b
                  **({"well_triangulated": True} if well_triangulated else {}),
                  **({"keep": keep} if keep is not None else {}), preview=preview,
                  **({"crowd": c} if (c := crowd.crowd_overrides(crowd_density, crowd_samples, crowd_score_samples,
-                                                                crowd_seed, crowd_aware)) else {}))
+                                                                crowd_seed, crowd_aware)) else {}),
+                 options=solver_option_values(option, seed))
 
 
 

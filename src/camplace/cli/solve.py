@@ -10,8 +10,8 @@ import typer
 from rich.console import Console
 from rich.table import Table
 
-from camplace.cli.common import (THREADS_OPT, RichProgress, StopFlag, certify_solver, check_options, progress_bars,
-                                 state)
+from camplace.cli.common import (OPTION_OPT, THREADS_OPT, RichProgress, StopFlag, certify_solver, check_options,
+                                 progress_bars, solver_option_values, state)
 
 
 def _table(name: str, p, budget: int, metrics, out_dir: Path) -> Table:
@@ -36,20 +36,23 @@ def solve_cmd(visibility: Path = typer.Argument(..., help="A saved instance: vis
               time_limit: Optional[float] = typer.Option(None, "--time-limit", help="Solver time limit, seconds."),
               threads: Optional[int] = THREADS_OPT,
               seed: int = typer.Option(0, "--seed", help="Seed of randomized solvers."),
+              option: Optional[list[str]] = OPTION_OPT,
               out: Optional[Path] = typer.Option(None, "--out", help="Output folder (default "
                                                  "camplace-out/<instance>-solved).")) -> None:
     """Re-solve a saved instance with no geometry; writes placement.json and metrics.json."""
+    from camplace.solvers import build_options
     from camplace.workflows.solve import instance_name, solve_instance, write_instance_outputs
 
     check_options(budget, time_limit, None, out)
     solver, time_limit = certify_solver(certify, solver, time_limit)
-    opts = {k: v for k, v in {"time_limit_s": time_limit, "threads": threads}.items() if v is not None}
+    opts = {**solver_option_values(option, seed),
+            **{k: v for k, v in {"time_limit_s": time_limit, "threads": threads}.items() if v is not None}}
+    build_options(solver, **opts)  # a bad solver or option value: one line before the instance is read
     stop = StopFlag()
     with stop.installed(), progress_bars() as prog:
         bars = RichProgress(prog, stop)
         problem, placement, metrics, arrays, timings = solve_instance(
-            visibility, budget, solver, progress=bars, on_incumbent=bars.incumbent, should_stop=stop, seed=seed,
-            **opts)
+            visibility, budget, solver, progress=bars, on_incumbent=bars.incumbent, should_stop=stop, **opts)
     name = instance_name(visibility)
     out_dir = out or Path("camplace-out") / f"{name}-solved"
     paths = write_instance_outputs(out_dir, name, problem, placement, metrics, arrays, timings)

@@ -1,1 +1,3 @@
-"""camplace.improve."""
+"""camplace.improve (layer 9): beyond the candidate grid - refine (each camera moved off the
+grid by a compass search) and adaptive (rounds of finer candidates); both raycast new poses
+through the engine that computed V (``Visibility.engine``) and append them to V."""

@@ -3,9 +3,10 @@
 After the discrete solve, each selected camera is moved continuously - its position on
 its mount surface within half a grid spacing of its grid point, yaw / pitch / roll within
 half an angle step, a varifocal lens's focal length within the lens's range (issue 27) -
-by a derivative-free compass (pattern) search. Each poll raycasts
-only the camera that moves (one small ``visibility_block`` call for the <= 10 trial
-poses of one poll), against the scene occupancy and targets. The coverage of the other
+by a derivative-free compass (pattern) search. Each poll raycasts only the camera that
+moves (the <= 10 trial poses of one poll), against the scene occupancy and targets,
+through the engine that computed V with its parameters (``Visibility.engine``: voxel or
+pixel mode, probe rule), so every row added to V follows V's own rule. The coverage of the other
 cameras is kept, so a trial costs one raycast and an O(row) cost delta:
 
     cost(c_o + r) = cost(c_o) - Σ_{j in r} g_j,  g_j = w_j (max(Γ_j - c_oj, 0)² - max(Γ_j - c_oj - 1, 0)²)
@@ -38,7 +39,8 @@ from camplace.problem.model import PlacementProblem, type_ids_of
 from camplace.scene.build import OccupancyGrid, Scene
 from camplace.solvers.base import Placement
 from camplace.targets.build import Targets
-from camplace.visibility.voxel import Visibility, visibility_block
+from camplace.visibility.engine import Visibility, VisibilityEngine, raycast_rows
+from camplace.visibility.registry import engine_of
 
 Progress = Callable[[str, int, int], None]
 # A pose guard: (poses (K, 6) x, y, z, yaw, pitch, roll; camera ids (K,)) -> (K,) bool, True = allowed
@@ -123,11 +125,10 @@ def single_pose_candidates(template: Candidates, camera_id: int, poses: np.ndarr
                       cams)
 
 
-def raycast_poses(occupancy: OccupancyGrid, targets: Targets, template: Candidates, camera_id: int,
-                  poses: np.ndarray) -> sp.csr_matrix:
-    """V rows (K, N_p) of trial poses (K, 6) or (K, 7) (single_pose_candidates), raycast afresh."""
-    c = single_pose_candidates(template, camera_id, poses)
-    return visibility_block(occupancy, targets, c, 0, len(c))
+def raycast_poses(engine: VisibilityEngine, occupancy: OccupancyGrid, targets: Targets, template: Candidates,
+                  camera_id: int, poses: np.ndarray) -> sp.csr_matrix:
+    """V rows (K, N_p) of trial poses (K, 6) or (K, 7) (single_pose_candidates), raycast afresh by ``engine``."""
+    return raycast_rows(engine, occupancy, targets, single_pose_candidates(template, camera_id, poses))
 
 
 def focal_box(camera, fraction: float = HALF) -> np.ndarray:
@@ -144,7 +145,7 @@ def focal_box(camera, fraction: float = HALF) -> np.ndarray:
 def append_candidates(vis: Visibility, occupancy: OccupancyGrid, poses: np.ndarray,
                       camera_ids: np.ndarray) -> tuple[Visibility, np.ndarray]:
     """Raycast new poses (K, 6), or (K, 7) with a focal length (mm; camplace.cameras.candidates.focal_models
-    adds its camera settings), and append them to V as rows; returns the new Visibility and
+    adds its camera settings), by V's own engine and append them to V as rows; returns the new Visibility and
     the row ids (K,) of the new poses. Location rule: a position equal (to 1 mm) to an
     existing one reuses that location id, a new position is a new location."""
     poses = np.atleast_2d(np.asarray(poses, float))
@@ -157,8 +158,7 @@ def append_candidates(vis: Visibility, occupancy: OccupancyGrid, poses: np.ndarr
     angles = poses[:, 3:FOCAL].copy()
     angles[:, 0] %= 360.0
     new = Candidates(poses[:, :3].copy(), rot, angles, camera_ids, np.zeros(len(poses), np.int64), cams)
-    rows = visibility_block(occupancy, vis.targets, new, 0, len(new)) if len(new) else \
-        sp.csr_matrix((0, vis.V.shape[1]), dtype=np.uint8)
+    rows = raycast_rows(engine_of(vis), occupancy, vis.targets, new)
     key_of = {tuple(k): int(l) for k, l in zip(np.round(cands.positions * 1000).astype(np.int64).tolist(),
                                                  cands.location_ids.tolist())}
     next_id = int(cands.location_ids.max()) + 1 if len(cands) else 0
@@ -178,7 +178,7 @@ def append_candidates(vis: Visibility, occupancy: OccupancyGrid, poses: np.ndarr
     V.sort_indices()
     info = dict(vis.info, appended=int(vis.info.get("appended", 0)) + len(poses))
     first = vis.V.shape[0]
-    return Visibility(V, merged, vis.targets, vis.mode, info), np.arange(first, first + len(poses), dtype=np.int64)
+    return replace(vis, V=V, candidates=merged, info=info), np.arange(first, first + len(poses), dtype=np.int64)
 
 
 def extend_problem(problem: PlacementProblem, vis: Visibility, row_map: RowMap | None = None) -> PlacementProblem:
@@ -252,6 +252,7 @@ def refine_poses(scene: Scene, vis: Visibility, problem: PlacementProblem, selec
     deadline = None if time_limit_s is None else t0 + float(time_limit_s)
     sel = np.asarray(selected, np.int64)
     cands = vis.candidates
+    engine = engine_of(vis)
     boxes = [pose_box(scene, cands, int(i)) for i in sel]
     fbox = np.array([focal_box(cands.cameras[int(cands.camera_ids[i])]) for i in sel]).reshape(len(sel), 4)
     poses = np.c_[np.array([b.centre for b in boxes], float).reshape(len(sel), 6), fbox[:, 0]]
@@ -303,7 +304,7 @@ def refine_poses(scene: Scene, vis: Visibility, problem: PlacementProblem, selec
                         trial = trial[_guarded(guard, cands, cid, trial)]
                     if len(trial) == 0:
                         break
-                    R = raycast_poses(scene.occupancy, vis.targets, cands, cid, trial)
+                    R = raycast_poses(engine, scene.occupancy, vis.targets, cands, cid, trial)
                     if row_map is not None:  # scored as the problem's rows (e.g. on the same crowd samples)
                         R = row_map(trial[:, :3], R)
                     trials += len(trial)

@@ -125,7 +125,7 @@ def open_start(target, scene: str | Path | None = None, root: str | Path | None 
     result = run(target, progress=progress)
     vis = result.visibility
     n = vis.V.shape[0] - int(vis.info.get("existing", 0))
-    grid = Visibility(vis.V[:n], vis.candidates.subset(np.arange(n)), vis.targets, vis.mode, dict(vis.info))
+    grid = Visibility(vis.V[:n], vis.candidates.subset(np.arange(n)), vis.targets, vis.mode, dict(vis.info), vis.engine)
     pdict = placement_dict(result.scene.name, result.placement, int(result.problem.budget), vis.candidates)
     base = Path(root or ".").resolve()
     return Opened(target, result.scene, grid, pdict["cameras"], int(result.problem.budget), base,

@@ -65,7 +65,8 @@ def locked_site(session):
     numbered = replace(grid.candidates, location_ids=np.arange(len(grid.candidates), dtype=np.int64))
     keep = site.admit(numbered).location_ids  # Site's rule: no new camera at a locked camera's position
     if len(keep) < len(grid.candidates):
-        grid = Visibility(grid.V[keep], grid.candidates.subset(keep), grid.targets, grid.mode, dict(grid.info))
+        grid = Visibility(grid.V[keep], grid.candidates.subset(keep), grid.targets, grid.mode, dict(grid.info),
+                          grid.engine)
     return site, grid
 
 

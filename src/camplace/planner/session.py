@@ -90,7 +90,7 @@ class Session:
         self.targets = opened.vis.targets
         self.lenses = tuple(opened.vis.candidates.cameras)
         self.lens_index = {c.name: k for k, c in enumerate(self.lenses)}
-        self.engine = get_engine("voxel", voxel_size=self.scene.spec.voxel_size)
+        self.engine = get_engine("voxel")
         self.guard = privacy_guard(self.scene, self.lenses, self.engine)
         self.budget = int(opened.budget)
         self.height = WORKING_HEIGHT
@@ -189,7 +189,7 @@ class Session:
         indptr = np.r_[0, np.cumsum([len(r) for r in rows])].astype(np.int64)
         indices = np.concatenate(rows).astype(np.int32) if rows else np.zeros(0, np.int32)
         V = sp.csr_matrix((np.ones(len(indices), np.uint8), indices, indptr), shape=(n, len(self.targets)))
-        return Visibility(V, cands, self.targets, "voxel"), np.arange(n, dtype=np.int64)
+        return Visibility(V, cands, self.targets, self.engine.mode, engine=self.engine), np.arange(n, dtype=np.int64)
 
     def _score(self) -> None:
         """metrics of the current cameras, as camplace.workflows.evaluate scores them."""

@@ -1,8 +1,9 @@
-"""Stage 6 - solvers: one contract, one registry, one conformance suite.
+"""camplace.solvers (layer 8): one contract, one registry, one conformance suite.
 
 Every solver is a :class:`Solver` (camplace.solvers.contract): a name, :class:`Tags`, a
 frozen options dataclass and one call ``solver.solve(problem, options, hooks) ->
-Placement``. ``SOLVERS`` (camplace.solvers.registry) holds them by name;
+Placement``. ``SOLVERS`` (camplace.solvers.registry) holds them by name: the entry points
+of the group ``camplace.solvers``, camplace's own and other packages' (plugins);
 ``build_options(name, **kwargs)`` refuses an option the solver does not take;
 ``solve(problem, "name", **options)`` is the convenience entry (options and hooks as
 keywords, the problem reduced first). camplace.solvers.testing checks any solver against

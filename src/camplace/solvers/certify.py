@@ -22,6 +22,7 @@ import numpy as np
 
 from camplace.problem.model import PlacementProblem
 from camplace.solvers.base import Placement
+from camplace.solvers.contract import Tags, make_solver
 from camplace.solvers.bounds import Lagrangian, lagrangian_bound, lp_bound, reduce_by_fixing, solve_reduced_mip
 from camplace.solvers.tabu import TabuSearch
 
@@ -275,3 +276,7 @@ def solve_certify(problem: PlacementProblem, *, time_limit_s: float | None = Non
             "threads": n_threads, "history": history, "lp": lp_info, "fixing": red_info,
             "region": region_info}
     return Placement(board.selected, board.objective, board.bound, status, "certify", time.perf_counter() - t0, info)
+
+
+CERTIFY = make_solver("certify", solve_certify, Tags(gives_bound=True),
+                      summary="Tabu incumbent and proven bounds (Lagrangian, LP, reduced MIP)")

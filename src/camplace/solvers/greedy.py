@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import heapq
 import time
+from dataclasses import replace
 from typing import Callable
 
 import numpy as np
@@ -16,6 +17,7 @@ import numpy as np
 from camplace.problem.gains import marginal_gains, row_gain  # noqa: F401 (re-exported)
 from camplace.problem.model import PlacementProblem, TypeBudget
 from camplace.solvers.base import OnIncumbent, Placement, ProgressFn, ShouldStop, deadline, stopped
+from camplace.solvers.contract import make_solver
 from camplace.solvers.local_search import NominalObjective, swap_search
 
 
@@ -173,3 +175,28 @@ def solve_catalogue_greedy(problem: PlacementProblem, *, time_limit_s: float | N
     info["local_search"] = bool(local_search)
     info["money_spent"] = float(problem.costs[sel].sum()) if len(sel) else 0.0
     return Placement(sel, problem.cost(sel), None, status, "greedy", time.perf_counter() - t0, info)
+
+
+def solve_greedy_ls(problem: PlacementProblem, *, time_limit_s: float | None = None, threads: int | None = None,
+                    seed: int = 0, should_stop: ShouldStop | None = None, progress: ProgressFn | None = None,
+                    on_incumbent: OnIncumbent | None = None, cost_scaled: bool = True) -> Placement:
+    """Greedy, then 1-swap local search (:func:`solve_greedy` with local_search=True)."""
+    p = solve_greedy(problem, time_limit_s=time_limit_s, threads=threads, seed=seed, should_stop=should_stop,
+                     progress=progress, on_incumbent=on_incumbent, local_search=True, cost_scaled=cost_scaled)
+    return replace(p, solver="greedy-ls")
+
+
+def solve_greedy_money(problem: PlacementProblem, *, time_limit_s: float | None = None, threads: int | None = None,
+                       seed: int = 0, should_stop: ShouldStop | None = None, progress: ProgressFn | None = None,
+                       on_incumbent: OnIncumbent | None = None, local_search: bool = False) -> Placement:
+    """:func:`solve_catalogue_greedy` as the solver 'greedy-money'."""
+    p = solve_catalogue_greedy(problem, time_limit_s=time_limit_s, threads=threads, seed=seed,
+                               should_stop=should_stop, progress=progress, on_incumbent=on_incumbent,
+                               local_search=local_search)
+    return replace(p, solver="greedy-money")
+
+
+GREEDY = make_solver("greedy", solve_greedy, summary="The paper's greedy (lazy CELF); local_search: 1-swap after")
+GREEDY_LS = make_solver("greedy-ls", solve_greedy_ls, summary="Greedy, then 1-swap local search")
+GREEDY_MONEY = make_solver("greedy-money", solve_greedy_money,
+                           summary="Best of cost-scaled and plain greedy under a money budget")

@@ -18,6 +18,7 @@ from camplace.core.errors import InputError
 from camplace.problem.triangulation import DEFAULT_MAX_DEG, DEFAULT_MIN_DEG, apply_add, check_angle_range, pair_up
 from camplace.problem.model import PlacementProblem, TypeBudget, shortfall_cost
 from camplace.solvers.base import OnIncumbent, Placement, ProgressFn, ShouldStop, deadline, stopped
+from camplace.solvers.contract import Tags, make_solver
 from camplace.solvers.greedy import marginal_gains
 
 
@@ -143,4 +144,8 @@ def solve_greedy_triangulated(problem: PlacementProblem, *, time_limit_s: float 
                       "angle_range_deg": [min_deg, max_deg]})
 
 
-__all__ = ["positions_of", "solve_greedy_triangulated"]
+GREEDY_TRIANGULATED = make_solver("greedy-triangulated", solve_greedy_triangulated, Tags(needs_positions=True),
+                                  summary="Greedy counting only well-triangulating pairs (needs positions)")
+
+
+__all__ = ["GREEDY_TRIANGULATED", "positions_of", "solve_greedy_triangulated"]

@@ -15,6 +15,7 @@ import numpy as np
 
 from camplace.problem.model import PlacementProblem
 from camplace.solvers.base import OnIncumbent, Placement, ProgressFn, ShouldStop, deadline, stopped
+from camplace.solvers.contract import make_solver
 from camplace.solvers.greedy import lazy_greedy
 
 
@@ -45,3 +46,6 @@ def solve_horster(problem: PlacementProblem, *, time_limit_s: float | None = Non
     status = ("interrupted" if stopped(should_stop) else "time_limit") if cut else "heuristic"
     return Placement(sel, cost, None, status, "horster", time.perf_counter() - t0,
                      {"gain_evaluations": evaluations, "order": [int(i) for i in selected]})
+
+
+HORSTER = make_solver("horster", solve_horster, summary="Hörster's greedy baseline")

@@ -28,6 +28,7 @@ import numpy as np
 
 from camplace.problem.model import PlacementProblem
 from camplace.solvers.base import OnIncumbent, Placement, ProgressFn, ShouldStop, deadline, limit_left, stopped
+from camplace.solvers.contract import Tags, make_solver
 from camplace.solvers.highs_util import INF, convex_model_nnz, highs_from_arrays, model_fits, run_highs, skipped_outcome
 from camplace.solvers.mip import tight_model_arrays, tight_start
 import scipy.sparse as sp
@@ -188,3 +189,5 @@ def solve_min_cameras(problem: PlacementProblem, *, time_limit_s: float | None =
     return Placement(np.sort(sel), cost, None, status, "min-cameras", time.perf_counter() - t0, info)
 
 
+MIN_CAMERAS = make_solver("min-cameras", solve_min_cameras, Tags(ignores_camera_budget=True),
+                          summary="Fewest cameras that reach a coverage target (coverage_gap / max_cost)")

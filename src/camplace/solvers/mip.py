@@ -28,6 +28,7 @@ import scipy.sparse as sp
 
 from camplace.problem.model import PlacementProblem
 from camplace.solvers.base import OnIncumbent, Placement, ProgressFn, ShouldStop, deadline, trivial_placement
+from camplace.solvers.contract import Tags, make_solver
 from camplace.solvers.highs_util import (INF, MilpArrays, convex_model_nnz, highs_from_arrays, location_rows,
                                         model_fits, run_highs, target_rows)
 
@@ -290,3 +291,6 @@ def _solve_fixed(problem: PlacementProblem, start: np.ndarray, *, end: float, ti
     else:
         status = "time_limit" if time_limit_s is not None else "feasible"
     return Placement(best, best_cost, bound, status, "mip", 0.0, info)
+
+
+MIP = make_solver("mip", solve_mip, Tags(exact=True, gives_bound=True), summary="The tight MIP (HiGHS), exact")

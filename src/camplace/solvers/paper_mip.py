@@ -33,6 +33,7 @@ import scipy.sparse as sp
 from camplace.problem.model import PlacementProblem
 from camplace.solvers.base import (OnIncumbent, Placement, ProgressFn, ShouldStop, deadline, limit_left, out_of_time,
                                    stopped, trivial_placement)
+from camplace.solvers.contract import Tags, make_solver
 from camplace.solvers.highs_util import INF, MilpArrays, build_seconds, highs_from_arrays, location_rows, model_fits
 from camplace.solvers.mip import better_selection, skipped_placement, solve_highs_model
 
@@ -269,3 +270,7 @@ def _solve_cbc(mip, problem: PlacementProblem, h, arrays: MilpArrays, start_cols
     if on_incumbent:
         on_incumbent(best_cost, bound)
     return Placement(best, best_cost, bound, status, "paper-mip", time.perf_counter() - t0, info)
+
+
+PAPER_MIP = make_solver("paper-mip", solve_paper_mip, Tags(exact=True, gives_bound=True),
+                        summary="The paper's MIP model (CBC or HiGHS), exact")

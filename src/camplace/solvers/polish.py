@@ -25,6 +25,7 @@ import numpy as np
 from camplace.problem.gains import marginal_gains
 from camplace.problem.model import PlacementProblem
 from camplace.solvers.base import OnIncumbent, Placement, ProgressFn, ShouldStop, deadline, stopped
+from camplace.solvers.contract import Tags, make_solver
 from camplace.solvers.greedy_fast import solve_greedy_fast
 from camplace.solvers.mip import solve_mip
 from camplace.solvers.reduction import solve_reduced
@@ -93,3 +94,7 @@ def solve_greedy_polish(problem: PlacementProblem, *, time_limit_s: float | None
         status = "time_limit" if time.perf_counter() > end else "heuristic"
     return Placement(np.asarray(best, np.int64), best_cost, bound, status, "greedy-polish",
                      time.perf_counter() - t0, info)
+
+
+GREEDY_POLISH = make_solver("greedy-polish", solve_greedy_polish, Tags(gives_bound=True),
+                            summary="Greedy, then the MIP on a restricted candidate set, Lagrangian bound")

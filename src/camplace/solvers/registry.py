@@ -3,62 +3,73 @@
     SOLVERS["mip"].solve(problem, build_options("mip", time_limit_s=10), Hooks(should_stop=f))
     solve(problem, "mip", time_limit_s=10, should_stop=f)        # the same, on the reduced problem
 
-Adding a solver is one ``make_solver`` line here (camplace.solvers.contract; docs/solvers.md),
-and camplace.solvers.testing.check_solver is the proof that it keeps the contract.
+``SOLVERS`` is the entry-point group ``camplace.solvers`` (camplace.core.plugins), read at
+first use: the built-ins are declared in camplace's pyproject.toml, another package adds
+its own the same way; a broken one is reported (a PluginWarning) and skipped. Adding a
+solver: docs/solvers.md; camplace.solvers.testing.check_solver is the proof that it
+keeps the contract.
 """
 
 from __future__ import annotations
 
 import time
 from dataclasses import replace
-from functools import partial
 from typing import Any
 
 from camplace.core.errors import InputError
+from camplace.core.plugins import Registry
 from camplace.problem.model import PlacementProblem
 from camplace.solvers.base import Placement
-from camplace.solvers.certify import solve_certify
-from camplace.solvers.contract import HOOK_FIELDS, Options, Solver, Tags, make_solver, split_options
-from camplace.solvers.greedy import solve_catalogue_greedy, solve_greedy
-from camplace.solvers.greedy_fast import solve_greedy_fast
-from camplace.solvers.greedy_triangulated import solve_greedy_triangulated
-from camplace.solvers.horster import solve_horster
-from camplace.solvers.min_cameras import solve_min_cameras
-from camplace.solvers.mip import solve_mip
-from camplace.solvers.paper_mip import solve_paper_mip
-from camplace.solvers.polish import solve_greedy_polish
+from camplace.solvers.contract import HOOK_FIELDS, Options, Solver, split_options
 from camplace.solvers.reduction import solve_reduced
-from camplace.solvers.robust_solver import solve_robust
-from camplace.solvers.tabu import solve_tabu
-from camplace.solvers.zhao import solve_zhao
-from camplace.solvers.zones import solve_zones
 
-_EXACT = Tags(exact=True, gives_bound=True)
+GROUP = "camplace.solvers"
 
-SOLVERS: dict[str, Solver] = {s.name: s for s in [
-    make_solver("greedy", solve_greedy, summary="The paper's greedy (lazy CELF); local_search: 1-swap after"),
-    make_solver("greedy-ls", partial(solve_greedy, local_search=True), summary="Greedy, then 1-swap local search"),
-    make_solver("greedy-fast", solve_greedy_fast, summary="Greedy with numba gains (same selection as greedy)"),
-    make_solver("greedy-money", solve_catalogue_greedy,
-                summary="Best of cost-scaled and plain greedy under a money budget"),
-    make_solver("greedy-polish", solve_greedy_polish, Tags(gives_bound=True),
-                summary="Greedy, then the MIP on a restricted candidate set, Lagrangian bound"),
-    make_solver("greedy-triangulated", solve_greedy_triangulated, Tags(needs_positions=True),
-                summary="Greedy counting only well-triangulating pairs (needs positions)"),
-    make_solver("mip", solve_mip, _EXACT, summary="The tight MIP (HiGHS), exact"),
-    make_solver("paper-mip", solve_paper_mip, _EXACT, summary="The paper's MIP model (CBC or HiGHS), exact"),
-    make_solver("zhao", solve_zhao, summary="Zhao et al. baseline"),
-    make_solver("horster", solve_horster, summary="Hörster's greedy baseline"),
-    make_solver("min-cameras", solve_min_cameras, Tags(ignores_camera_budget=True),
-                summary="Fewest cameras that reach a coverage target (coverage_gap / max_cost)"),
-    make_solver("tabu", solve_tabu, summary="Tabu search from greedy"),
-    make_solver("certify", solve_certify, Tags(gives_bound=True),
-                summary="Tabu incumbent and proven bounds (Lagrangian, LP, reduced MIP)"),
-    make_solver("robust", solve_robust, Tags(needs_start=True, robust_objective=True),
-                summary="Best worst case over single camera failures, from a nominal start"),
-    make_solver("zones", solve_zones, Tags(gives_bound=True, needs_positions=True),
-                summary="Zone sweeps: tight MIP / tabu per floor tile, budget moves, Lagrangian bound (needs positions)"),
-]}
+
+def check_plugin(name: str, obj: Any) -> Solver:
+    """``obj`` when it is a Solver named ``name`` (the entry point's name); else TypeError."""
+    if not isinstance(obj, Solver):
+        raise TypeError(f"expected a camplace.solvers.Solver (camplace.solvers.contract.make_solver), got "
+                        f"{type(obj).__name__}")
+    if obj.name != name:
+        raise TypeError(f"the Solver is named {obj.name!r}, the entry point {name!r}")
+    return obj
+
+
+SOLVERS: Registry = Registry(GROUP, check_plugin)  # name -> Solver, loaded at first use
+
+
+def type_name(tp: Any) -> str:
+    """A declared type as written: 'int', 'float | None', 'Placement | ndarray | None'."""
+    import types
+    import typing
+
+    if isinstance(tp, str):
+        return tp
+    if typing.get_origin(tp) in (typing.Union, types.UnionType):
+        return " | ".join(type_name(a) for a in typing.get_args(tp))
+    if tp is type(None):
+        return "None"
+    if isinstance(tp, type) and typing.get_origin(tp) is None:
+        return tp.__name__
+    return str(tp).replace("typing.", "").replace("collections.abc.", "").replace("NoneType", "None")
+
+
+def catalogue() -> list[dict]:
+    """Every registered solver as plain data: name, summary, distribution ('camplace' for a
+    built-in), the tags that hold, and its options (name, type, default), common ones first."""
+    from dataclasses import MISSING, asdict, fields
+
+    from camplace.solvers.contract import _field_types
+
+    out = []
+    for name, s in SOLVERS.items():
+        hints = _field_types(s.options)
+        opts = [{"name": f.name, "type": type_name(hints.get(f.name, f.type)),
+                 "default": None if f.default is MISSING else f.default} for f in fields(s.options)]
+        out.append({"name": name, "summary": s.summary, "distribution": SOLVERS.distribution(name),
+                    "tags": [k for k, v in asdict(s.tags).items() if v], "options": opts})
+    return out
 
 
 def get_solver(name: str) -> Solver:
@@ -107,4 +118,4 @@ def solve(problem: PlacementProblem, solver: str = "greedy", *, reduce: bool = T
     return solve_reduced(problem, run_reduced)
 
 
-__all__ = ["SOLVERS", "build_options", "get_solver", "solve", "solvers_taking"]
+__all__ = ["SOLVERS", "build_options", "catalogue", "get_solver", "solve", "solvers_taking", "type_name"]

@@ -16,6 +16,7 @@ import numpy as np
 
 from camplace.problem.model import PlacementProblem
 from camplace.solvers.base import OnIncumbent, Placement, ProgressFn, ShouldStop, deadline, stopped
+from camplace.solvers.contract import Tags, make_solver
 from camplace.solvers.greedy import solve_greedy
 from camplace.solvers.robust import robust_placement
 
@@ -61,7 +62,7 @@ def solve_robust(problem: PlacementProblem, *, time_limit_s: float | None = None
         on_incumbent(p.objective, None)
     status = "interrupted" if stopped(should_stop) else p.status
     seconds = p.seconds if isinstance(nominal, Placement) else time.perf_counter() - t0
-    return replace(p, status=status, seconds=seconds)
+    return replace(p, status=status, seconds=seconds, solver="robust", info=dict(p.info, nominal_solver=start.solver))
 
 
 def describe_robust(info: dict) -> str:
@@ -75,4 +76,8 @@ def describe_robust(info: dict) -> str:
             f"{rob['worst_case_gap']:.4f}")
 
 
-__all__ = ["describe_robust", "nominal_placement", "solve_robust"]
+ROBUST = make_solver("robust", solve_robust, Tags(needs_start=True, robust_objective=True),
+                     summary="Best worst case over single camera failures, from a nominal start")
+
+
+__all__ = ["ROBUST", "describe_robust", "nominal_placement", "solve_robust"]

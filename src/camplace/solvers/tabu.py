@@ -25,6 +25,7 @@ import scipy.sparse as sp
 from camplace.problem.gains import row_loss_nb as _loss, target_gain_nb as _unit_gain, target_gains
 from camplace.problem.model import PlacementProblem, type_arrays
 from camplace.solvers.base import Placement
+from camplace.solvers.contract import make_solver
 
 # state vector slots (int64)
 _IT, _BEST_IT, _RESTARTS, _RNG, _NSEL, _MOVES = 0, 1, 2, 3, 4, 5
@@ -426,3 +427,6 @@ def solve_tabu(problem: PlacementProblem, *, time_limit_s: float | None = None, 
     return Placement(sel, cost, None, status, "tabu", time.perf_counter() - t0,
                      {"iterations": ts.iterations, "restarts": ts.restarts, "seed": int(seed),
                       "incumbent_method": "tabu"})
+
+
+TABU = make_solver("tabu", solve_tabu, summary="Tabu search from greedy")

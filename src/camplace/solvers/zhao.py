@@ -24,6 +24,7 @@ import scipy.sparse as sp
 
 from camplace.problem.model import PlacementProblem
 from camplace.solvers.base import OnIncumbent, Placement, ProgressFn, ShouldStop, deadline, trivial_placement
+from camplace.solvers.contract import make_solver
 from camplace.solvers.highs_util import (INF, MilpArrays, highs_from_arrays, location_rows, model_fits,
                                         target_rows, run_highs,
                                         skipped_outcome)
@@ -98,3 +99,6 @@ def solve_zhao(problem: PlacementProblem, *, time_limit_s: float | None = None, 
     info = {"zhao_covered": covered, "zhao_bound": out.bound, "zhao_gap": out.gap, "nodes": out.nodes,
             "highs_status": out.model_status, "warm_start_covered": covered0}
     return Placement(sel, cost, None, status, "zhao", time.perf_counter() - t0, info)
+
+
+ZHAO = make_solver("zhao", solve_zhao, summary="Zhao et al. baseline")

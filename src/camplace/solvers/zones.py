@@ -47,6 +47,7 @@ from camplace.problem.model import PlacementProblem
 from camplace.problem.offset import offset_subproblem
 from camplace.solvers.base import (OnIncumbent, Placement, ProgressFn, ShouldStop, deadline, stopped, time_left,
                                    trivial_placement)
+from camplace.solvers.contract import Tags, make_solver
 from camplace.solvers.greedy_triangulated import positions_of
 from camplace.solvers.zones_tiles import TileRunner, TileTask, Tiling, estimate_range, location_xy, make_tiling, \
     tile_method
@@ -322,4 +323,8 @@ def solve_zones(problem: PlacementProblem, *, time_limit_s: float | None = None,
     return Placement(sel, cost, min(bound, cost), status, "zones", time.perf_counter() - t0, info)
 
 
-__all__ = ["budget_moves", "checkpoint_path", "load_checkpoint", "problem_key", "save_checkpoint", "solve_zones"]
+ZONES = make_solver("zones", solve_zones, Tags(gives_bound=True, needs_positions=True),
+                    summary="Zone sweeps: tight MIP / tabu per floor tile, budget moves, Lagrangian bound (needs positions)")
+
+
+__all__ = ["ZONES", "budget_moves", "checkpoint_path", "load_checkpoint", "problem_key", "save_checkpoint", "solve_zones"]

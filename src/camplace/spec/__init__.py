@@ -1,4 +1,4 @@
-"""camplace.spec: the scene file, the user's contract.
+"""camplace.spec (layer 1): the scene file, the user's contract.
 
 schema (the pydantic models), wording (one-line errors, "did you mean"), loading (YAML
 and scene files), resources (sizes estimated from the spec, checked against the memory

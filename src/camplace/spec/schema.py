@@ -251,6 +251,9 @@ class PlacementSettings(_Strict):
     solver: str = "greedy"
     time_limit_s: PositiveFloat = 600.0
     money_budget: Annotated[float, Field(ge=0, allow_inf_nan=False)] | None = None  # Σ camera cost limit
+    # the solver's own options (and seed / threads), checked against the solver's declared
+    # types before any heavy stage (camplace.workflows.run); they go with ``solver`` only
+    options: dict[str, Any] = {}
 
 
 class SceneSpec(_Strict):

@@ -24,7 +24,9 @@ DEFAULT_FACES = ("+x", "-x", "+y", "-y")
 class Targets:
     """positions: (N, 3) float64 m; normals: (N, 3) float64 unit outward normal, zeros
     for volume targets; gamma: (N,) int64 required coverage Γ; weights: (N,) float64;
-    region_ids: (N,) int32 index into region_names; max_incidence_deg: (R,) per region."""
+    region_ids: (N,) int32 index into region_names; max_incidence_deg: (R,) per region;
+    voxel_size: the target voxel edge (m, the scene's ``voxel_size``: the cell each target
+    stands for, which a visibility engine's probe rule reads; None when unknown)."""
 
     positions: np.ndarray
     normals: np.ndarray
@@ -35,6 +37,7 @@ class Targets:
     region_kinds: tuple[str, ...]
     max_incidence_deg: np.ndarray
     min_px_per_m: np.ndarray | None = None  # (R,) px/m per region, 0 = no limit (issue 4)
+    voxel_size: float | None = None
 
     def __len__(self) -> int:
         return len(self.positions)
@@ -125,7 +128,7 @@ def build_targets(scene: Scene) -> Targets:
         np.concatenate(pos), np.concatenate(nrm), np.concatenate(gam), np.concatenate(wts), np.concatenate(rid),
         tuple(r.name for r in regions), tuple(r.kind for r in regions),
         np.array([r.max_incidence_deg for r in regions], dtype=np.float64),
-        np.array([r.min_px_per_m_value for r in regions], dtype=np.float64),
+        np.array([r.min_px_per_m_value for r in regions], dtype=np.float64), float(scene.spec.voxel_size),
     )
     if len(t) == 0:
         raise InputError(f"scene '{scene.name}': targets: no target point lies in free space inside the room")
@@ -147,4 +150,4 @@ def privacy_targets(scene: Scene) -> Targets | None:
     n = len(p)
     return Targets(p, np.zeros_like(p), np.ones(n, np.int64), np.ones(n), np.repeat(
         np.arange(len(zones), dtype=np.int32), [len(q) for q in pos]), tuple(z.name for z in zones),
-        ("volume",) * len(zones), np.full(len(zones), 90.0), np.zeros(len(zones)))
+        ("volume",) * len(zones), np.full(len(zones), 90.0), np.zeros(len(zones)), float(scene.spec.voxel_size))

@@ -1,4 +1,4 @@
-"""Stage 4 - visibility: the sparse matrix V (N_g x N_p) of which candidate sees which target.
+"""camplace.visibility (layer 5): the sparse matrix V (N_g x N_p) of which candidate sees which target.
 
 - ``engine``: the engine interface (``VisibilityEngine``), ``Visibility`` and the one
   loop ``compute_visibility(engine, occupancy, targets, candidates, ...)``;

@@ -41,13 +41,16 @@ RowBlock = tuple[np.ndarray, np.ndarray]  # (indptr (rows + 1,) int64 from 0, in
 @dataclass(frozen=True)
 class Visibility:
     """V: (N_g, N_p) CSR uint8, 1 where candidate i sees target j; rows follow
-    ``candidates``, columns follow ``targets``; mode: the engine that computed it."""
+    ``candidates``, columns follow ``targets``; mode: the engine that computed it; engine:
+    that engine with its parameters (None: the default ``mode`` engine), so a later stage
+    that raycasts new poses (camplace.improve) adds rows computed under the same rule."""
 
     V: sp.csr_matrix
     candidates: Candidates
     targets: Targets
     mode: str = "voxel"
     info: dict = field(default_factory=dict)
+    engine: Any = None
 
 
 @runtime_checkable
@@ -105,6 +108,28 @@ def visibility_cache_key(engine: VisibilityEngine, occupancy: OccupancyGrid, tar
                        int(engine.chunk_size), occupancy.occupied.shape, occ, targets, candidates)
 
 
+def raycast_rows(engine: VisibilityEngine, occupancy: OccupancyGrid, targets: Targets,
+                 candidates: Candidates) -> sp.csr_matrix:
+    """V rows (len(candidates), N_p) CSR uint8 of a few new poses by ``engine``, here, without
+    the cache: ``engine.setup`` then ``engine.rows`` over all of them (the refinement's trial
+    poses, an adaptive round's candidates)."""
+    n = len(candidates)
+    if n == 0:
+        return sp.csr_matrix((0, len(targets)), dtype=np.uint8)
+    indptr, indices = engine.rows(engine.setup(occupancy, targets, candidates), 0, n)
+    return sp.csr_matrix((np.ones(len(indices), np.uint8), indices, indptr), shape=(n, len(targets)))
+
+
+def target_voxel(targets: Targets, option: str) -> float:
+    """The targets' voxel edge (m, ``Targets.voxel_size``) for an engine rule that needs it;
+    InputError(option=``option``) when the targets do not carry one."""
+    v = targets.voxel_size
+    if v is None or not float(v) > 0:
+        raise InputError(f"{option}: this visibility rule needs the targets' voxel edge (Targets.voxel_size, "
+                         f"a positive length in m), got {v}", option=option)
+    return float(v)
+
+
 def check_chunk_size(chunk_size: int) -> None:
     """InputError unless chunk_size (candidate rows per block) is a positive integer."""
     if int(chunk_size) != chunk_size or chunk_size < 1:
@@ -157,7 +182,7 @@ def compute_visibility(engine: VisibilityEngine, occupancy: OccupancyGrid, targe
             "executor": getattr(executor, "name", "in-process")}
     if store is not None:
         info["cache"] = str(store.dir)
-    return Visibility(V, candidates, targets, engine.mode, info)
+    return Visibility(V, candidates, targets, engine.mode, info, engine)
 
 
 def chunked_rows(n_cols: int, bounds: list[tuple[int, int]], task: Callable, make_shared: Callable[[], object],
@@ -276,4 +301,4 @@ def drop_blind_candidates(vis: Visibility) -> Visibility:
     info = dict(vis.info, dropped_blind=int((~keep).sum()))
     indptr = np.r_[0, np.cumsum(counts[keep])].astype(vis.V.indptr.dtype)
     V = sp.csr_matrix((vis.V.data, vis.V.indices, indptr), shape=(int(keep.sum()), vis.V.shape[1]), copy=False)
-    return Visibility(V, vis.candidates.subset(keep), vis.targets, vis.mode, info)
+    return Visibility(V, vis.candidates.subset(keep), vis.targets, vis.mode, info, vis.engine)

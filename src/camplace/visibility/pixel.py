@@ -255,7 +255,7 @@ def ray_counts(candidates: Candidates, stride: int) -> np.ndarray:
 class PixelEngine:
     """The paper's per-pixel raycasting (see the module docstring).
 
-    voxel_size: the target voxel edge (m, the scene's ``voxel_size``); stride: cast one
+    The target voxel edge is the targets' ``voxel_size`` (the scene's). stride: cast one
     ray per stride x stride pixel block (None = DEFAULT_STRIDE); probe: the part of the
     voxel a ray must pass through, as a fraction of its edge (1 = any part of the voxel,
     the paper's rule; smaller = closer to the target centre; 0 = "centre": the target
@@ -264,7 +264,6 @@ class PixelEngine:
     within its footprint). skip_empty: jump rays through empty space (same V, faster).
     chunk_size: candidate rows per block."""
 
-    voxel_size: float
     stride: int | None = None
     probe: float = DEFAULT_PROBE
     chunk_size: int = DEFAULT_CHUNK
@@ -277,15 +276,11 @@ class PixelEngine:
             raise InputError(f"stride: expected a positive integer, got {stride}", option="stride")
         if not 0 <= self.probe <= 1:
             raise InputError(f"probe: expected a fraction in [0, 1], got {self.probe}", option="probe")
-        if not float(self.voxel_size) > 0:
-            raise InputError(f"voxel_size: expected a positive length (m), got {self.voxel_size}",
-                             option="voxel_size")
         _engine.check_chunk_size(self.chunk_size)
         object.__setattr__(self, "stride", int(stride))
 
     def cache_tag(self) -> str:
-        return (f"pixel:stride={self.stride}:probe={float(self.probe)!r}:voxel={float(self.voxel_size)!r}"
-                f":skip={bool(self.skip_empty)}")
+        return f"pixel:stride={self.stride}:probe={float(self.probe)!r}:skip={bool(self.skip_empty)}"
 
     def code_modules(self) -> tuple:
         return (sys.modules[__name__],)
@@ -293,7 +288,7 @@ class PixelEngine:
     def setup(self, occupancy: OccupancyGrid, targets: Targets, candidates: Candidates) -> tuple:
         """The arrays every block of ``_pixel_kernel`` reads (built once, shipped once per worker)."""
         rays, ray_start, foot = camera_rays(candidates, self.stride)
-        probe, voxel_size = self.probe, self.voxel_size
+        probe, voxel_size = self.probe, _engine.target_voxel(targets, "visibility_mode")
         centre_mode = probe == 0
         reach = max(c.max_range for c in candidates.cameras) * float(foot.max()) if centre_mode else 0.0
         bprobe = min(1.0, 2.0 * reach / voxel_size) if centre_mode else probe
@@ -337,13 +332,13 @@ class PixelEngine:
 
 
 def compute_pixel_visibility(occupancy: OccupancyGrid, targets: Targets, candidates: Candidates,
-                             voxel_size: float, stride: int | None = None, probe: float = DEFAULT_PROBE,
+                             stride: int | None = None, probe: float = DEFAULT_PROBE,
                              chunk_size: int = DEFAULT_CHUNK, progress: Progress | None = None,
                              skip_empty: bool = True, executor=None,
                              cache_dir: str | Path | None = None) -> Visibility:
     """V by per-pixel raycasting (rows in candidate order): camplace.visibility.engine.
-    compute_visibility of ``PixelEngine(voxel_size, stride, probe, chunk_size, skip_empty)``
+    compute_visibility of ``PixelEngine(stride, probe, chunk_size, skip_empty)``
     (parameters: PixelEngine). The result does not depend on executor or cache."""
-    eng = PixelEngine(voxel_size, stride, probe, chunk_size, skip_empty)
+    eng = PixelEngine(stride, probe, chunk_size, skip_empty)
     return _engine.compute_visibility(eng, occupancy, targets, candidates, executor=executor, cache_dir=cache_dir,
                                       progress=progress)

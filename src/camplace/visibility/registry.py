@@ -1,5 +1,8 @@
 """The visibility engines by name: ``ENGINES`` and ``get_engine(mode, **params)``.
 
+``ENGINES`` is the entry-point group ``camplace.engines`` (camplace.core.plugins), read at
+first use: the built-ins (voxel, pixel) are declared in camplace's pyproject.toml, another
+package adds its own the same way; a broken one is reported (a PluginWarning) and skipped.
 Every engine implements camplace.visibility.engine.VisibilityEngine; its parameters are
 the fields of its dataclass. ``get_engine`` drops parameters given as None (= the
 engine's default) and refuses one the engine does not take (InputError naming it and
@@ -12,11 +15,29 @@ import dataclasses
 from typing import Any
 
 from camplace.core.errors import InputError
-from camplace.visibility.engine import VisibilityEngine
-from camplace.visibility.pixel import PixelEngine
-from camplace.visibility.voxel import VoxelEngine
+from camplace.core.plugins import Registry
+from camplace.visibility.engine import Visibility, VisibilityEngine
 
-ENGINES: dict[str, type] = {"voxel": VoxelEngine, "pixel": PixelEngine}
+GROUP = "camplace.engines"
+MEMBERS = ("cache_tag", "code_modules", "setup", "rows", "info")
+
+
+def check_plugin(name: str, obj: Any) -> type:
+    """``obj`` when it is an engine class (a dataclass with the VisibilityEngine members and a
+    ``chunk_size`` field) whose ``mode`` is ``name``; else TypeError naming what is missing."""
+    if not (isinstance(obj, type) and dataclasses.is_dataclass(obj)):
+        raise TypeError(f"expected a dataclass implementing camplace.visibility.engine.VisibilityEngine, got {obj!r}")
+    missing = [m for m in MEMBERS if not callable(getattr(obj, m, None))]
+    if "chunk_size" not in {f.name for f in dataclasses.fields(obj)}:
+        missing.append("chunk_size (a field)")
+    if missing:
+        raise TypeError(f"{obj.__name__} lacks {', '.join(missing)}")
+    if getattr(obj, "mode", None) != name:
+        raise TypeError(f"{obj.__name__}.mode is {getattr(obj, 'mode', None)!r}, the entry point {name!r}")
+    return obj
+
+
+ENGINES: Registry = Registry(GROUP, check_plugin)  # mode -> engine class, loaded at first use
 
 
 def engine_params(mode: str) -> tuple[str, ...]:
@@ -39,3 +60,23 @@ def get_engine(mode: str, **params: Any) -> VisibilityEngine:
         return ENGINES[mode](**given)
     except TypeError as err:  # a required parameter is missing
         raise InputError(f"visibility_mode {mode!r}: {err}", option="visibility_mode") from None
+
+
+def engine_of(vis: Visibility) -> VisibilityEngine:
+    """The engine (with its parameters) that computed ``vis``: ``vis.engine``, or the default
+    engine of ``vis.mode`` for a Visibility made without one."""
+    return vis.engine if vis.engine is not None else get_engine(vis.mode)
+
+
+def catalogue() -> list[dict]:
+    """Every registered engine as plain data: mode, summary (its docstring's first line),
+    distribution ('camplace' for a built-in) and its parameters (name, type, default)."""
+    out = []
+    for mode, cls in ENGINES.items():
+        params = [{"name": f.name, "type": f.type if isinstance(f.type, str) else getattr(f.type, "__name__", str(f.type)),
+                   "default": None if f.default is dataclasses.MISSING else f.default}
+                  for f in dataclasses.fields(cls)]
+        doc = (cls.__doc__ or "").strip().splitlines()
+        out.append({"name": mode, "summary": doc[0] if doc else "", "distribution": ENGINES.distribution(mode),
+                    "parameters": params})
+    return out

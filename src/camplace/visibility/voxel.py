@@ -24,7 +24,6 @@ from typing import Any
 
 import numba
 import numpy as np
-import scipy.sparse as sp
 
 from camplace.cameras.models import project_nb, px_per_m_nb
 from camplace.core.errors import InputError
@@ -324,15 +323,6 @@ def default_grid_cell(candidates: Candidates) -> float:
     return max(rng / GRID_CELLS_PER_RANGE, 0.05)
 
 
-def visibility_block(occupancy: OccupancyGrid, targets: Targets, candidates: Candidates,
-                     start: int, stop: int, grid: TargetGrid | None = None) -> sp.csr_matrix:
-    """V rows [start, stop) as a CSR block (stop - start, N_p). ``grid``: the targets'
-    range-culling grid (built here when None; ``target_grid(targets, np.inf)`` = no culling)."""
-    indptr, indices = _block_arrays(occupancy, targets, candidates, start, stop, grid)
-    data = np.ones(len(indices), dtype=np.uint8)
-    return sp.csr_matrix((data, indices, indptr), shape=(stop - start, len(targets)))
-
-
 def _block_arrays(occupancy: OccupancyGrid, targets: Targets, candidates: Candidates,
                   start: int, stop: int, grid: TargetGrid | None = None) -> tuple[np.ndarray, np.ndarray]:
     """(indptr (rows + 1,) int64, indices (nnz,) int32) of V rows [start, stop)."""
@@ -396,12 +386,11 @@ class VoxelEngine:
     edge, in [0, 1]: 0 = the target's centre (the default, the centre test); p > 0 = any
     part of the central p x voxel_size cube (surfaces: of the patch's face cells within
     p x voxel_size / 2 of its centre); 1 = any part of the voxel, the paper's rule (as the
-    pixel engine's probe). voxel_size: the target voxel edge (m; needed for probe > 0);
-    chunk_size: candidate rows per block; grid_cell: range-culling cell (m; None = the
-    smallest range / 8, ``np.inf`` = no culling; V does not depend on it)."""
+    pixel engine's probe; the voxel edge is the targets' ``voxel_size``); chunk_size:
+    candidate rows per block; grid_cell: range-culling cell (m; None = the smallest range / 8,
+    ``np.inf`` = no culling; V does not depend on it)."""
 
     probe: float = 0.0
-    voxel_size: float | None = None
     chunk_size: int = DEFAULT_CHUNK
     grid_cell: float | None = None
     mode = "voxel"
@@ -409,16 +398,12 @@ class VoxelEngine:
     def __post_init__(self) -> None:
         if not 0.0 <= float(self.probe) <= 1.0:
             raise InputError(f"probe: expected a fraction in [0, 1], got {self.probe}", option="probe")
-        if float(self.probe) > 0.0 and not (self.voxel_size is not None and float(self.voxel_size) > 0.0):
-            raise InputError(f"voxel_size: a probe > 0 needs the target voxel edge (a positive length, m), got "
-                             f"{self.voxel_size}", option="voxel_size")
         _engine.check_chunk_size(self.chunk_size)
 
     def cache_tag(self) -> str:
         if float(self.probe) == 0.0:
             return f"voxel:probe={float(self.probe)!r}"
-        return (f"voxel:probe={float(self.probe)!r}:voxel={float(self.voxel_size)!r}"
-            f":lattice={footprint.CUBE_LATTICE}x{footprint.CELL_LATTICE}")
+        return f"voxel:probe={float(self.probe)!r}:lattice={footprint.CUBE_LATTICE}x{footprint.CELL_LATTICE}"
 
     def code_modules(self) -> tuple:
         import sys
@@ -429,7 +414,8 @@ class VoxelEngine:
         """(occupancy, targets, candidates, the targets' range-culling grid, the probe's
         ProbeArrays or None for probe 0)."""
         cell = default_grid_cell(candidates) if self.grid_cell is None else self.grid_cell
-        pa = probe_arrays(occupancy, targets, self.probe, self.voxel_size) if float(self.probe) > 0.0 else None
+        pa = (probe_arrays(occupancy, targets, self.probe, _engine.target_voxel(targets, "probe"))
+              if float(self.probe) > 0.0 else None)
         return occupancy, targets, candidates, target_grid(targets, cell), pa
 
     def rows(self, shared: tuple, start: int, stop: int) -> tuple[np.ndarray, np.ndarray]:

@@ -70,15 +70,39 @@ def restrict_targets(problem: PlacementProblem, keep: np.ndarray) -> PlacementPr
                    target_positions=tp)
 
 
+def method_options(method: str, options: dict | None) -> dict:
+    """The part of ``options`` that the solver of ``method`` takes."""
+    from camplace.solvers import SOLVERS
+
+    names = SOLVERS[ALIASES.get(method, method)].option_names
+    return {k: v for k, v in (options or {}).items() if k in names}
+
+
+def check_method_options(methods: Sequence[str], options: dict | None) -> None:
+    """InputError(option=key) for an option no method takes or a value one of them refuses."""
+    from camplace.solvers.registry import build_options, solvers_taking
+
+    for key in options or {}:
+        if not any(key in method_options(m, {key: None}) for m in methods):
+            takers = solvers_taking(key)
+            raise InputError(f"{key}: none of the methods {', '.join(methods)} takes option '{key}'"
+                             + (f"; solvers that take it: {', '.join(takers)}" if takers else ""), option=key)
+    for m in methods:
+        build_options(ALIASES.get(m, m), **method_options(m, options))
+
+
 def bench_problem(problem: PlacementProblem, budget: int, method: str, *, time_limit_s: float | None = None,
                   threads: int | None = None, should_stop: Callable[[], bool] | None = None,
-                  scene: str = "") -> BenchRow:
-    """Run one registered solver (or an alias, ALIASES: 'greedy+ls' = 'greedy-ls') at one budget; score it."""
+                  scene: str = "", options: dict | None = None) -> BenchRow:
+    """Run one registered solver (or an alias, ALIASES: 'greedy+ls' = 'greedy-ls') at one budget
+    with the part of ``options`` it takes; score it."""
     from camplace.metrics.coverage import compute_metrics
     from camplace.solvers import solve
 
     p = replace(problem, budget=int(budget))
-    pl = solve(p, ALIASES.get(method, method), time_limit_s=time_limit_s, threads=threads, should_stop=should_stop)
+    own = {k: v for k, v in method_options(method, options).items() if k not in ("time_limit_s", "threads")}
+    pl = solve(p, ALIASES.get(method, method), time_limit_s=time_limit_s, threads=threads, should_stop=should_stop,
+               **own)
     m = compute_metrics(p, pl.selected)
     return BenchRow(scene, int(budget), method, int(len(pl.selected)), float(pl.objective), float(m.coverage_gap),
                     float(m.non_triangulatable_pct), pl.bound, pl.gap, pl.status, float(pl.seconds))
@@ -89,11 +113,12 @@ def run_bench(scene: str | Path, budgets: Sequence[int], methods: Sequence[str] 
               progress: Callable[[str, int, int], None] | None = None,
               should_stop: Callable[[], bool] | None = None,
               on_row: Callable[[list[BenchRow]], None] | None = None,
-              certify_s: float | None = None) -> tuple[str, dict, list[BenchRow]]:
+              certify_s: float | None = None, options: dict | None = None) -> tuple[str, dict, list[BenchRow]]:
     """Every method at every budget on one V. Returns (scene name, instance info, rows).
     on_row(rows so far) is called after each run (e.g. to save partial results).
     certify_s: also run the 'certify' solver (tabu + proven bounds) for that many seconds
-    per budget (its row carries the bound and proven gap)."""
+    per budget (its row carries the bound and proven gap). options: solver options, each
+    given to the methods that take it (one no method takes is an InputError)."""
     from camplace.workflows.run import prepare, problem_from_visibility
     from camplace.solvers import SOLVERS
 
@@ -107,6 +132,7 @@ def run_bench(scene: str | Path, budgets: Sequence[int], methods: Sequence[str] 
                              option="methods")
     if targets not in ("volume", "all"):
         raise InputError(f"targets: expected 'volume' or 'all', got '{targets}'", option="targets")
+    check_method_options(methods, options)
     sc, vis = prepare(scene, progress)
     problem = problem_from_visibility(vis, max(budgets))
     t = vis.targets
@@ -126,7 +152,7 @@ def run_bench(scene: str | Path, budgets: Sequence[int], methods: Sequence[str] 
                 progress("bench", len(rows), total)
             limit = certify_s if (m == "certify" and certify_s is not None) else time_limit_s
             rows.append(bench_problem(problem, b, m, time_limit_s=limit, threads=threads,
-                                      should_stop=should_stop, scene=sc.name))
+                                      should_stop=should_stop, scene=sc.name, options=options))
             if on_row:
                 on_row(rows)
     if progress:

@@ -78,8 +78,8 @@ def compare_visibility(scene: str | Path | SceneSpec, stride: int | None = None,
     the scene's)."""
     sc, targets, cameras, _ = scene_inputs(scene, progress)
     cands = build_candidates(sc, cameras)
-    engines = {"voxel": get_engine("voxel", voxel_size=sc.spec.voxel_size, probe=probe),
-               "pixel": get_engine("pixel", voxel_size=sc.spec.voxel_size, stride=stride, probe=probe)}
+    engines = {"voxel": get_engine("voxel", probe=probe),
+               "pixel": get_engine("pixel", stride=stride, probe=probe)}
     vis, secs = {}, {}
     for mode, engine in engines.items():
         t = time.perf_counter()

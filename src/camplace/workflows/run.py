@@ -95,7 +95,7 @@ def prepare_site(scene: str | Path | SceneSpec, progress: Progress | None = None
     cands = build_candidates(sc, cameras)
     timings["candidates"] = time.perf_counter() - t
     t = time.perf_counter()
-    engine = get_engine(visibility_mode, voxel_size=sc.spec.voxel_size, stride=stride, probe=probe)
+    engine = get_engine(visibility_mode, stride=stride, probe=probe)
     site = site_of(sc, cameras, engine, keep)
     with make_executor(workers, scheduler) as executor:
         if site is not None:  # privacy zones, existing cameras (camplace.workflows.sites)
@@ -246,16 +246,45 @@ def check_solver_name(name: str, key: str) -> None:
                          f"{', '.join(sorted(SOLVERS))}")
 
 
-def check_solver_options(name: str, options: dict, triangulation_deg: tuple[float, float] = (20.0, 160.0)) -> None:
-    """InputError(option=key) for a solver option that solver ``name`` does not take, before
-    any heavy stage (callbacks pass; 'greedy-triangulated' also gets the angle range)."""
+def check_solver_options(name: str, options: dict, triangulation_deg: tuple[float, float] = (20.0, 160.0)) -> str:
+    """InputError(option=key) for a solver option that solver ``name`` does not take or a
+    value that does not fit its type, before any heavy stage (callbacks pass;
+    'greedy-triangulated' also gets the angle range). Returns the given options as the
+    solver reads them ('restarts=3, seed=5'; '' when none)."""
     from camplace.solvers import build_options
     from camplace.solvers.contract import HOOK_FIELDS
 
     opts = {k: v for k, v in options.items() if k not in HOOK_FIELDS}
+    given = list(opts)
     if name == "greedy-triangulated":
         opts.update(min_deg=triangulation_deg[0], max_deg=triangulation_deg[1])
-    build_options(name, **opts)
+    built = build_options(name, **opts)
+    return ", ".join(f"{k}={getattr(built, k)!r}" for k in given)
+
+
+def scene_solver_options(spec: SceneSpec, solver: str, source: str, log: list | None = None) -> dict:
+    """The scene's ``placement.options``, checked against ``placement.solver`` (InputError
+    naming the file and the key path ``placement.options.KEY``); {} when the run uses
+    another ``solver`` (a line in ``log`` says so)."""
+    from camplace.solvers import build_options
+
+    opts = dict(spec.placement.options)
+    if not opts:
+        return {}
+    if "time_limit_s" in opts:
+        raise InputError(f"{source}: placement.options.time_limit_s: give the time limit as placement.time_limit_s")
+    try:
+        build_options(spec.placement.solver, **opts)
+    except InputError as err:
+        msg = str(err)
+        key = err.option or ""
+        raise InputError(f"{source}: placement.options.{key}: {msg.removeprefix(key + ':').strip()}") from None
+    if solver != spec.placement.solver:
+        if log is not None:
+            log.append(f"placement.options ({', '.join(opts)}) not used: they are for solver "
+                       f"'{spec.placement.solver}', the run uses '{solver}'")
+        return {}
+    return opts
 
 
 def problem_from_visibility(vis: Visibility, budget: int, money_budget: float | None = None) -> PlacementProblem:
@@ -298,8 +327,10 @@ def improve_placement(sc: Scene, vis: Visibility, problem: PlacementProblem, pla
         from camplace.solvers.robust_solver import describe_robust
 
         t = time.perf_counter()
-        placement = solve_stoppable(problem, "robust", log=log, nominal=placement, time_limit_s=time_limit_s or 60.0,
+        nominal = placement
+        placement = solve_stoppable(problem, "robust", log=log, nominal=nominal, time_limit_s=time_limit_s or 60.0,
                                     should_stop=should_stop)
+        placement = replace(placement, solver=f"{nominal.solver}+robust1")
         timings["robust"] = time.perf_counter() - t
         if "robust" in placement.info:
             log.append(describe_robust(placement.info["robust"]))
@@ -334,7 +365,8 @@ def run(scene: str | Path | SceneSpec, budget: int | None = None, solver: str | 
         probe: float | None = None, money_budget: float | None = None, refine: bool = False,
         refine_time_s: float = 60.0, adaptive: int = 0, robust: int = 0,
         triangulation_deg: tuple[float, float] = (20.0, 160.0), well_triangulated: bool = False,
-        keep: str | Path | None = None, crowd: dict | None = None, **solver_options) -> RunResult:
+        keep: str | Path | None = None, crowd: dict | None = None, options: dict | None = None,
+        **solver_options) -> RunResult:
     """Run every stage on a scene (built-in name, YAML path or spec).
 
     budget / solver / time_limit_s default to the scene's ``placement`` keys. The solver
@@ -344,7 +376,9 @@ def run(scene: str | Path | SceneSpec, budget: int | None = None, solver: str | 
     whose cameras stay as existing ones (camplace.workflows.sites; the budget counts new
     cameras). ``crowd``: overrides of the scene's ``crowd:`` keys (camplace.spec.crowd.CROWD_OPTIONS;
     camplace.workflows.crowd: metrics in held-out crowds, and with ``optimise`` the crowd-aware
-    problem). See ``prepare_site`` for the other options."""
+    problem). ``options``: solver options as a mapping (e.g. the command line's), over the
+    scene's ``placement.options``; keyword solver options win over both. See ``prepare_site``
+    for the other options."""
     timings: dict[str, float] = {}
     log: list[str] = []
     spec, _, source = resolve_scene(scene)
@@ -353,8 +387,11 @@ def run(scene: str | Path | SceneSpec, budget: int | None = None, solver: str | 
         check_solver_name(spec.placement.solver, f"{source}: placement.solver")
     else:
         check_solver_name(solver, "solver")
-    check_solver_options("greedy-triangulated" if well_triangulated else solver or spec.placement.solver,
-                         solver_options, triangulation_deg)
+    run_solver = "greedy-triangulated" if well_triangulated else solver or spec.placement.solver
+    solver_options = {**scene_solver_options(spec, run_solver, source, log), **(options or {}), **solver_options}
+    given = check_solver_options(run_solver, solver_options, triangulation_deg)
+    if given:
+        log.append(f"solver {run_solver}: {given}")
     if budget is not None and (isinstance(budget, bool) or int(budget) != budget or budget < 0):
         raise InputError(f"budget: expected a non-negative integer, got {budget!r}")
     if time_limit_s is not None and not (time_limit_s > 0 and np.isfinite(time_limit_s)):

@@ -159,7 +159,7 @@ class Site:
                          location_ids=np.r_[c.location_ids, loc], cameras=cams)
         V = sp.vstack([vis.V, self.V.astype(vis.V.dtype)], format="csr")
         V.sort_indices()
-        vis2 = Visibility(V, merged, vis.targets, vis.mode, dict(vis.info, existing=self.n_existing))
+        vis2 = Visibility(V, merged, vis.targets, vis.mode, dict(vis.info, existing=self.n_existing), vis.engine)
         costs = np.array([cams[k].cost for k in merged.camera_ids], np.float64)
         money = problem.money_budget
         extra = {}

@@ -1,0 +1,105 @@
+"""Plugins by entry points (camplace.core.plugins): a distribution on the path registers
+solvers; one that breaks (import error, contract error, wrong object, taken name) is
+reported once and skipped, never taking the others down."""
+
+from __future__ import annotations
+
+import textwrap
+import warnings
+
+import pytest
+
+from camplace.core.plugins import PluginWarning, Registry, source_entry_points
+from camplace.solvers.registry import check_plugin
+
+GROUP = "camplace.test-plugins"
+
+PLUGIN = '''
+import numpy as np
+from camplace.solvers import Placement
+from camplace.solvers.contract import make_solver
+
+
+def solve_first(problem, *, time_limit_s: float | None = None, threads: int | None = None, seed: int = 0,
+                should_stop=None, progress=None, on_incumbent=None, count: int = 1) -> Placement:
+    sel = np.arange(min(count, problem.n_candidates), dtype=np.int64)
+    return Placement(sel, problem.cost(sel), None, "heuristic", "first", 0.0)
+
+
+FIRST = make_solver("first", solve_first)
+NOT_A_SOLVER = 42
+'''
+
+BROKEN_CONTRACT = '''
+from camplace.solvers.contract import make_solver
+
+
+def solve_catchall(problem, *, time_limit_s=None, threads=None, seed=0, should_stop=None, progress=None,
+                   on_incumbent=None, **kwargs):
+    raise AssertionError("never called")
+
+
+CATCHALL = make_solver("catchall", solve_catchall)   # a contract mistake: fails at import
+'''
+
+
+def dist(root, name: str, entry_points: dict[str, str], modules: dict[str, str]) -> None:
+    """A distribution ``name`` installed in ``root`` (dist-info with entry_points.txt) with ``modules``."""
+    info = root / f"{name.replace('-', '_')}-0.1.dist-info"
+    info.mkdir()
+    (info / "METADATA").write_text(f"Metadata-Version: 2.1\nName: {name}\nVersion: 0.1\n")
+    lines = "".join(f"{k} = {v}\n" for k, v in entry_points.items())
+    (info / "entry_points.txt").write_text(f"[{GROUP}]\n{lines}")
+    for mod, text in modules.items():
+        (root / f"{mod}.py").write_text(textwrap.dedent(text))
+
+
+@pytest.fixture()
+def plugins(tmp_path, monkeypatch):
+    dist(tmp_path, "good-plugins", {"first": "cp_plugin_good:FIRST", "wrong-name": "cp_plugin_good:FIRST",
+                                    "not-a-solver": "cp_plugin_good:NOT_A_SOLVER",
+                                    "missing": "cp_plugin_good:NOTHING"}, {"cp_plugin_good": PLUGIN})
+    dist(tmp_path, "zz-bad-plugins", {"catchall": "cp_plugin_bad:CATCHALL", "broken-import": "cp_no_such_module:X",
+                                      "first": "cp_plugin_good:FIRST"}, {"cp_plugin_bad": BROKEN_CONTRACT})
+    monkeypatch.syspath_prepend(str(tmp_path))
+    return Registry(GROUP, check_plugin)
+
+
+def test_good_plugins_load_and_broken_ones_are_skipped_with_one_warning_each(plugins):
+    with pytest.warns(PluginWarning) as caught:
+        names = list(plugins)
+    assert names == ["first"]
+    assert plugins["first"].name == "first" and plugins.distribution("first") == "good-plugins"
+    text = [str(w.message) for w in caught]
+    for name, why in (("wrong-name", "named 'first', the entry point 'wrong-name'"),
+                      ("not-a-solver", "expected a camplace.solvers.Solver"), ("missing", "NOTHING"),
+                      ("catchall", "no *args / **kwargs"), ("broken-import", "cp_no_such_module"),
+                      ("first", "the name is taken by the one from good-plugins")):
+        hits = [t for t in text if f"plugin '{name}'" in t]
+        assert len(hits) == 1 and why in hits[0], (name, text)
+    assert {(n, d) for n, d, _ in plugins.problems} >= {("catchall", "zz-bad-plugins"), ("wrong-name", "good-plugins")}
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", PluginWarning)  # reported once: later uses warn no more
+        assert "first" in plugins and len(plugins) == 1
+
+
+def test_reload_reads_the_entry_points_again(plugins, tmp_path):
+    with pytest.warns(PluginWarning):
+        assert len(plugins) == 1
+    fixed = textwrap.dedent(PLUGIN).replace('FIRST = make_solver("first"', 'CATCHALL = make_solver("catchall"')
+    (tmp_path / "cp_plugin_bad.py").write_text(fixed.replace('"heuristic", "first"', '"heuristic", "catchall"'))
+    plugins.reload()
+    with pytest.warns(PluginWarning):
+        assert sorted(plugins) == ["catchall", "first"]
+
+
+def test_the_built_ins_are_declared_once_in_pyproject():
+    from camplace.solvers import SOLVERS
+    from camplace.visibility import ENGINES
+
+    eps = source_entry_points("camplace.solvers")
+    assert eps is not None, "camplace runs from its source tree here"
+    assert [e.name for e in eps] == [n for n in SOLVERS if SOLVERS.distribution(n) == "camplace"]
+    assert [e.name for e in source_entry_points("camplace.engines")] == [
+        n for n in ENGINES if ENGINES.distribution(n) == "camplace"]
+    assert SOLVERS.problems == [] and ENGINES.problems == []
