@@ -103,3 +103,14 @@ def test_the_built_ins_are_declared_once_in_pyproject():
     assert [e.name for e in source_entry_points("camplace.engines")] == [
         n for n in ENGINES if ENGINES.distribution(n) == "camplace"]
     assert SOLVERS.problems == [] and ENGINES.problems == []
+
+
+def test_registering_in_process_is_checked_the_same_way(plugins):
+    with pytest.warns(PluginWarning):
+        first = plugins["first"]
+    plugins["again"] = first.__class__("again", first.fn, first.options, first.tags)
+    assert plugins.distribution("again") == "(registered in this process)"
+    with pytest.raises(TypeError, match="named 'first', the entry point 'other'"):
+        plugins["other"] = first
+    del plugins["again"]
+    assert list(plugins) == ["first"]

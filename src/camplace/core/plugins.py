@@ -22,7 +22,7 @@ import importlib.metadata as md
 import threading
 import tomllib
 import warnings
-from collections.abc import Mapping
+from collections.abc import MutableMapping
 from pathlib import Path
 from typing import Any, Callable, Iterator
 
@@ -64,11 +64,13 @@ def group_entry_points(group: str) -> list[tuple[md.EntryPoint, str]]:
     return own + others
 
 
-class Registry(Mapping):
+class Registry(MutableMapping):
     """Name -> object of one entry-point group, loaded at first use (see the module doc).
 
     ``check(name, obj)`` returns the object to register or raises (TypeError, ValueError)
-    with the reason; ``problems``: (name, distribution, reason) of every skipped entry point."""
+    with the reason; ``problems``: (name, distribution, reason) of every skipped entry point.
+    ``registry[name] = obj`` registers one in this process only (checked the same way;
+    e.g. a test's solver), ``del registry[name]`` removes it."""
 
     def __init__(self, group: str, check: Callable[[str, Any], Any]) -> None:
         self.group = group
@@ -131,6 +133,15 @@ class Registry(Mapping):
 
     def __getitem__(self, name: str) -> Any:
         return self._load()[name]
+
+    def __setitem__(self, name: str, obj: Any) -> None:
+        items = self._load()
+        items[name] = self._check(name, obj)
+        self._dist[name] = "(registered in this process)"
+
+    def __delitem__(self, name: str) -> None:
+        del self._load()[name]
+        self._dist.pop(name, None)
 
     def __iter__(self) -> Iterator[str]:
         return iter(self._load())
