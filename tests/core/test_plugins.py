@@ -4,6 +4,7 @@ reported once and skipped, never taking the others down."""
 
 from __future__ import annotations
 
+import sys
 import textwrap
 import warnings
 
@@ -62,7 +63,9 @@ def plugins(tmp_path, monkeypatch):
     dist(tmp_path, "zz-bad-plugins", {"catchall": "cp_plugin_bad:CATCHALL", "broken-import": "cp_no_such_module:X",
                                       "first": "cp_plugin_good:FIRST"}, {"cp_plugin_bad": BROKEN_CONTRACT})
     monkeypatch.syspath_prepend(str(tmp_path))
-    return Registry(GROUP, check_plugin)
+    yield Registry(GROUP, check_plugin)
+    for name in [m for m in sys.modules if m.startswith("cp_plugin_")]:
+        del sys.modules[name]
 
 
 def test_good_plugins_load_and_broken_ones_are_skipped_with_one_warning_each(plugins):
