@@ -4,6 +4,7 @@
 from __future__ import annotations
 
 import typer
+from rich.markup import escape
 
 from camplace.cli import (bench, common, compare, demo, essential, evaluate, render, run, scan, scenes, serve, solve,
                           solvers)
@@ -39,8 +40,29 @@ app.command("serve")(serve.serve)
 app.add_typer(scene_app, name="scene")
 
 
+def _plugin_warnings_as_lines() -> None:
+    """A plugin skipped at load (camplace.core.plugins.PluginWarning) is one 'warning:' line."""
+    import warnings
+
+    from camplace.core.plugins import PluginWarning
+
+    shown = warnings.showwarning
+    if getattr(shown, "camplace_plugins", False):  # installed already (main() called again in-process)
+        return
+
+    def show(message, category, *args, **kwargs):
+        if issubclass(category, PluginWarning):
+            common.console.print(f"[yellow]warning: {escape(str(message))}[/yellow]", highlight=False, soft_wrap=True)
+        else:
+            shown(message, category, *args, **kwargs)
+
+    show.camplace_plugins = True  # type: ignore[attr-defined]
+    warnings.showwarning = show
+
+
 def main() -> None:
     """Entry point: run the app, turning CamplaceError into one line + exit code."""
+    _plugin_warnings_as_lines()
     common.run_main(app)
 
 
