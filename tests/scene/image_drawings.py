@@ -48,10 +48,12 @@ def font(size: int, bold: bool = False):
 
 
 def draw_apartment(path: str | Path, *, jpeg_quality: int | None = None, noise: float = 0.0, seed: int = 0,
-                   labels: bool = True, hatch: bool = True) -> Sheet:
+                   labels: bool = True, hatch: bool = True, furniture: bool = False) -> Sheet:
     """The apartment sheet as PNG (or JPEG with ``jpeg_quality``; ``noise``: the grey
     level std of a scan's noise on a slightly grey paper; ``hatch=False``: the outer
-    walls as two lines with paper between them, as many CAD exports draw them)."""
+    walls as two lines with paper between them, as many CAD exports draw them;
+    ``furniture``: a bed, a sofa, a table with chairs, a kitchen counter with a sink, a
+    bathtub and a desk drawn in outline)."""
     import numpy as np
     from PIL import Image, ImageDraw
 
@@ -154,6 +156,8 @@ def draw_apartment(path: str | Path, *, jpeg_quality: int | None = None, noise: 
     dim_h(5.56, W, D + t + 0.45, "4440")
     dim_v(-t - 0.9, -t, D + t, f"{round((D + 2 * t) * 1000)}")
     dim_h(0.0, 5.44, D - 0.45, "5440")
+    if furniture:
+        _furniture(d, p)
     # room labels: name (bold) and area in m² below it
     if labels:
         f_name, f_area = font(18, bold=True), font(14)
@@ -198,6 +202,32 @@ def draw_apartment(path: str | Path, *, jpeg_quality: int | None = None, noise: 
     else:
         out.save(path)
     return Sheet(path, (ox, oy), (width, height))
+
+
+def _furniture(d, p) -> None:
+    """Furniture in outline (2 px; cushions, pillows, a sink, chairs inside or beside it)."""
+    def rect(x0, y0, x1, y1, width=2):
+        (c0, r1), (c1, r0) = p(x0, y0), p(x1, y1)
+        d.rectangle([c0, r0, c1, r1], outline="black", width=width)
+
+    def circle(x, y, r):
+        (c0, r1), (c1, r0) = p(x - r, y - r), p(x + r, y + r)
+        d.ellipse([c0, r0, c1, r1], outline="black", width=1)
+
+    rect(8.2, 4.2, 9.8, 6.2)  # bed with two pillows
+    for x0 in (8.3, 9.05):
+        rect(x0, 5.7, x0 + 0.65, 6.1, 1)
+    rect(0.4, 6.0, 2.8, 6.9)  # sofa with armrests
+    for x0 in (0.4, 2.6):
+        rect(x0, 6.0, x0 + 0.2, 6.9, 1)
+    rect(3.6, 3.6, 4.8, 4.4)  # table and four chairs
+    for x, y in ((3.35, 4.0), (5.05, 4.0), (4.2, 3.35), (4.2, 4.65)):
+        circle(x, y, 0.2)
+    rect(0.0, 0.0, 0.6, 2.9)  # kitchen counter and sink
+    circle(0.3, 1.4, 0.2)
+    rect(4.6, 0.05, 5.4, 1.75)  # bathtub
+    rect(4.7, 0.15, 5.3, 1.65, 1)
+    rect(8.0, 2.7, 9.9, 3.35)  # desk
 
 
 def inside(sheet: Sheet, x: float, y: float) -> bool:

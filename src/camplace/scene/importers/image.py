@@ -34,8 +34,8 @@ from camplace.scene.importers import (DEFAULT_CEILING_M, PlanImport, clean_polyg
 from camplace.scene.importers.image_ocr import ocr_engine, read_lines, room_name, text_lines_mask
 from camplace.scene.importers.image_rooms import colour_rooms, free_regions, mask_polygons
 from camplace.scene.importers.image_scale import scale_from_dimensions
-from camplace.scene.importers.image_walls import (bridge_openings, brightness, find_plans, ink_threshold, otsu_threshold,
-                                                  read_image, solid_walls, square_morphology)
+from camplace.scene.importers.image_walls import (EIGHT, bridge_openings, brightness, find_plans, ink_threshold,
+                                                  otsu_threshold, read_image, solid_walls, square_morphology)
 
 OPTIONS = ("scale", "ref", "threshold", "storey", "min_wall_thickness", "max_wall_thickness", "hatch_spacing",
            "max_opening", "min_room_area", "ocr")
@@ -142,6 +142,10 @@ def _plan_rooms(plan_of: np.ndarray, k: int, box, s: float, max_opening: float, 
     box = (slice(box[0].start - m, box[0].stop + m), slice(box[1].start - m, box[1].stop + m))
     bridges = bridge_openings(walls, s, max_opening, max_wall)
     labels, n, outside = free_regions(walls | bridges)
+    idle = _bridges_parting_nothing(bridges, labels)
+    if idle.any():  # e.g. from a table drawn as a blot to a wall: the room goes round it
+        bridges &= ~idle
+        labels, n, outside = free_regions(walls | bridges)
     shape, _ = ndimage.label(~np.isin(labels, np.flatnonzero(outside[1:]) + 1))  # walls and what they enclose
     outline_px = int(np.bincount(shape.ravel())[1:].max(initial=0))
     enclosed = (labels > 0) & ~outside[labels]
@@ -152,6 +156,17 @@ def _plan_rooms(plan_of: np.ndarray, k: int, box, s: float, max_opening: float, 
     if small:
         skipped[f"enclosed pieces under {min_room_area:g} m² (not rooms)"] += small
     return PlanRooms(box, walls, bridges, labels, rooms, outline_px=outline_px, enclosed=enclosed)
+
+
+def _bridges_parting_nothing(bridges: np.ndarray, labels: np.ndarray) -> np.ndarray:
+    """The bridges (pixels) with one and the same free region all around them."""
+    blab, nb = ndimage.label(bridges, EIGHT)
+    if nb == 0:
+        return np.zeros_like(bridges)
+    ring = ndimage.maximum_filter(blab, size=3) * (labels > 0)  # free pixels beside a bridge, by bridge
+    pairs = np.unique(np.stack([ring[ring > 0], labels[ring > 0]]), axis=1)
+    sides = np.bincount(pairs[0], minlength=nb + 1)
+    return np.r_[False, sides[1:] == 1][blab]
 
 
 def _colour_split(plan: PlanRooms, rgb: np.ndarray, ink: np.ndarray, s: float, min_room_area: float) -> None:

@@ -249,29 +249,49 @@ def find_plans(raw: np.ndarray, ink: np.ndarray, s: float, max_opening_m: float,
     glab, ng = ndimage.label(ndimage.maximum_filter(bones, size=3), EIGHT)
     near = ndimage.maximum_filter(glab, size=odd(2 * REACH_M / s, 3), mode="constant")
     group = label_max(near, lab, n)[1:].astype(np.int64)  # group of each piece (0: none)
+    group = _inner_groups_joined(group, ndimage.find_objects(glab), np.bincount(group, weights=area * drawn,
+                                                                               minlength=ng + 1))
     biggest = np.zeros(ng + 1)
     np.maximum.at(biggest, group, area)
     keep = drawn | (area >= 0.25 * biggest[group])
     keep &= group > 0
     gsum = np.bincount(group, weights=area * keep, minlength=ng + 1)
     gsum[0] = 0
-    large = [int(g) for g in np.flatnonzero(gsum >= 0.25 * gsum.max())]
-    boxes = ndimage.find_objects(glab)
-    plans = [g for g in large if not _frames_another(boxes[g - 1], [boxes[h - 1] for h in large if h != g])]
-    if len(large) > len(plans):
-        skipped["frames around plans"] += len(large) - len(plans)
+    plans = [int(g) for g in np.flatnonzero(gsum >= 0.25 * gsum.max())]
     on_plan = np.isin(group, plans)
     if np.count_nonzero(on_plan & ~keep):
         skipped["text and symbols on the plans"] += int(np.count_nonzero(on_plan & ~keep))
     if np.count_nonzero(~on_plan):
         skipped["marks off the plans (title block, legend, scale bar, key plan, text)"] += int(
             np.count_nonzero(~on_plan))
+    piece_group = np.r_[0, np.where(keep & on_plan, group, 0)]
+    boxes = ndimage.find_objects(piece_group[lab])
     order = sorted(plans, key=lambda g: (round(boxes[g - 1][0].start * s / 3.0), boxes[g - 1][1].start))
     piece_plan = np.zeros(n + 1, np.int32)
     for k, g in enumerate(order, 1):
         piece_plan[1:][(group == g) & keep] = k
     plan_of = piece_plan[lab]
     return Sheet(plan_of > 0, plan_of, [boxes[g - 1] for g in order])
+
+
+def _inner_groups_joined(group: np.ndarray, boxes: list, weight: np.ndarray) -> np.ndarray:
+    """``group`` (per piece) with every group whose box centre lies in the box of a
+    heavier group (``weight`` per group) joined to the heaviest such: furniture, a stair
+    core, a free-standing wall inside a building belong to its plan."""
+    to = np.arange(len(weight))
+    for g in np.argsort(-weight):
+        if g == 0 or boxes[g - 1] is None:
+            continue
+        b = boxes[g - 1]
+        cy, cx = (b[0].start + b[0].stop) / 2, (b[1].start + b[1].stop) / 2
+        for h in np.argsort(-weight):
+            if weight[h] <= weight[g]:
+                break
+            o = boxes[h - 1] if h else None
+            if o is not None and o[0].start <= cy < o[0].stop and o[1].start <= cx < o[1].stop:
+                to[g] = to[h]
+                break
+    return to[group]
 
 
 def _sheet_frames(boxes: list, area: np.ndarray, drawn: np.ndarray, shape: tuple[int, int]) -> np.ndarray:
@@ -287,9 +307,3 @@ def _sheet_frames(boxes: list, area: np.ndarray, drawn: np.ndarray, shape: tuple
         inside[i] = False
         out[i] = area[inside].sum() >= 0.1 * area[i]
     return out
-
-
-def _frames_another(box: tuple[slice, slice], others: list[tuple[slice, slice]]) -> bool:
-    """True when ``box`` holds another plan's box wholly inside it (a sheet frame)."""
-    return any(box[0].start <= o[0].start and o[0].stop <= box[0].stop and box[1].start <= o[1].start
-               and o[1].stop <= box[1].stop for o in others)
