@@ -265,7 +265,7 @@ def draw_png(path, closed=True):
 def test_image_two_rooms_known_answers(tmp_path):
     from shapely.geometry import Polygon
 
-    data = import_plan(draw_png(tmp_path / "plan.png"), scale=PX, ocr=False)  # OCR of labels: test_image_ocr.py
+    data = import_plan(draw_png(tmp_path / "plan.png"), scale=PX, ocr=False)  # OCR of labels: test_image_plans.py
     assert Polygon(data["room"]["footprint"]).area == pytest.approx(FOOTPRINT_AREA, rel=0.01)
     assert [z["name"] for z in data["zones"]] == ["room-1", "room-2"]
     assert sorted(Polygon(z["polygon"]).area for z in data["zones"]) == pytest.approx([4.7 * 4.6] * 2, rel=0.03)
