@@ -392,10 +392,10 @@ def render_preview(plan, title: str, scene=None) -> Preview:
 
     with matplotlib.rc_context(RC):
         fig, summary = preview_figure(plan, title, scene)
-        png, svg = io.BytesIO(), io.BytesIO()
-        fig.savefig(png, format="png", dpi=DPI, metadata={"Software": None}, pil_kwargs={"compress_level": 3})
-        fig.savefig(svg, format="svg", metadata={"Date": None})
-    return Preview(png.getvalue(), svg.getvalue(), summary)
+        buf_png, buf_svg = io.BytesIO(), io.BytesIO()
+        fig.savefig(buf_png, format="png", dpi=DPI, metadata={"Software": None}, pil_kwargs={"compress_level": 3})
+        fig.savefig(buf_svg, format="svg", metadata={"Date": None})
+    return Preview(buf_png.getvalue(), buf_svg.getvalue(), summary)
 
 
 def preview_paths(base: Path) -> tuple[Path, Path]:
