@@ -42,6 +42,7 @@ from camplace.cameras.distortion import (fisheye_theta_d, fisheye_undistort_thet
                                          opencv_distort, opencv_undistort)
 from camplace.cameras.lenses import Lens
 from camplace.core.errors import InputError
+from camplace.spec.lenses import DEFAULT_FOCAL_STEPS
 from camplace.spec.quality import DORI_PX_PER_M, range_density
 
 MODEL_CODES = {"pinhole": 0, "opencv": 1, "fisheye": 2}
@@ -375,7 +376,6 @@ def px_per_m_nb(params: np.ndarray, x: float, y: float, z: float, nx: float, ny:
 
 # ----------------------------------------------------------------------------- scene file side
 DEFAULT_MAX_RANGE = 5.0  # m: a camera type's range when it gives neither max_range nor a lens (focal_mm)
-DEFAULT_FOCAL_STEPS = 4  # focal settings of a varifocal lens on the candidate grid
 
 
 def cameras_from_spec(spec, base_dir: Path | None = None) -> dict[str, CameraModel]:

@@ -16,6 +16,7 @@ from camplace.spec.basics import Finite, PositiveFloat, PositiveInt, _no_bool, _
 Angle360 = Annotated[float, BeforeValidator(_no_bool), Field(gt=0, le=360)]
 NonNegative = Annotated[float, BeforeValidator(_no_bool), Field(ge=0, allow_inf_nan=False)]
 LENS_SOURCES = ("fov_deg", "intrinsics", "calibration", "focal_mm")
+DEFAULT_FOCAL_STEPS = 4  # focal settings of a varifocal lens on the candidate grid
 SOLD_ONLY = ("pixel_um", "sensor_width_mm", "focal_steps")  # keys that belong to a lens given by focal_mm
 
 
@@ -107,6 +108,12 @@ class Camera(_Strict):
         """(min, max) focal length (mm); equal for a fixed lens."""
         f = self.focal_mm
         return (float(f[0]), float(f[1])) if isinstance(f, tuple) else (float(f), float(f))
+
+    @property
+    def n_settings(self) -> int:
+        """Camera models one pose of this type becomes: focal_steps for a varifocal lens, else 1."""
+        lo, hi = self.focal_range_mm if self.focal_mm is not None else (0.0, 0.0)
+        return (self.focal_steps or DEFAULT_FOCAL_STEPS) if hi > lo else 1
 
     @property
     def pixel_pitch_um(self) -> float:

@@ -83,9 +83,16 @@ def estimate_resources(spec: SceneSpec) -> ResourceEstimate:
             segs = getattr(m, "walls", None) or [(fp[k], fp[(k + 1) % len(fp)]) for k in range(len(fp))]
             pts = sum(math.dist(a, b) / spacing + 1 for a, b in segs)
         n = pts * _n_angles(getattr(m, "yaw_deg", 1)) * _n_angles(getattr(m, "pitch_deg", 1)) * \
-            _n_angles(getattr(m, "roll_deg", 1))
+            _n_angles(getattr(m, "roll_deg", 1)) * _n_settings(spec, m)
         items.append((f"mounts[{i}]", "candidates", n, n * BYTES_PER_CANDIDATE))
     return ResourceEstimate(tuple(items))
+
+
+def _n_settings(spec, mount) -> int:
+    """Camera models a pose of ``mount`` carries: per camera type, its focal settings (issue 27)."""
+    kinds = {c.name: c for c in getattr(spec, "cameras", [])}
+    names = getattr(mount, "camera_names", None) or [getattr(mount, "camera", None)]
+    return max(sum(kinds[n].n_settings if n in kinds else 1 for n in names), 1)
 
 
 def check_resources(spec: SceneSpec, source: str, limit_bytes: int | None = None) -> ResourceEstimate:
