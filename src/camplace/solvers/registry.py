@@ -13,7 +13,7 @@ keeps the contract.
 from __future__ import annotations
 
 import time
-from dataclasses import replace
+from dataclasses import fields, replace
 from typing import Any
 
 from camplace.core.errors import InputError
@@ -22,6 +22,7 @@ from camplace.problem.model import PlacementProblem
 from camplace.solvers.base import Placement
 from camplace.solvers.contract import HOOK_FIELDS, Options, Solver, split_options
 from camplace.solvers.reduction import solve_reduced
+from camplace.solvers.warmup import DRY_RUN_S, dry_run
 
 GROUP = "camplace.solvers"
 
@@ -86,6 +87,11 @@ def solvers_taking(option: str) -> list[str]:
     return sorted(n for n, s in SOLVERS.items() if option in s.option_names)
 
 
+def options_of(opts: Options) -> dict[str, Any]:
+    """The keyword arguments that give ``opts`` back (every field)."""
+    return {f.name: getattr(opts, f.name) for f in fields(opts)}
+
+
 def build_options(name: str, **kwargs: Any) -> Options:
     """The options of solver ``name`` from keywords (common ones and the solver's own);
     InputError(option=key) for a key it does not take, naming the solvers that do."""
@@ -97,14 +103,20 @@ def build_options(name: str, **kwargs: Any) -> Options:
     return opts
 
 
-def solve(problem: PlacementProblem, solver: str = "greedy", *, reduce: bool = True, **options: Any) -> Placement:
+def solve(problem: PlacementProblem, solver: str = "greedy", *, reduce: bool = True, warm: bool = True,
+          **options: Any) -> Placement:
     """Run the named solver: options and hooks (should_stop, progress, on_incumbent) as
     keywords, checked against the solver (InputError for one it does not take). With
     reduce=True (default) the solver sees camplace.problem.model.reduce_problem(problem)
     (same optimum, fewer rows/columns; camplace.solvers.reduction.solve_reduced), except
-    solvers tagged needs_positions or needs_start, which always see ``problem``."""
+    solvers tagged needs_positions or needs_start, which always see ``problem``. With warm=True
+    (default) the first solve of a solver in a process is preceded by a dry run on a small
+    problem (camplace.solvers.warmup), so that compiling its kernels does not eat its time limit."""
     s = get_solver(solver)
     opts, hooks = split_options(s, options, solvers_taking)
+    if warm and not s.tags.needs_start:  # the kernels compile here, not inside the solver's time limit
+        dry_run(s.name, problem, lambda small: solve(small, solver, reduce=reduce, warm=False,
+                                                     **dict(options_of(opts), time_limit_s=DRY_RUN_S)))
     if not reduce or s.tags.needs_positions or s.tags.needs_start:
         return s.solve(problem, opts, hooks)
     t0 = time.perf_counter()

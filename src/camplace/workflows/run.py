@@ -225,7 +225,7 @@ def solve_stoppable(problem: PlacementProblem, solver: str, *, log: list | None 
     if "placement" in out:
         return out["placement"]
     fallback_opts = {k: options[k] for k in ("threads", "seed") if k in options}  # the common options only
-    g = solve(problem, "greedy", time_limit_s=1.0, **fallback_opts)
+    g = solve(problem, "greedy", time_limit_s=1.0, warm=False, **fallback_opts)
     b = bound["bound"]
     if b is not None and b > g.objective:  # cannot happen for a valid bound; never report one above the cost
         b = None
