@@ -22,7 +22,7 @@ from pathlib import Path
 
 FM_OUTER = (3100, 2000)  # cm, outer faces of the exterior walls
 FM_EXT, FM_BEARING, FM_PARTITION = 40, 20, 12  # wall thicknesses, cm
-FM_CLEAR_M2 = (3100 - 2 * 40) * (2000 - 2 * 40) / 1e4  # the floor inside the exterior walls, m²
+FM_OUTLINE_M2 = 3100 * 2000 / 1e4  # the footprint: the outer faces of the exterior walls, m²
 # rooms (name, number, x0, y0, x1, y1 in cm, clear sizes); the corridor between y 900 and 1100
 FM_ROOMS = [("Büro", "E.01", 40, 40, 794, 880), ("Sitzungszimmer", "E.02", 806, 40, 1494, 880),
             ("Büro", "E.03", 1506, 40, 2294, 880), ("Empfang", "E.04", 2306, 40, 3060, 880),
@@ -61,7 +61,7 @@ def _door_block(doc, name, w):
 
 
 def draw_fm_plan(path: str | Path) -> Path:
-    """The Swiss FM ground floor (see the module docstring); truth FM_CLEAR_M2, FM_ROOMS."""
+    """The Swiss FM ground floor (see the module docstring); truth FM_OUTLINE_M2, FM_ROOMS."""
     import ezdxf
     from ezdxf.enums import TextEntityAlignment
 
@@ -165,7 +165,7 @@ LATIN_LAYERS = {"fr": {"wall": "MURS", "part": "CLOISONS", "door": "PORTES", "wi
                 "es": {"wall": "MUROS", "part": "TABIQUES", "door": "PUERTAS", "window": "VENTANAS",
                        "room": "RECINTOS", "text": "TEXTOS", "dim": "COTAS", "title": "CAJETIN"}}
 LATIN_ROOMS = {"fr": ("Séjour", "Cuisine", "Chambre"), "es": ("Salón", "Cocina", "Dormitorio")}
-LATIN_CLEAR_M2 = (12.0 - 0.4) * (8.0 - 0.4)  # inside the 0.2 m exterior walls of the 12 x 8 m flat
+LATIN_OUTLINE_M2 = 12.0 * 8.0  # the 12 x 8 m flat to the outer faces of its 0.2 m exterior walls
 
 
 def draw_latin_plan(path: str | Path, lang: str = "fr", version: str = "R2000") -> Path:

@@ -61,7 +61,7 @@ def test_fm_plan_walls_by_name_rooms_by_stamps(fm):
     walls = fm.used["wall layers"]
     assert all(la in walls for la in ("E41_AUSSENWAENDE", "E61_INNENWAENDE_TRAGEND", "E62_INNENWAENDE_LEICHT"))
     assert "by name" in walls and fm.used["units"].startswith("cm")
-    assert _area(fm) == pytest.approx(dd.FM_CLEAR_M2, rel=0.10)
+    assert _area(fm) == pytest.approx(dd.FM_OUTLINE_M2, rel=0.03)
     names = [z["name"] for z in fm.scene["zones"]]
     assert sorted(names) == sorted(n if n != "Büro" else f"{n} {k}" for n, k, *_ in dd.FM_ROOMS)
     pieces = [Polygon(o["prism"]["polygon"], o["prism"].get("holes", [])) for o in _prisms(fm, "wall")]
@@ -82,7 +82,7 @@ def test_fm_plan_title_block_dimensions_axes_left_out(fm):
 def test_latin_layers(files, lang):
     got = read_plan(files[lang])
     wall = {"fr": "MURS", "es": "MUROS", "r12": "MUROS"}[lang]
-    assert got.used["wall layers"].startswith(wall) and _area(got) == pytest.approx(dd.LATIN_CLEAR_M2, rel=0.10)
+    assert got.used["wall layers"].startswith(wall) and _area(got) == pytest.approx(dd.LATIN_OUTLINE_M2, rel=0.03)
     assert {z["name"] for z in got.scene["zones"]} == set(dd.LATIN_ROOMS["fr" if lang == "fr" else "es"])
     if lang == "r12":  # R12 cannot say its units: guessed, and said so
         assert "guessed" in got.used["units"] and any("units" in n for n in got.notes)
@@ -92,7 +92,7 @@ def test_walls_found_by_geometry(files):
     got = read_plan(files["unnamed"])
     assert got.used["wall layers"].startswith("L4 ") and "by geometry" in got.used["wall layers"]
     assert {o["source"]["layer"] for o in _prisms(got, "wall")} == {"L4"}  # not the shelves, stair or hatch
-    assert _area(got) == pytest.approx(dd.UNNAMED_OUTLINE_M2, rel=0.10)
+    assert _area(got) == pytest.approx(dd.UNNAMED_OUTLINE_M2, rel=0.03)
     assert any("parallel line pairs" in n for n in got.notes)
 
 
@@ -143,4 +143,4 @@ def test_damaged_file_read_in_recover_mode_with_a_note(files, tmp_path):
     (tmp_path / "cut.dxf").write_text("\n".join(text[:-2]) + "\n", encoding="utf-8")  # the EOF tag lost
     got = read_plan(tmp_path / "cut.dxf")
     assert any("structure errors" in n and "recover" in n for n in got.notes)
-    assert _area(got) == pytest.approx(dd.FM_CLEAR_M2, rel=0.10)
+    assert _area(got) == pytest.approx(dd.FM_OUTLINE_M2, rel=0.03)

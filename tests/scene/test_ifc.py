@@ -43,7 +43,7 @@ def _line_free(scene, a, b, n=400) -> bool:
 def test_footprint_zones_and_walls(building):
     data = import_plan(building)
     assert data["room"]["height"] == pytest.approx(TWO_ROOMS.height)  # the roof slab's underside
-    assert Polygon(data["room"]["footprint"]).area == pytest.approx(TWO_ROOMS.clear_area(), rel=0.01)
+    assert Polygon(data["room"]["footprint"]).area == pytest.approx(TWO_ROOMS.outline_area(), rel=0.01)
     assert [z["name"] for z in data["zones"]] == ["Office", "Lab"]
     for z, (lo, hi) in zip(data["zones"], TWO_ROOMS.space_boxes()):
         assert Polygon(z["polygon"]).area == pytest.approx((hi[0] - lo[0]) * (hi[1] - lo[1]), rel=0.01)

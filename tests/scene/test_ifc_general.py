@@ -29,7 +29,7 @@ def _check(path, **options):
     for name, g, _ in got:
         parse_scene(g.scene, name)
         assert [z["name"] for z in g.scene["zones"]] == ["Office", "Lab"], name
-        assert Polygon(g.scene["room"]["footprint"]).area == pytest.approx(B.clear_area(), rel=0.01), name
+        assert Polygon(g.scene["room"]["footprint"]).area == pytest.approx(B.outline_area(), rel=0.01), name
         assert g.scene["room"]["height"] == pytest.approx(B.height), name
     return got
 

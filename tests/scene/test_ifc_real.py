@@ -28,6 +28,11 @@ pytestmark = pytest.mark.skipif(not all(p.is_file() for p in (DUPLEX, WHALE, PAV
                                 reason=f"the real plans are not in {PLANS} (../shared/data/plans)")
 LEVEL_1 = {"Foyer", "Living Room", "Kitchen", "Bathroom 1", "Stair", "Room"}
 LEVEL_2 = {"Hallway", "Bedroom 1", "Bedroom 2", "Bathroom 2", "Utility"}
+# footprints (m²) at the outer faces of the outer walls (SOURCES.md): the Duplex 8.8 x 17.8 m; bim-whale's west
+# block x -14.783..-6.583, y -10.648..9.552 (its walls) and east block x 0.583..20.783, y -5.758..2.442 (spaces 5-8,
+# x 0.783..20.583, y -5.558..2.242, in 0.2 m walls)
+DUPLEX_M2 = 8.8 * 17.8
+WHALE_M2 = 8.2 * 20.2 + 20.2 * 8.2
 WHALE_ROOMS = {"Room 1": 49.92, "Room 2": 39.78, "Room 3": 33.18, "Room 4": 26.86, "Room 5": 49.92, "Room 6": 39.78,
                "Room 7": 33.18, "Room 8": 26.86}  # GrossFloorArea (SOURCES.md)
 
@@ -73,7 +78,7 @@ def test_duplex_default_is_level_1_with_its_rooms_named(got):
         ("Roof", pytest.approx(6.0), 1, False)]
     names = [z["name"] for z in g.scene["zones"]]
     assert len(names) == 10 and {_base(n) for n in names} == LEVEL_1 and "Foyer A101" in names
-    assert 0.9 * 135.0 <= _area(g.scene) <= 135.0  # the spaces' extent 7.96 x 16.96 m, inside the 0.42 m walls
+    assert _area(g.scene) == pytest.approx(DUPLEX_M2, rel=0.1)  # the outer faces of its 0.42 m outer walls
     assert len(g.openings) >= 10  # 6 doors and 4 windows on Level 1
 
 
@@ -82,6 +87,9 @@ def test_duplex_storey_all_gives_both_floors(got, duplex_all):
     for name, rooms in (("Level 1", LEVEL_1), ("Level 2", LEVEL_2)):
         zones = [z["name"] for z in got[("duplex", name)].scene["zones"]]
         assert len(zones) == 10 and {_base(n) for n in zones} == rooms, name
+        assert _area(got[("duplex", name)].scene) == pytest.approx(DUPLEX_M2, rel=0.1), name
+    for key, g in got.items():  # every wall of the building is inside the footprint (an obstacle in it)
+        assert not [k for k in g.skipped if k.startswith("outside the footprint: IfcWall")], (key, g.skipped)
     assert got[("duplex", "Roof")].scene["zones"][0]["name"] == "Roof"
 
 
@@ -89,8 +97,7 @@ def test_bim_whale_two_blocks_eight_rooms_no_trees(got):
     g = got[("whale", None)]
     zones = {z["name"]: Polygon(z["polygon"]).area for z in g.scene["zones"]}
     assert zones == pytest.approx(WHALE_ROOMS, rel=0.02)
-    area = _area(g.scene)  # the clear inside of both blocks' outer walls, and the seam between them
-    assert 299.5 <= area <= 1.1 * 299.5 and abs(area - 330) <= 0.1 * 330
+    assert _area(g.scene) == pytest.approx(WHALE_M2, rel=0.1)  # both blocks to their outer faces, and the seam
     outside = [o for o in g.scene["obstacles"] if o["source"]["class"] == "outside"]
     assert len(outside) == 1 and Polygon(outside[0]["prism"]["polygon"]).area < 1.0
     xs = [x for o in g.scene["obstacles"] for x, _ in o["prism"]["polygon"]]

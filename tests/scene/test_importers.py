@@ -74,8 +74,7 @@ def test_prism_obstacles_keep_holes_and_provenance():
 # outer walls 10 m x 5 m, 0.2 m thick; an interior wall x 4.9..5.1 m with a 0.9 m door
 # (y 2.0..2.9 m); room A "Office" (west), room B "Lab" (east); a 1.2 m x 0.6 m desk in A
 WALL_AREA = 50 - 2 * 4.7 * 4.6 - 0.2 * 0.9  # m², all walls
-INNER_WALL_AREA = 0.2 * (4.6 - 0.9)  # m², the interior wall beside the door (the outer walls ring the footprint)
-FOOTPRINT_AREA = 9.6 * 4.6  # m², inside the outer walls
+FOOTPRINT_AREA = 10.0 * 5.0  # m², the building's outline: the outer faces of the outer walls
 ROOM_A = [(200, 200), (4900, 200), (4900, 4800), (200, 4800)]
 ROOM_B = [(5100, 200), (9800, 200), (9800, 4800), (5100, 4800)]
 
@@ -151,8 +150,8 @@ def test_dxf_two_rooms_known_answers(tmp_path):
     assert desk["prism"]["z"] == [0.0, 0.9] and desk["source"]["block"] == "DESK"
     assert Polygon(desk["prism"]["polygon"]).area == pytest.approx(0.72, rel=0.01)
     scene = _scene_of(data)
-    assert _wall_cells_m2(scene, 1.0) == pytest.approx(INNER_WALL_AREA, rel=0.05)  # above the desk
-    assert _wall_cells_m2(scene, 0.5) == pytest.approx(INNER_WALL_AREA + 0.72, rel=0.05)
+    assert _wall_cells_m2(scene, 1.0) == pytest.approx(WALL_AREA, rel=0.05)  # every wall (inside the footprint)
+    assert _wall_cells_m2(scene, 0.5) == pytest.approx(WALL_AREA + 0.72, rel=0.05)  # and the desk
     assert _sees(scene, (2.0, 2.45, 1.5), (8.0, 2.45, 1.0))  # through the open door
     assert not _sees(scene, (2.0, 4.0, 1.5), (8.0, 4.0, 1.0))  # through the interior wall
 
@@ -272,7 +271,7 @@ def test_image_two_rooms_known_answers(tmp_path):
     assert all(o["source"]["file"] == "plan.png" for o in data["obstacles"])
     scene = _scene_of(data)
     assert sum(_prism_area(o) for o in data["obstacles"]) == pytest.approx(WALL_AREA, rel=0.03)
-    assert _wall_cells_m2(scene, 1.0) == pytest.approx(INNER_WALL_AREA, rel=0.08)
+    assert _wall_cells_m2(scene, 1.0) == pytest.approx(WALL_AREA, rel=0.08)
     assert _sees(scene, (2.0, 2.45, 1.5), (8.0, 2.45, 1.0))  # through the door gap
     assert not _sees(scene, (2.0, 4.0, 1.5), (8.0, 4.0, 1.0))
 

@@ -34,7 +34,7 @@ def runs(tmp_path_factory):
 
 def test_footprints_agree_within_2_percent(runs):
     areas = {k: Polygon(d["room"]["footprint"]).area for k, (d, _) in runs.items()}
-    assert areas["ifc"] == pytest.approx(PLAN.clear_area(), rel=0.01)
+    assert areas["ifc"] == pytest.approx(PLAN.outline_area(), rel=0.01)
     assert max(areas.values()) <= 1.02 * min(areas.values()), areas
 
 

@@ -237,15 +237,38 @@ def walls_outline(walls, gap: float = 1.5, min_share: float = 0.5, how: list | N
     return footprint_of([shape], "walls")
 
 
+def outline_pieces(rooms: list, walls, reach: float, min_area: float = 0.0) -> list[Polygon]:
+    """The building outline of a plan (m, no holes) in pieces, largest first: the ``rooms``
+    (polygons: rooms, spaces, floor slabs) merged with the walls that bound them, closed over
+    gaps up to ``reach`` m (the thickest wall), holes filled; pieces under ``min_area`` m²
+    dropped. The walls that bound them: the connected pieces of ``walls`` that come within
+    ``reach`` of a room, cut to the rooms' convex hull grown by ``reach`` (a closet or shaft
+    without a room between them is filled; a garden wall running off is left out). Its
+    edge is the outer face of the outer walls: the building's footprint, the rule of
+    every importer."""
+    union = shapely.union_all([q for q in rooms if q is not None and not q.is_empty] or [Polygon()])
+    if union.is_empty:
+        return []
+    if walls is not None and not walls.is_empty:
+        pieces = np.asarray(polygons_of(shapely.make_valid(walls)), dtype=object)
+        near = union.buffer(reach, join_style="mitre")
+        bounding = pieces[shapely.intersects(pieces, near)] if len(pieces) else pieces
+        if len(bounding):
+            hull = union.convex_hull.buffer(reach, join_style="mitre")
+            union = shapely.union_all([union, shapely.union_all(bounding).intersection(hull)])
+    d = reach / 2
+    closed = shapely.make_valid(union.buffer(d, join_style="mitre").buffer(-d, join_style="mitre"))
+    out = [Polygon(q.exterior) for q in polygons_of(closed)]
+    return sorted([q for q in out if q.area > 0 and q.area >= min_area], key=lambda q: -q.area)
+
+
 def rooms_footprint(rooms: list, walls, gap: float, source: str) -> Polygon:
-    """The footprint of a plan: the room polygons (m) merged across the walls between them
-    (a closing by ``gap`` m, the thickest wall), outline of the largest piece; the walls'
-    outline when there are no rooms. The outer walls lie outside it (occupied anyway)."""
-    d = gap / 2
+    """The footprint of a plan (m, no holes): the largest piece of the rooms merged with the
+    walls that bound them (outline_pieces; ``gap`` m the thickest wall), so its edge is the
+    outer face of the outer walls; the walls' outline (walls_outline) when there are no rooms."""
     if not rooms:
-        return footprint_of([walls], source)
-    merged = shapely.unary_union(rooms).buffer(d, join_style="mitre").buffer(-d, join_style="mitre")
-    return footprint_of([shapely.make_valid(merged)], source)
+        return walls_outline(walls)
+    return footprint_of(outline_pieces(rooms, walls, gap)[:1], source)
 
 
 def plan_scene(name: str, footprint: Polygon, height: float, obstacles: list[dict], zones: list[dict], *,

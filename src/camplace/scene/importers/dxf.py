@@ -11,8 +11,9 @@ block, legend, a second drawing) is left out and counted. Doors are open (their 
 rectangle cuts the walls) or closed (fills the gap); windows and glass occlude.
 Furniture blocks become prisms of their plan hull. Rooms are the closed outlines on
 room layers, else the free pieces the walls enclose, named by the texts and block
-attributes inside (dxf_rooms). The footprint is the rooms merged across the walls
-between them, else the walls' outline (walls_outline).
+attributes inside (dxf_rooms). The footprint is the building's outline at the outer
+faces of its outer walls: the rooms with the walls that bound them (rooms_footprint),
+else the walls' outline (walls_outline).
 """
 
 from __future__ import annotations
@@ -359,7 +360,8 @@ def _furniture(d: Drawing, role: dict, region, heights: dict, ceiling: float, sr
 def _rooms_and_footprint(out: PlanImport, d: Drawing, room_shapes: list[Shape], role: dict, how: dict, region,
                          walls, glass, columns, gap: float, source: str) -> tuple[list, Polygon]:
     """([(name, polygon)] rooms, footprint) (m): the closed outlines on room layers in
-    the building, named; the footprint their union closed across the walls. Without
+    the building, named; the footprint those rooms with the walls, glass, columns and door
+    gaps that bound them (rooms_footprint: the outer faces of the outer walls). Without
     them (or where they cover less than half the walls' outline) the footprint is the
     walls' outline and the rooms the free pieces the walls enclose."""
     kind: list[str] = []
@@ -367,7 +369,8 @@ def _rooms_and_footprint(out: PlanImport, d: Drawing, room_shapes: list[Shape], 
     polys = [q for q in filled_polygons(room_shapes) if region.contains(q.representative_point())]
     rooms = room_polygons(polys, out.skipped)
     labels = [lb for lb in d.labels if region.contains(lb.point)]
-    footprint = rooms_footprint(rooms, walls, gap, source) if rooms else None
+    barrier = shapely.union_all([walls, glass, columns])
+    footprint = rooms_footprint(rooms, barrier, gap, source) if rooms else None
     if rooms:
         out.used["rooms"] = f"{len(rooms)} outlines on {_listing(d, _layers_of(room_shapes, how), counts=False)}"
     if footprint is None or footprint.area < 0.5 * outline.area:
@@ -377,11 +380,10 @@ def _rooms_and_footprint(out: PlanImport, d: Drawing, room_shapes: list[Shape], 
         footprint = outline
         out.used["footprint"] = f"{footprint.area:.1f} m², {kind[0]}"
         if not rooms:
-            barrier = shapely.union_all([walls, glass, columns])
             rooms = enclosed_rooms(footprint, barrier, ROOM_BRIDGE_M)
             out.used["rooms"] = f"{len(rooms)} free areas the walls enclose (no room outlines)"
     else:
-        out.used["footprint"] = f"{footprint.area:.1f} m², the rooms merged across the walls"
+        out.used["footprint"] = f"{footprint.area:.1f} m², the rooms with the walls that bound them (outer faces)"
     names, named = room_names(rooms, labels)
     if named:
         out.used["room names"] = ", ".join(f"{k} ({n})" for k, n in named.items())

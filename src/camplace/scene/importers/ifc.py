@@ -9,9 +9,10 @@ cross-section between the element's vertex heights (exact for walls with door an
 holes, columns, slabs, extruded furniture); an element with more than MAX_BANDS levels
 (a stair, a curved chair) becomes one prism of its plan outline over its height. Doors are
 open unless ``doors='closed'``; windows occlude unless ``glass='transparent'``. Each
-IfcSpace becomes a zone named by its LongName (or Name); the footprint is the union of the
-storey's spaces with the walls between them closed (else its floor slabs, else the outline
-of its walls); separate blocks are joined by thin seams filled by ``outside`` obstacles.
+IfcSpace becomes a zone named by its LongName (or Name); the footprint is the building's
+outline at the outer faces of its outer walls: the storey's spaces with the walls that bound
+them (else its floor slabs with them, else the outline of its walls); separate blocks are
+joined by thin seams filled by ``outside`` obstacles.
 Elements outside the footprint (trees, site objects) are left out. See docs/plans.md (IFC).
 """
 

@@ -44,9 +44,9 @@ class GridBuilding:
                                                                           self.height]))
                 for j in range(self.ny) for i in range(self.nx)]
 
-    def clear_area(self) -> float:
-        """The area (m²) of the union of the rooms with the inner walls closed."""
-        return (self.nx * self.room[0] - self.wall) * (self.ny * self.room[1] - self.wall)
+    def outline_area(self) -> float:
+        """The area (m²) of the building's outline, the outer faces of its outer walls (the footprint)."""
+        return (self.nx * self.room[0] + self.wall) * (self.ny * self.room[1] + self.wall)
 
 
 class _Writer:

@@ -1,7 +1,8 @@
 """One storey of an IFC model from its element bodies (world z, metres): the default storey,
-the floor level of a building without storeys, the ceiling, and the footprint (spaces,
-else floor slabs, else walls; separate blocks joined into one simple polygon by thin seams
-that an ``outside`` obstacle fills).
+the floor level of a building without storeys, the ceiling, and the footprint (the building's
+outline at the outer wall faces: spaces, else floor slabs, with the walls that bound them;
+else the walls' outline; separate blocks joined into one simple polygon by thin seams that
+an ``outside`` obstacle fills).
 """
 
 from __future__ import annotations
@@ -13,7 +14,7 @@ import shapely
 from shapely.geometry import Polygon
 
 from camplace.core.errors import InputError
-from camplace.scene.importers import DEFAULT_CEILING_M, footprint_of, polygons_of, walls_outline
+from camplace.scene.importers import DEFAULT_CEILING_M, footprint_of, outline_pieces, polygons_of, walls_outline
 from camplace.scene.importers.ifc_geometry import Element, plan_shape
 from camplace.scene.importers.ifc_model import Storey, Structure
 
@@ -129,16 +130,6 @@ def ceiling_of(floor: float, nxt: float | None, ceilings: list[Element], spaces:
     return DEFAULT_CEILING_M, "default"
 
 
-def _pieces(parts: list, gap: float) -> list[Polygon]:
-    """The outlines (no holes) of the union of ``parts`` with gaps up to ``gap`` m (walls)
-    closed, pieces under MIN_PIECE_M2 dropped; largest first."""
-    d = gap / 2
-    union = shapely.union_all([p for p in parts if not p.is_empty]) if parts else Polygon()
-    closed = shapely.make_valid(union.buffer(d, join_style="mitre").buffer(-d, join_style="mitre"))
-    out = [Polygon(q.exterior) for q in polygons_of(closed)]
-    return sorted([q for q in out if q.area >= MIN_PIECE_M2], key=lambda q: -q.area)
-
-
 def join_pieces(pieces: list[Polygon], width: float = SEAM_M) -> tuple[Polygon, object]:
     """One simple polygon over separate ``pieces`` (largest first) and the seams (shapely)
     added to join them: each piece in turn is joined to the nearest one already joined by
@@ -161,20 +152,24 @@ def join_pieces(pieces: list[Polygon], width: float = SEAM_M) -> tuple[Polygon, 
 
 def storey_footprint(spaces: list[Element], floors: list[Element], walls: list[Element], floor: float,
                      height: float, gap: float, where: str) -> Footprint:
-    """The footprint of a storey: its spaces merged across the walls between them (gaps up
-    to ``gap`` m); else its floor slabs (top within FLOOR_TOL_M of ``floor``); else the
-    outline of its walls above the floor (walls_outline). Separate pieces are joined by
-    seams. InputError naming ``where`` when the storey has none of these."""
+    """The footprint of a storey, the building's outline at the outer faces of its outer
+    walls: its spaces merged with the walls that bound them (outline_pieces; walls up to
+    ``gap`` m thick); else its floor slabs (top within FLOOR_TOL_M of ``floor``) with those
+    walls; else the outline of its walls above the floor (walls_outline). Separate pieces
+    are joined by seams. InputError naming ``where`` when the storey has none of these."""
+    shapes = [q for q in (plan_shape(e) for e in walls  # the walls reaching above the floor (not the footings)
+                          if min(e.z_range[1], floor + height) - max(e.z_range[0], floor + 0.05) > 0)
+              if not q.is_empty]
+    wall_plan = shapely.union_all(shapes) if shapes else Polygon()
     for found, how in ((spaces, "IfcSpace"), (floors, "floor slab")):
-        pieces = _pieces([plan_shape(e) for e in found], gap)
+        pieces = outline_pieces([plan_shape(e) for e in found], wall_plan, gap, MIN_PIECE_M2)
         if pieces:
             polygon, seams = join_pieces(pieces)
             n = len(pieces)
-            return Footprint(polygon, seams, n, f"{len(found)} {how}{'s' * (len(found) != 1)}, walls between "
-                             f"closed (≤ {gap:g} m)" + (f"; {n} pieces joined by seams" if n > 1 else ""))
-    shapes = [plan_shape(e, floor + 0.05, floor + height) for e in walls]
-    shapes = [q for q in shapes if not q.is_empty]
+            return Footprint(polygon, seams, n, f"{len(found)} {how}{'s' * (len(found) != 1)} with the walls that "
+                             f"bound them (outer faces; gaps ≤ {gap:g} m closed)"
+                             + (f"; {n} pieces joined by seams" if n > 1 else ""))
     if shapes:
-        return Footprint(walls_outline(shapely.union_all(shapes)), Polygon(), 1,
+        return Footprint(walls_outline(wall_plan), Polygon(), 1,
                          f"outline of {len(shapes)} walls above the floor (no IfcSpace, no floor slab)")
     raise InputError(f"{where} has no spaces, floor slab or walls to make a footprint of", option="storey")

@@ -29,13 +29,13 @@ import shapely
 from scipy import ndimage
 
 from camplace.core.errors import InputError
-from camplace.scene.importers import (DEFAULT_CEILING_M, PlanImport, clean_polygons, footprint_of, plan_scene,
-                                      polygons_of, prism_obstacles, room_zones)
+from camplace.scene.importers import (DEFAULT_CEILING_M, PlanImport, clean_polygons, plan_scene, polygons_of,
+                                      prism_obstacles, room_zones, rooms_footprint)
 from camplace.scene.importers.image_ocr import ocr_engine, read_lines, room_name, text_lines_mask
 from camplace.scene.importers.image_rooms import colour_rooms, free_regions, mask_polygons
 from camplace.scene.importers.image_scale import scale_from_dimensions
 from camplace.scene.importers.image_walls import (EIGHT, bridge_openings, brightness, find_plans, ink_threshold,
-                                                  otsu_threshold, read_image, solid_walls, square_morphology)
+                                                  otsu_threshold, read_image, solid_walls)
 
 OPTIONS = ("scale", "ref", "threshold", "storey", "min_wall_thickness", "max_wall_thickness", "hatch_spacing",
            "max_opening", "min_room_area", "ocr")
@@ -228,14 +228,14 @@ def _polygons(plan: PlanRooms, sheet: Sheet, min_area: float):
     return rooms, walls, openings
 
 
-def _inside(plan: PlanRooms, sheet: Sheet) -> np.ndarray:
-    """The plan's footprint as a mask of its box: the free space enclosed by its walls and
-    its rooms (a porch drawn by its colour too) closed across the walls between them
-    (the thickest wall), holes filled, the largest piece."""
-    inside = plan.enclosed | np.isin(plan.labels, plan.rooms)
-    inside = ndimage.binary_fill_holes(square_morphology(inside, sheet.max_wall / sheet.s, "close"))
-    parts, n = ndimage.label(inside)
-    return parts == np.bincount(parts.ravel())[1:].argmax() + 1 if n else inside
+def _footprint(plan: PlanRooms, sheet: Sheet, source: str):
+    """The plan's footprint (m): the free space its walls enclose and its rooms (a porch
+    drawn by its colour too) merged with the walls and bridged openings that bound them
+    (outline_pieces: the outer face of the outer walls), the largest piece."""
+    at = (plan.box[0].start, plan.box[1].start)
+    inside = mask_polygons(plan.enclosed | np.isin(plan.labels, plan.rooms), sheet.s, at, sheet.rows)
+    walls = mask_polygons(plan.walls | plan.bridges, sheet.s, at, sheet.rows)
+    return rooms_footprint(polygons_of(inside), walls, sheet.max_wall, source)
 
 
 def _storey_rows(sheet: Sheet) -> list[dict]:
@@ -272,8 +272,7 @@ def plan_import(path: Path, sheet: Sheet, index: int, why: str, *, name=None, wa
     skipped = Counter(sheet.skipped)
     obstacles = prism_obstacles(walls, 0.0, min(float(wall_height or ceiling), ceiling), "wall", src, tolerance=0,
                                 skipped=skipped)
-    at = (plan.box[0].start, plan.box[1].start)
-    footprint = footprint_of([mask_polygons(_inside(plan, sheet), sheet.s, at, sheet.rows)], str(path))
+    footprint = _footprint(plan, sheet, str(path))
     zones = room_zones(rooms, coverage or 2, skipped=skipped)
     title = name or (path.stem if len(sheet.plans) == 1 else f"{path.stem} plan-{index + 1}")
     scene = plan_scene(title, footprint, ceiling, obstacles, zones, heights=heights, coverage=coverage, budget=budget)
