@@ -40,7 +40,7 @@ SURFACE_OFFSET = 0.75  # surface rays end this many occupancy cells outside the 
 DEFAULT_CHUNK = 2048  # candidate rows per block
 
 
-@numba.njit(cache=True, inline="always")
+@numba.njit(cache=True)  # a call, not inlined: the kernels using it compile in half the time
 def _passes_view(cam_p, R, params, tx, ty, tz, nx_, ny_, nz_, cos_max, min_px=0.0):
     """Range, image, incidence and pixel-density (``min_px`` px/m, 0 = none) tests of one
     (camera, target) pair."""
@@ -88,7 +88,7 @@ def _cell_near(grid, cx: int, cy: int, px: float, py: float, rng: float) -> bool
     return dx * dx + dy * dy <= r * r
 
 
-@numba.njit(cache=True, parallel=True)
+@numba.njit(cache=True, nogil=True)
 def _compact(buf, offs, seen):
     """CSR (indptr, indices) from row pieces: row i holds buf[offs[i]:offs[i] + seen[i]]."""
     n_c = len(seen)
@@ -96,12 +96,12 @@ def _compact(buf, offs, seen):
     for i in range(n_c):
         indptr[i + 1] = indptr[i] + seen[i]
     indices = np.empty(indptr[n_c], np.int32)
-    for i in numba.prange(n_c):
+    for i in range(n_c):
         indices[indptr[i]:indptr[i + 1]] = buf[offs[i]:offs[i] + seen[i]]
     return indptr, indices
 
 
-@numba.njit(cache=True, parallel=True)
+@numba.njit(cache=True, nogil=True)
 def _visibility_kernel(occ, origin, res, cam_pos, cam_rot, cam_ids, cam_params,
                        tpos, tnrm, tcos, grid, cell_start, cell_tids, tpx):
     """CSR (indptr, indices) of V for a chunk of candidates, indices ascending per row.
@@ -112,7 +112,7 @@ def _visibility_kernel(occ, origin, res, cam_pos, cam_rot, cam_ids, cam_params,
     n_c = cam_pos.shape[0]
     gnx, gny = int(grid[3]), int(grid[4])
     counts = np.zeros(n_c, np.int64)
-    for i in numba.prange(n_c):
+    for i in range(n_c):
         params = cam_params[cam_ids[i]]
         p = cam_pos[i]
         ax, bx = _cell_span(grid[0], grid[2], gnx, p[0], params[7])
@@ -135,7 +135,7 @@ def _visibility_kernel(occ, origin, res, cam_pos, cam_rot, cam_ids, cam_params,
     buf = np.empty(offs[n_c], np.int32)
     seen = np.zeros(n_c, np.int64)
     off_len = SURFACE_OFFSET * res
-    for i in numba.prange(n_c):
+    for i in range(n_c):
         params = cam_params[cam_ids[i]]
         p = cam_pos[i]
         k = offs[i]
@@ -323,22 +323,38 @@ def default_grid_cell(candidates: Candidates) -> float:
     return max(rng / GRID_CELLS_PER_RANGE, 0.05)
 
 
+MIN_ROWS_PER_THREAD = 64  # a block this small runs on one thread
+
+
 def _block_arrays(occupancy: OccupancyGrid, targets: Targets, candidates: Candidates,
                   start: int, stop: int, grid: TargetGrid | None = None) -> tuple[np.ndarray, np.ndarray]:
-    """(indptr (rows + 1,) int64, indices (nnz,) int32) of V rows [start, stop)."""
+    """(indptr (rows + 1,) int64, indices (nnz,) int32) of V rows [start, stop), in pieces on
+    numba.get_num_threads() threads (the kernel releases the GIL)."""
     if grid is None:
         grid = target_grid(targets, default_grid_cell(candidates))
     occ = occupancy.occupied.view(np.uint8)
     params = np.stack([c.params for c in candidates.cameras])
-    indptr, indices = _visibility_kernel(
-        occ, occupancy.origin.astype(np.float64), float(occupancy.resolution),
-        np.ascontiguousarray(candidates.positions[start:stop], dtype=np.float64),
-        np.ascontiguousarray(candidates.rotations[start:stop], dtype=np.float64),
-        np.ascontiguousarray(candidates.camera_ids[start:stop], dtype=np.int64), params,
-        np.ascontiguousarray(targets.positions, dtype=np.float64),
-        np.ascontiguousarray(targets.normals, dtype=np.float64), target_cos_limits(targets),
-        grid.params, grid.cell_start, grid.cell_tids, target_min_px(targets))
-    return indptr, indices
+    shared = (np.ascontiguousarray(targets.positions, dtype=np.float64),
+              np.ascontiguousarray(targets.normals, dtype=np.float64), target_cos_limits(targets),
+              grid.params, grid.cell_start, grid.cell_tids, target_min_px(targets))
+    origin, res = occupancy.origin.astype(np.float64), float(occupancy.resolution)
+
+    def piece(a: int, b: int) -> tuple[np.ndarray, np.ndarray]:
+        return _visibility_kernel(occ, origin, res, np.ascontiguousarray(candidates.positions[a:b], dtype=np.float64),
+                                  np.ascontiguousarray(candidates.rotations[a:b], dtype=np.float64),
+                                  np.ascontiguousarray(candidates.camera_ids[a:b], dtype=np.int64), params, *shared)
+
+    n_pieces = max(1, min(numba.get_num_threads(), (stop - start) // MIN_ROWS_PER_THREAD))
+    if n_pieces == 1:
+        return piece(start, stop)
+    from concurrent.futures import ThreadPoolExecutor
+
+    cuts = np.linspace(start, stop, n_pieces + 1).astype(np.int64)
+    with ThreadPoolExecutor(n_pieces) as pool:
+        parts = list(pool.map(piece, cuts[:-1], cuts[1:]))
+    offsets = np.cumsum([0] + [len(ix) for _, ix in parts])
+    indptr = np.concatenate([[0]] + [ip[1:] + off for (ip, _), off in zip(parts, offsets)]).astype(np.int64)
+    return indptr, np.concatenate([ix for _, ix in parts]).astype(np.int32, copy=False)
 
 
 @dataclass(frozen=True)
