@@ -8,7 +8,7 @@ import pytest
 
 from camplace.core.errors import InputError
 from camplace.scene.build import build_scene
-from camplace.scene.importers import import_plan, plan_kind, prism_obstacles
+from camplace.scene.importers import import_plan, plan_kind, prism_obstacles, read_plan
 from tests.conftest import box_room
 
 L_WALL = [[1, 1], [3, 1], [3, 3], [2.5, 3], [2.5, 1.5], [1, 1.5]]  # a non-convex (L-shaped) wall in plan
@@ -166,6 +166,20 @@ def test_dxf_closed_door_blocks_the_view_and_units_override(tmp_path):
     assert Polygon(data["room"]["footprint"]).area == pytest.approx(FOOTPRINT_AREA, rel=0.01)
 
 
+def test_unitless_dxf_unit_guessed_from_its_walls_and_doors(tmp_path, monkeypatch, capsys):
+    from shapely.geometry import Polygon
+
+    from tests.conftest import run_cli
+
+    plan = draw_dxf(tmp_path / "plan.dxf", insunits=0)  # $INSUNITS 0, drawn in mm
+    got = read_plan(plan)
+    assert got.used["units"].startswith("mm (guessed") and "door swings 0.90 m" in got.used["units"]
+    assert any("no drawing unit" in n and "(units)" in n for n in got.notes)
+    assert Polygon(got.scene["room"]["footprint"]).area == pytest.approx(FOOTPRINT_AREA, rel=0.01)
+    code, text = run_cli(["scene", "import", plan, "--out", tmp_path / "site.yaml"], monkeypatch, capsys)
+    assert code == 0 and "guessed" in text and "(--units)" in text, text
+
+
 def test_cli_run_and_import_dxf(tmp_path, monkeypatch, capsys):
     import json
 
@@ -205,7 +219,11 @@ def _bad_dxf(tmp_path, kind):
         doc.modelspace().add_line((0, 0), (1000, 0), dxfattribs={"layer": "A-ANNO"})
         doc.saveas(tmp_path / "plan.dxf")
         return tmp_path / "plan.dxf"
-    return draw_dxf(tmp_path / "plan.dxf", insunits=0)
+    doc = ezdxf.new()  # unitless, 0.5 units wide: no unit makes it a building
+    doc.header["$INSUNITS"] = 0
+    doc.modelspace().add_lwpolyline([(0, 0), (0.5, 0), (0.5, 0.3), (0, 0.3)], close=True, dxfattribs={"layer": "A-WALL"})
+    doc.saveas(tmp_path / "plan.dxf")
+    return tmp_path / "plan.dxf"
 
 
 @pytest.mark.parametrize("kind, words", [("not-dxf", "not a DXF file"), ("no-walls", "no walls found"),

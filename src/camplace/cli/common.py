@@ -82,6 +82,15 @@ def word_error(err: CamplaceError) -> str:
     return f"{flag}: {msg}" if flag else msg
 
 
+_PAREN_OPTION = re.compile(r"\(([a-z][a-z_]*)\)")
+
+
+def word_options(text: str) -> str:
+    """A library line (a note, an import summary item) for the command line: the options
+    it names in parentheses, '(units)', become the flags, '(--units)'."""
+    return _PAREN_OPTION.sub(lambda m: f"({FLAGS[m.group(1)]})" if FLAGS.get(m.group(1)) else m.group(0), text)
+
+
 REPORT_AFTER_STOP_S = 6.0  # after the first Ctrl-C the report set may run until this many seconds after it
 PREPARE_STAGES = ("scene", "targets", "candidates")  # before visibility: nothing to keep, Ctrl-C ends them at once
 

@@ -9,7 +9,7 @@ from pathlib import Path
 from rich.markup import escape
 from rich.table import Table
 
-from camplace.cli.common import console, state
+from camplace.cli.common import console, state, word_options
 
 ROOM_COLUMNS_FROM = 16  # more rooms than this: the rooms table in three column pairs
 
@@ -68,13 +68,13 @@ def show_summary(summary: dict, title: str) -> None:
             grid.add_column(style="dim", no_wrap=True)
             grid.add_column()
             for k, v in items.items():
-                grid.add_row(f"  {escape(str(k))}", escape(str(v)))
+                grid.add_row(f"  {escape(str(k))}", escape(word_options(str(v))))
             console.print(f"{what}:")
             console.print(grid)
     if s["storeys"]:
         console.print(storeys_table(s["storeys"]))
     for note in s["notes"]:
-        console.print(f"[yellow]note: {escape(note)}[/yellow]", soft_wrap=True)
+        console.print(f"[yellow]note: {escape(word_options(note))}[/yellow]", soft_wrap=True)
 
 
 def write_files(preview, base: Path) -> list[Path]:

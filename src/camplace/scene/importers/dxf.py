@@ -30,9 +30,9 @@ from camplace.core.errors import InputError
 from camplace.scene.importers import (DEFAULT_CEILING_M, PlanImport, plan_scene, polygons_of, prism_obstacles,
                                       room_zones, rooms_footprint, walls_outline)
 from camplace.scene.importers.dxf_layers import ROLES, block_role, layer_role, matches
-from camplace.scene.importers.dxf_read import (FILLED, LINEWORK, Drawing, Shape, check_span, drawing_units,
-                                               filled_polygons, read_drawing, read_dxf)
+from camplace.scene.importers.dxf_read import FILLED, LINEWORK, Drawing, Shape, filled_polygons, read_dxf
 from camplace.scene.importers.dxf_rooms import enclosed_rooms, room_names, room_polygons
+from camplace.scene.importers.dxf_units import check_span, read_in_units
 from camplace.scene.importers.dxf_walls import (closing_solid, column_solid, components, fill_gap, is_wall_fill,
                                                 layer_pairs, main_building, span, wall_layers_by_geometry)
 
@@ -62,11 +62,9 @@ def read(path: Path, *, name: str | None = None, units: str | None = None, wall_
     if doors not in ("open", "closed"):
         raise InputError(f"doors: expected open or closed, got '{doors}'", option="doors")
     doc, damaged = read_dxf(path)
-    scale, unit_text = drawing_units(doc, path, units)
-    d = read_drawing(doc, scale, unit_text)
+    d = read_in_units(doc, path, units)
+    scale, unit_text = d.scale, d.units
     d.notes += [damaged] if damaged else []
-    if "guessed" in unit_text:
-        d.notes.append(f"units {unit_text}; if that is wrong, give them (units)")
     given = {"wall": wall_layers, "door": door_layers, "window": window_layers, "column": column_layers,
              "room": room_layers, "furniture": furniture_layers}
     out = PlanImport({}, "dxf", used={"units": unit_text}, skipped=d.skipped, notes=d.notes)

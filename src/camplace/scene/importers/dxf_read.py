@@ -17,10 +17,8 @@ import shapely
 from shapely.geometry import LineString, Point, Polygon
 
 from camplace.core.errors import InputError
-from camplace.scene.importers import UNITS_M, polygons_of, unit_scale
+from camplace.scene.importers import polygons_of
 
-INSUNITS = {1: ("in", 0.0254), 2: ("ft", 0.3048), 4: ("mm", 0.001), 5: ("cm", 0.01), 6: ("m", 1.0),
-            10: ("yd", 0.9144), 14: ("dm", 0.1)}  # $INSUNITS code -> (unit, m per unit)
 FLATTEN_M = 0.01  # chord error of flattened arcs, bulges and splines (m)
 MAX_DEPTH = 8  # nesting depth of block references followed
 MAX_ENTITIES = 2_000_000  # exploded entities read at most (a guard against runaway arrays)
@@ -29,8 +27,6 @@ FILLED = {"HATCH", "MPOLYGON", "SOLID", "TRACE", "3DFACE"}
 TEXTS = {"TEXT", "MTEXT", "ATTRIB"}
 ANNOTATION = {"DIMENSION", "ARC_DIMENSION", "LARGE_RADIAL_DIMENSION", "LEADER", "MLEADER", "MULTILEADER",
               "ACAD_TABLE", "TOLERANCE", "VIEWPORT"}  # never taken apart into linework
-PLAUSIBLE_M = (3.0, 500.0)  # the span of a building plan that makes sense, m
-TYPICAL_SPAN_M = 30.0  # a file without units is read in the unit (mm, cm, m) that makes its span nearest this
 
 
 @dataclass
@@ -103,62 +99,6 @@ def read_dxf(path: Path):
         raise InputError(f"{path}: not a DXF file ({first})")
     return doc, (f"the file has structure errors ({first}); read what ezdxf's recover mode rebuilt "
                  f"({len(auditor.fixes)} fixes, {len(auditor.errors)} errors left)")
-
-
-def drawing_units(doc, path: Path, units: str | None) -> tuple[float, str]:
-    """(m per drawing unit, how it was found): ``units`` if given, else the header's
-    $INSUNITS; a unitless drawing is an InputError that says what its extent would
-    mean in each unit."""
-    if units is not None:
-        return unit_scale(units), f"{units} (given)"
-    code = int(doc.header.get("$INSUNITS", 0) or 0)
-    if code in INSUNITS:
-        name, metres = INSUNITS[code]
-        return metres, f"{name} ($INSUNITS {code})"
-    span = _span_units(doc)
-    if "$INSUNITS" not in doc.header and span > 0:  # R12 and older writers cannot say the units: guess them
-        name = min(("mm", "cm", "m"), key=lambda u: abs(np.log10(span * UNITS_M[u] / TYPICAL_SPAN_M)))
-        return UNITS_M[name], f"{name} (guessed: the file does not say; its linework spans {span:,.0f} units)"
-    hint = f"; its linework spans {span:,.0f} units ({unit_hint(span)})" if span > 0 else ""
-    raise InputError(f"{path}: the drawing units are unknown ($INSUNITS {code}){hint}; expected mm, cm, m, in or ft "
-                     "(units)", option="units")
-
-
-def unit_hint(span: float) -> str:
-    """'mm: 24.3 m, cm: 243.0 m' - what a span in drawing units would measure in the
-    units that make it a building (PLAUSIBLE_M), else in mm, cm and m."""
-    good = [(u, span * s) for u, s in UNITS_M.items() if PLAUSIBLE_M[0] <= span * s <= PLAUSIBLE_M[1] / 3]
-    return ", ".join(f"{u}: {m:,.1f} m" for u, m in (good or [(u, span * UNITS_M[u]) for u in ("mm", "cm", "m")]))
-
-
-def _span_units(doc) -> float:
-    """The larger side of the box around the modelspace's LINE and polyline vertices (drawing units)."""
-    pts = []
-    for e in doc.modelspace().query("LINE LWPOLYLINE POLYLINE"):
-        if e.dxftype() == "LINE":
-            pts += [(e.dxf.start.x, e.dxf.start.y), (e.dxf.end.x, e.dxf.end.y)]
-        elif e.dxftype() == "LWPOLYLINE":
-            pts += [p[:2] for p in e.get_points("xy")]
-        else:
-            pts += [(p.x, p.y) for p in e.points()]
-    if not pts:
-        return 0.0
-    a = np.asarray(pts, float)
-    return float((a.max(0) - a.min(0)).max())
-
-
-def check_span(span_m: float, scale: float, units: str, plausible: tuple = PLAUSIBLE_M,
-               what: str = "walls") -> list[str]:
-    """Notes when a length (m; ``scale`` m per drawing unit) that should lie in
-    ``plausible`` (the walls' larger side, a typical door) makes no sense in the drawing's
-    ``units``, with what the other units would make of it."""
-    if plausible[0] <= span_m <= plausible[1] or span_m <= 0:
-        return []
-    span = span_m / scale
-    other = ", ".join(f"{u}: {span * s:,.2f} m" for u, s in UNITS_M.items()
-                      if plausible[0] <= span * s <= plausible[1]) or "none fits"
-    return [f"the {what} measure {span_m:,.2f} m in the drawing's units ({units}): are they right? In other "
-            f"units: {other} (units)"]
 
 
 def read_drawing(doc, scale: float, units: str) -> Drawing:
