@@ -239,6 +239,23 @@ def test_bad_dxf_exits_2_with_one_line_and_writes_nothing(tmp_path, monkeypatch,
         assert not (tmp_path / "site.yaml").exists() and not (tmp_path / "o").exists()
 
 
+def test_dxf_coordinates_that_are_no_numbers_are_left_out_without_a_warning(tmp_path):
+    import warnings
+
+    import ezdxf
+
+    plan = draw_dxf(tmp_path / "plan.dxf")
+    doc = ezdxf.readfile(plan)
+    for end in ((float("nan"), 5000), (1e308, 5000)):  # damage: 'nan' and an overflowing number in the file
+        doc.modelspace().add_line((0, 0), end, dxfattribs={"layer": "A-WALL"})
+    doc.saveas(plan)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # shapely's RuntimeWarnings (invalid value, overflow in buffer) fail
+        got = read_plan(plan)
+    assert got.skipped["entities with coordinates that are no numbers or over 10,000 km out"] == 2
+    assert {z["name"] for z in got.scene["zones"]} == {"Office", "Lab"}
+
+
 def test_bad_units_option_is_refused(tmp_path, monkeypatch, capsys):
     from tests.conftest import run_cli
 

@@ -21,6 +21,7 @@ from camplace.scene.importers import polygons_of
 
 FLATTEN_M = 0.01  # chord error of flattened arcs, bulges and splines (m)
 MAX_DEPTH = 8  # nesting depth of block references followed
+MAX_COORD_M = 1e7  # a coordinate farther out than this (10,000 km), or not a finite number, is damage: left out
 MAX_ENTITIES = 2_000_000  # exploded entities read at most (a guard against runaway arrays)
 LINEWORK = {"LINE", "LWPOLYLINE", "POLYLINE", "ARC", "CIRCLE", "ELLIPSE", "SPLINE"}
 FILLED = {"HATCH", "MPOLYGON", "SOLID", "TRACE", "3DFACE"}
@@ -171,6 +172,8 @@ class _Reader:
             text, height = e.plain_text(), e.dxf.get("height", 0.0)
             aligned = e.dxf.get("halign", 0) or e.dxf.get("valign", 0)
             p = e.ocs().to_wcs(e.dxf.align_point if aligned and e.dxf.hasattr("align_point") else e.dxf.insert)
+        if self._far([(p.x * self.s, p.y * self.s)]):
+            return
         for line in str(text).splitlines():
             line = " ".join(line.split())
             if line:
@@ -181,13 +184,16 @@ class _Reader:
         s = self.s
         if kind == "LINE":
             a, b = e.dxf.start, e.dxf.end
-            self._add(layer, kind, LineString([(a.x * s, a.y * s), (b.x * s, b.y * s)]), False, group, part,
-                      handle)
+            ends = [(a.x * s, a.y * s), (b.x * s, b.y * s)]
+            if not self._far(ends):
+                self._add(layer, kind, LineString(ends), False, group, part, handle)
             return
         if kind in ("HATCH", "MPOLYGON"):
             from ezdxf import path as dxfpath
 
             rings = [_xy(p.flattening(self.tol), s) for p in dxfpath.from_hatch(e)]
+            if self._far([v for r in rings for v in r]):
+                return
             area = even_odd([Polygon(r) for r in rings if len(r) >= 3])
             if not area.is_empty:
                 self._add(layer, kind, area, True, group, part, handle)
@@ -199,7 +205,7 @@ class _Reader:
 
         p = dxfpath.make_path(e)
         pts = _xy(p.flattening(self.tol), s)
-        if len(pts) < 2:
+        if len(pts) < 2 or self._far(pts):
             return
         closed = bool(kind in ("CIRCLE", "SOLID", "TRACE", "3DFACE") or getattr(e, "closed", False)
                       or getattr(e, "is_closed", False) or (len(pts) > 3 and np.allclose(pts[0], pts[-1], atol=1e-3)))
@@ -211,6 +217,14 @@ class _Reader:
         else:
             geom = LineString(pts if not closed or np.allclose(pts[0], pts[-1]) else [*pts, pts[0]])
         self._add(layer, kind, geom, closed, group, part, handle)
+
+    def _far(self, pts: list) -> bool:
+        """True (and counted) when a coordinate (m) is no finite number or lies beyond MAX_COORD_M."""
+        a = np.asarray(pts, float)
+        if not a.size or np.isfinite(a).all() and np.abs(a).max() <= MAX_COORD_M:
+            return False
+        self.out.skipped["entities with coordinates that are no numbers or over 10,000 km out"] += 1
+        return True
 
     def _add(self, layer, kind, geom, closed, group, part, handle) -> None:
         if not geom.is_empty and (geom.length > 0 or geom.area > 0):
