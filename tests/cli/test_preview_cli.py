@@ -57,3 +57,28 @@ def test_run_writes_the_preview_into_the_run_folder(plan, tmp_path, monkeypatch,
     assert doc["files"]["preview.png"] == str(out / "preview.png") and (out / "preview.svg").is_file()
     assert [r["name"] for r in doc["plan"]["rooms"]] == ["Office", "Lab"]
     assert "Office" in (out / "preview.svg").read_text()
+
+
+def test_plan_image_flags(tmp_path, monkeypatch, capsys):
+    """--threshold, --max-opening, --min-room-area and --no-ocr reach the image importer; bad
+    values and image flags on a DXF end in one line naming the flag, nothing written."""
+    from tests.scene.plan_drawings import PLAN_PX, draw_grid_png
+
+    png = draw_grid_png(tmp_path / "plan.png", B)
+    code, text = run_cli(["--json", "scene", "import", png, "--scale", PLAN_PX, "--threshold", "100", "--max-opening",
+                          "1.2", "--min-room-area", "2", "--no-ocr", "--out", tmp_path / "site.yaml"], monkeypatch,
+                         capsys)
+    assert code == 0, text
+    plan = json.JSONDecoder().raw_decode(text[text.index("{"):])[0]["plan"]
+    assert plan["used"]["threshold"].startswith("100 of 255") and "(given)" in plan["used"]["threshold"]
+    assert plan["used"]["ocr"] == "off" and len(plan["rooms"]) == 2
+    for args, flag in ((["--threshold", "300"], "--threshold"), (["--max-opening", "0"], "--max-opening"),
+                       (["--min-room-area", "-1"], "--min-room-area")):
+        code, text = run_cli(["scene", "import", png, "--scale", PLAN_PX, *args, "--out", tmp_path / "bad.yaml"],
+                             monkeypatch, capsys)
+        lines = [ln for ln in text.strip().splitlines() if ln.strip()]
+        assert code == 2 and len(lines) == 1 and lines[0].startswith(f"error: {flag}:"), text
+    dxf = draw_grid_dxf(tmp_path / "plan.dxf", B)
+    code, text = run_cli(["scene", "import", dxf, "--no-ocr", "--out", tmp_path / "bad.yaml"], monkeypatch, capsys)
+    assert code == 2 and "--no-ocr" in text and "dxf" in text, text
+    assert not (tmp_path / "bad.yaml").exists()

@@ -41,7 +41,8 @@ FLAGS = {
     "cloud": "",  # the space file: the message names it already
     "units": "--units", "wall_height": "--wall-height", "ceiling_height": "--ceiling-height", "scale": "--scale",
     "ref": "--ref", "storey": "--storey", "wall_layers": "--wall-layers", "furniture_heights": "--layer-height",
-    "doors": "--doors", "glass": "--glass",
+    "doors": "--doors", "glass": "--glass", "threshold": "--threshold", "max_opening": "--max-opening",
+    "min_room_area": "--min-room-area", "ocr": "--no-ocr",
     **CROWD_FLAGS,
 }
 

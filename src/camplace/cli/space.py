@@ -25,24 +25,37 @@ OCTOMAP_LATTICE = 8  # at most this many points per axis in one occupied leaf
 
 
 # the options of plans (DXF, plan images, IFC), shared by camplace run and camplace scene import
-UNITS_OPT = typer.Option(None, "--units", help="Plan units mm|cm|m|in|ft (default: the file's, e.g. DXF $INSUNITS).")
+UNITS_OPT = typer.Option(None, "--units", help="Plan units mm|cm|m|in|ft (default: the file's - DXF $INSUNITS, IFC "
+                         "length unit; a DXF that says none is read in the unit its geometry suggests, with a note).")
 WALL_HEIGHT_OPT = typer.Option(None, "--wall-height", help="Plan walls: height (m; default the ceiling height).")
 CEILING_OPT = typer.Option(None, "--ceiling-height", help="Plans: ceiling height (m; default 3, IFC: the storey's).")
-SCALE_OPT = typer.Option(None, "--scale", help="Plan images: metres per pixel.")
+SCALE_OPT = typer.Option(None, "--scale", help="Plan images: metres per pixel (default: read from the dimension "
+                         "lines by OCR, said in a note).")
 REF_OPT = typer.Option(None, "--ref", help="Plan images: two points 'x1,y1,x2,y2,DIST' (pixels, metres) for the scale.")
-STOREY_OPT = typer.Option(None, "--storey", help="IFC: the IfcBuildingStorey name (default: the largest), or 'all': "
-                          "every storey with rooms (run: DIR/<storey>/ each and DIR/storeys.json; scene import: "
+STOREY_OPT = typer.Option(None, "--storey", help="IFC: the IfcBuildingStorey name (default: the storey a user plans, "
+                          "most rooms, never a roof or foundation level); plan images: plan-N, the N-th plan on a "
+                          "sheet of several side by side (default: the one with most rooms); 'all': every storey "
+                          "or plan with rooms (run: DIR/<storey>/ each and DIR/storeys.json; scene import: "
                           "OUT-<storey>.yaml each).")
-WALL_LAYERS_OPT = typer.Option(None, "--wall-layers", help="DXF: wall layer patterns, comma-separated fnmatch "
-                               "(default A-WALL*,WALL*,WAND*).")
+WALL_LAYERS_OPT = typer.Option(None, "--wall-layers", help="DXF: wall layer patterns, comma-separated fnmatch, "
+                               "case-insensitive, replacing the defaults (default: layers named like walls in the "
+                               "common conventions and languages - A-WALL, WALL, WAND, MUR, MURO, PARED, ... - else "
+                               "the layers whose lines pair like wall faces; the summary says which were taken).")
 LAYER_HEIGHT_OPT = typer.Option(None, "--layer-height", help="DXF: LAYER=M, the height (m) of the furniture blocks on "
                                 "layers matching LAYER; repeat for several.")
 DOORS_OPT = typer.Option(None, "--doors", help="IFC, DXF: open (default; doors do not occlude) or closed.")
 GLASS_OPT = typer.Option(None, "--glass", help="IFC: opaque (default; windows occlude) or transparent.")
+THRESHOLD_OPT = typer.Option(None, "--threshold", help="Plan images: the ink's grey level 1-255 (pixels darker than it "
+                             "in their brightest channel are ink; default: Otsu's split of the image).")
+MAX_OPENING_OPT = typer.Option(None, "--max-opening", help="Plan images: the widest door or window gap (m) bridged to "
+                               "close a room (default 1.8).")
+MIN_ROOM_OPT = typer.Option(None, "--min-room-area", help="Plan images: the smallest enclosed area (m²) that is a "
+                            "room (default 1).")
+NO_OCR_OPT = typer.Option(False, "--no-ocr", help="Plan images: no OCR (rooms named room-1..n; give --scale or --ref).")
 PLAN_FLAGS = {"units": "--units", "wall_height": "--wall-height", "ceiling_height": "--ceiling-height",
               "scale": "--scale", "ref": "--ref", "storey": "--storey", "wall_layers": "--wall-layers",
-              "layer_height": "--layer-height", "doors": "--doors", "glass": "--glass"}
-
+              "layer_height": "--layer-height", "doors": "--doors", "glass": "--glass", "threshold": "--threshold",
+              "max_opening": "--max-opening", "min_room_area": "--min-room-area", "no_ocr": "--no-ocr"}
 
 @dataclass(frozen=True)
 class ImportOptions:
@@ -67,6 +80,10 @@ class ImportOptions:
     layer_height: list[str] | None = None
     doors: str | None = None
     glass: str | None = None
+    threshold: float | None = None
+    max_opening: float | None = None
+    min_room_area: float | None = None
+    no_ocr: bool = False
 
     def plan_kwargs(self, budget: int | None) -> dict:
         """camplace.scene.importers.import_plan keyword arguments (None: the importer's default)."""
@@ -79,7 +96,8 @@ class ImportOptions:
                     heights=floats(self.heights, "--heights"), coverage=self.coverage, budget=budget,
                     wall_layers=tuple(p.strip() for p in self.wall_layers.split(",") if p.strip())
                     if self.wall_layers else None, furniture_heights=layer_heights(self.layer_height),
-                    doors=self.doors, glass=self.glass)
+                    doors=self.doors, glass=self.glass, threshold=self.threshold, max_opening=self.max_opening,
+                    min_room_area=self.min_room_area, ocr=False if self.no_ocr else None)
 
     def kwargs(self, budget: int | None) -> dict:
         """scene_from_cloud keyword arguments (InputError naming the flag on bad text)."""

@@ -97,6 +97,11 @@ class Sheet:
 def analyse(path: Path, scale=None, ref=None, threshold=None, min_wall_thickness=0.08, max_wall_thickness=0.8,
             hatch_spacing=0.3, max_opening=1.8, min_room_area=1.0, ocr=True) -> Sheet:
     """The plans, walls, openings, rooms and room names of a plan image."""
+    for key, value in (("min_wall_thickness", min_wall_thickness), ("max_wall_thickness", max_wall_thickness),
+                       ("hatch_spacing", hatch_spacing), ("max_opening", max_opening), ("min_room_area", min_room_area)):
+        if not (isinstance(value, (int, float)) and math.isfinite(value) and value > 0):
+            raise InputError(f"{key}: expected a number > 0 ({'m²' if key == 'min_room_area' else 'm'}), got {value}",
+                             option=key)
     rgb = read_image(path)
     dark = brightness(rgb)
     engine, ocr_line = ocr_engine() if ocr else (None, "off")
@@ -112,8 +117,8 @@ def analyse(path: Path, scale=None, ref=None, threshold=None, min_wall_thickness
     if threshold is None:
         t, how = ink_threshold(dark, s, max_wall_thickness)
     else:
-        if not 0 < float(threshold) <= 255:
-            raise InputError(f"threshold: expected a grey level 0..255, got {threshold}", option="threshold")
+        if not (isinstance(threshold, (int, float)) and 0 < threshold <= 255):
+            raise InputError(f"threshold: expected a grey level > 0 and <= 255, got {threshold}", option="threshold")
         t, how = float(threshold), "given"
     ink = dark < t
     skipped: Counter = Counter()
