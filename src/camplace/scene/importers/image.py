@@ -240,7 +240,8 @@ def _footprint(plan: PlanRooms, sheet: Sheet, source: str):
     at = (plan.box[0].start, plan.box[1].start)
     inside = mask_polygons(plan.enclosed | np.isin(plan.labels, plan.rooms), sheet.s, at, sheet.rows)
     walls = mask_polygons(plan.walls | plan.bridges, sheet.s, at, sheet.rows)
-    return rooms_footprint(polygons_of(inside), walls, sheet.max_wall, source)
+    return rooms_footprint(polygons_of(inside.simplify(sheet.s / 2)), walls.simplify(sheet.s / 2), sheet.max_wall,
+                           source)
 
 
 def _storey_rows(sheet: Sheet) -> list[dict]:
