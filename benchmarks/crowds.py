@@ -15,6 +15,10 @@ JSON object to stdout (``--out FILE``: also to FILE) and a markdown table to std
 
     python benchmarks/crowds.py [--scene standard-store] [--budget 40] [--densities 0.3,1.0]
         [--solvers greedy,tabu] [--time-limit 60] [--samples 16] [--score-samples 32]
+        [--workers N | --scheduler tcp://HOST:PORT] [--timing-only]
+
+``--timing-only``: V and V_s times only (no placements), e.g. on a site-scale scene
+(``--scene warehouse:5000``) with V_s on a process pool (``--workers 2``) or a Dask cluster.
 """
 
 from __future__ import annotations
@@ -27,9 +31,11 @@ import time
 
 import numpy as np
 
+from camplace.metrics.crowd import sample_figures
+from camplace.problem.crowd import sample_coverage
 from camplace.solvers import solve
 from camplace.spec.crowd import CrowdSpec
-from camplace.targets.crowd import sample_crowds
+from camplace.targets.crowd import SCORE, sample_crowds
 from camplace.visibility.crowd import crowd_rows
 from camplace.visibility.engine import compute_visibility
 from camplace.visibility.voxel import VoxelEngine
@@ -43,9 +49,31 @@ def timed(fn, *args, **kw):
     return out, time.perf_counter() - t0
 
 
+def per_sample(sc, vis, selected, crowd: CrowdSpec) -> dict[str, np.ndarray]:
+    """The crowd figures of ``selected`` in each held-out crowd: name -> (S,)."""
+    held = sample_crowds(sc, crowd, SCORE)
+    sel = np.asarray(selected, np.int64)
+    rows = crowd_rows(vis.V[sel], vis.candidates.positions[sel], vis.targets.positions, held)
+    cov = sample_coverage(rows, held.n_samples, np.arange(len(sel)))
+    t = vis.targets
+    figs = [sample_figures(t.gamma, t.weights, c) for c in cov]
+    return {k: np.array([f[k] for f in figs]) for k in figs[0]}
+
+
+def paired(a: dict, b: dict) -> dict:
+    """b − a per held-out crowd (the same crowds): mean, standard error, crowds where b is better."""
+    out = {}
+    for k, better in (("coverage_gap", -1), ("triangulatable_pct", 1), ("seen_by_gamma_pct", 1)):
+        d = b[k] - a[k]
+        out[k] = {"mean": float(d.mean()), "stderr": float(d.std(ddof=1) / np.sqrt(len(d))),
+                  "better_in": int(np.sum(better * d > 0)), "of": int(len(d))}
+    return out
+
+
 def scores(sc, vis, problem, selected, crowd: CrowdSpec) -> dict:
     m = score_in_crowd(sc, vis, selected, crowd).summary
     out = {k: m[k] for k in ("coverage_gap", "seen_by_gamma_pct", "triangulatable_pct")}
+    out["selected"] = [int(i) for i in selected]
     cov = problem.coverage(selected)
     out["empty_store_gap"] = problem.cost(selected) / problem.normalizer
     out["empty_store_triangulatable_pct"] = 100.0 * float(np.mean(cov >= 2))
@@ -63,8 +91,13 @@ def main() -> None:
     ap.add_argument("--score-samples", type=int, default=32)
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--out", default=None)
+    ap.add_argument("--workers", type=int, default=1)
+    ap.add_argument("--scheduler", default=None)
+    ap.add_argument("--timing-only", action="store_true")
     a = ap.parse_args()
-    sc, vis = prepare(a.scene)
+    from camplace.core.executors import make_executor
+
+    sc, vis = prepare(a.scene, workers=a.workers, scheduler=a.scheduler)
     p = problem_from_visibility(vis, a.budget)
     V = vis.V
     v_s = [timed(compute_visibility, VoxelEngine(), sc.occupancy, vis.targets, vis.candidates)[1] for _ in range(2)]
@@ -76,9 +109,17 @@ def main() -> None:
         crowd = CrowdSpec(density=d, samples=a.samples, score_samples=a.score_samples, seed=a.seed)
         crowds = sample_crowds(sc, crowd)
         per = []
-        for _ in range(2):
-            out, t = timed(crowd_rows, V, vis.candidates.positions, vis.targets.positions, crowds)
-            per.append(t / crowds.n_samples)
+        with make_executor(a.workers, a.scheduler) as ex:
+            for _ in range(2):
+                out, t = timed(crowd_rows, V, vis.candidates.positions, vis.targets.positions, crowds, executor=ex)
+                per.append(t / crowds.n_samples)
+        if a.timing_only:
+            res["densities"][str(d)] = {"persons": float(np.mean(crowds.counts)), "V_s_seconds_per_sample": per,
+                                        "kept_pct": 100.0 * out.nnz / (V.nnz * crowds.n_samples),
+                                        "executor": getattr(ex, "name", "in-process")}
+            print(f"density {d:g}: V {min(v_s):.2f} s, V_s {min(per):.3f} s per sample ({a.workers} workers)",
+                  file=sys.stderr, flush=True)
+            continue
         cp, t_build = timed(crowd_problem, sc, vis, p, crowd)
         entry = {"persons": float(np.mean(crowds.counts)), "kept_pct": 100.0 * out.nnz / (V.nnz * crowds.n_samples),
                  "V_s_seconds_per_sample": per, "crowd_problem_seconds": t_build,
@@ -91,14 +132,21 @@ def main() -> None:
                    "crowd-aware": {"solve_seconds": tc, "in_sample_gap": c.objective / cp.problem.normalizer,
                                    **scores(sc, vis, p, c.selected, crowd)}}
             got["empty-store"]["in_sample_gap"] = cp.problem.cost(e.selected) / cp.problem.normalizer
+            got["paired"] = paired(per_sample(sc, vis, e.selected, crowd), per_sample(sc, vis, c.selected, crowd))
             entry["solvers"][solver] = got
-            for name, g in got.items():
+            for name in ("empty-store", "crowd-aware"):
+                g = got[name]
                 rows.append(f"| {d:g} | {solver} | {name} | {g['coverage_gap']['mean']:.4f} ± "
                             f"{g['coverage_gap']['std']:.4f} | {g['triangulatable_pct']['mean']:.2f} | "
                             f"{g['seen_by_gamma_pct']['mean']:.2f} | {g['in_sample_gap']:.4f} | "
                             f"{g['empty_store_gap']:.4f} | {g['empty_store_triangulatable_pct']:.2f} | "
                             f"{g['solve_seconds']:.1f} |")
-            print(rows[-2], rows[-1], sep="\n", file=sys.stderr, flush=True)
+            pr = got["paired"]
+            print(rows[-2], rows[-1], f"paired (crowd-aware − empty-store): gap {pr['coverage_gap']['mean']:+.4f} ± "
+                  f"{pr['coverage_gap']['stderr']:.4f} (better in {pr['coverage_gap']['better_in']}/"
+                  f"{pr['coverage_gap']['of']}), triangulatable {pr['triangulatable_pct']['mean']:+.2f} ± "
+                  f"{pr['triangulatable_pct']['stderr']:.2f} (better in {pr['triangulatable_pct']['better_in']})",
+                  sep="\n", file=sys.stderr, flush=True)
         res["densities"][str(d)] = entry
     res["load_average_end"] = os.getloadavg()
     text = json.dumps(res, indent=2)
