@@ -20,6 +20,7 @@ import scipy.sparse as sp
 
 from camplace.problem.model import PlacementProblem, Reduction, reduce_problem
 from camplace.solvers.base import Placement
+from camplace.core.executors import on_threads
 from camplace.core.memory import release_pages
 
 _M1 = np.uint64(0x9E3779B97F4A7C15)
@@ -50,39 +51,36 @@ def _is_subset(indptr, indices, live, a, stamp, token):
     return True
 
 
-@numba.njit(cache=True, parallel=True)
-def _dominated(indptr, indices, live, n_cols, rows, gptr, n, costs, types, use_types, n_chunks):
-    """(len(rows),) bool: row rows[a] is dominated inside its location group (rows[gptr[g]:
-    gptr[g+1]], ascending ids) by the rule of camplace.problem.model.dominated_candidates."""
-    out = np.zeros(len(rows), np.bool_)
-    n_groups = len(gptr) - 1
-    for ch in numba.prange(n_chunks):
-        stamp = np.full(n_cols, -1, np.int64)
-        for g in range(ch * n_groups // n_chunks, (ch + 1) * n_groups // n_chunks):
-            s, e = gptr[g], gptr[g + 1]
-            if e - s < 2:
-                continue
-            for pb in range(s, e):
-                b = rows[pb]
-                marked = False
-                for pa in range(s, e):
-                    if pa == pb or out[pa]:
-                        continue
-                    a = rows[pa]
-                    if costs[pb] > costs[pa]:
-                        continue
-                    if not (n[pb] > n[pa] or (n[pb] == n[pa] and (costs[pb] < costs[pa] or
-                                                                  (costs[pb] == costs[pa] and b < a)))):
-                        continue
-                    if use_types and not (types[pb] == types[pa] or types[pb] < 0):
-                        continue
-                    if not marked:
-                        for q in range(indptr[b], indptr[b + 1]):
-                            stamp[indices[q]] = pb
-                        marked = True
-                    if _is_subset(indptr, indices, live, a, stamp, pb):
-                        out[pa] = True
-    return out
+@numba.njit(cache=True, nogil=True)
+def _dominated(indptr, indices, live, n_cols, rows, gptr, n, costs, types, use_types, g0, g1, out):
+    """out[a] = True when row rows[a] is dominated inside its location group (rows[gptr[g]:
+    gptr[g+1]], ascending ids) by the rule of camplace.problem.model.dominated_candidates,
+    for the groups g0 <= g < g1 (serial, without the GIL: groups are split over threads)."""
+    stamp = np.full(n_cols, -1, np.int64)
+    for g in range(g0, g1):
+        s, e = gptr[g], gptr[g + 1]
+        if e - s < 2:
+            continue
+        for pb in range(s, e):
+            b = rows[pb]
+            marked = False
+            for pa in range(s, e):
+                if pa == pb or out[pa]:
+                    continue
+                a = rows[pa]
+                if costs[pb] > costs[pa]:
+                    continue
+                if not (n[pb] > n[pa] or (n[pb] == n[pa] and (costs[pb] < costs[pa] or
+                                                              (costs[pb] == costs[pa] and b < a)))):
+                    continue
+                if use_types and not (types[pb] == types[pa] or types[pb] < 0):
+                    continue
+                if not marked:
+                    for q in range(indptr[b], indptr[b + 1]):
+                        stamp[indices[q]] = pb
+                    marked = True
+                if _is_subset(indptr, indices, live, a, stamp, pb):
+                    out[pa] = True
 
 
 @numba.njit(cache=True)
@@ -171,8 +169,10 @@ def reduce_streaming(problem: PlacementProblem, dominance: bool = True) -> Reduc
         gptr = np.r_[0, np.flatnonzero(np.diff(loc[order])) + 1, len(rows)].astype(np.int64)
         use_types = problem.has_type_limits
         types = (problem.limited_types()[rows] if use_types else np.zeros(len(rows), np.int64)).astype(np.int64)
-        dom = _dominated(indptr, indices, live, n_p, rows, gptr, row_nnz[rows], np.asarray(costs[rows], np.float64),
-                         types, use_types, max(1, min(len(gptr) - 1, numba.get_num_threads() * 8)))
+        dom = np.zeros(len(rows), np.bool_)
+        args = (indptr, indices, live, n_p, rows, gptr, row_nnz[rows], np.asarray(costs[rows], np.float64), types,
+                use_types)
+        on_threads(len(gptr) - 1, lambda g0, g1: _dominated(*args, g0, g1, dom), min_rows=8)
         keep_c[rows[dom]] = False
         info["dropped_dominated_candidates"] = int(dom.sum())
     cand = np.nonzero(keep_c)[0]

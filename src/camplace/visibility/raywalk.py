@@ -16,6 +16,7 @@ import math
 import numba
 import numpy as np
 
+from camplace.core.executors import on_threads
 from camplace.scene.build import OccupancyGrid
 
 NO_HIT, BOUNDARY = -2, -1  # first_hit's axis: nothing hit within range / started inside or left the grid
@@ -131,9 +132,9 @@ def _crossings(tm: float, per_t: float, te: float, k: int) -> int:
     return min(k, int((te - tm) * per_t) + 1)
 
 
-@numba.njit(cache=True, parallel=True)
+@numba.njit(cache=True, nogil=True)
 def _cast_rays_kernel(occ, dist, origin, res, p, dirs, max_t, t_out, cell_out, axis_out):
-    for r in numba.prange(dirs.shape[0]):
+    for r in range(dirs.shape[0]):
         t, ix, iy, iz, axis, step = first_hit(occ, dist, origin[0], origin[1], origin[2], res, p[0], p[1], p[2],
                                               dirs[r, 0], dirs[r, 1], dirs[r, 2], max_t)
         t_out[r] = t if axis != NO_HIT else np.inf
@@ -153,9 +154,10 @@ def cast_rays(occupied: np.ndarray, dist: np.ndarray, origin: np.ndarray, res: f
     t = np.empty(n)
     cell = np.empty((n, 3), np.int64)
     axis = np.empty(n, np.int64)
-    _cast_rays_kernel(occupied.view(np.uint8), dist, np.asarray(origin, np.float64), float(res),
-                      np.asarray(position, np.float64), np.ascontiguousarray(dirs, dtype=np.float64), float(max_t),
-                      t, cell, axis)
+    occ, origin, pos = occupied.view(np.uint8), np.asarray(origin, np.float64), np.asarray(position, np.float64)
+    dirs = np.ascontiguousarray(dirs, dtype=np.float64)
+    on_threads(n, lambda a, b: _cast_rays_kernel(occ, dist, origin, float(res), pos, dirs[a:b], float(max_t), t[a:b],
+                                                 cell[a:b], axis[a:b]), min_rows=1024)
     return t, cell, axis
 
 

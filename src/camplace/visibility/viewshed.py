@@ -22,6 +22,7 @@ import shapely
 from shapely.geometry import MultiPolygon, Polygon
 
 from camplace.cameras.models import CameraModel, project_nb, px_per_m_nb
+from camplace.core.executors import on_threads
 from camplace.scene.build import OccupancyGrid
 from camplace.spec.quality import DORI_PX_PER_M
 from camplace.visibility.raywalk import segment_clear
@@ -51,12 +52,12 @@ class Viewshed:
         return float(self.polygon.area)
 
 
-@numba.njit(cache=True, parallel=True)
+@numba.njit(cache=True, nogil=True)
 def _sample_kernel(occ, origin, res, p, R, params, xs, ys, h, seen, dens):
     """seen[iy, ix] = 1 if (xs[ix], ys[iy], h) is in range, in the image and in sight;
     dens[iy, ix] = its pixel density (px/m) when in range and in the image, else 0."""
     rng = params[7]
-    for iy in numba.prange(ys.shape[0]):
+    for iy in range(ys.shape[0]):
         for ix in range(xs.shape[0]):
             vx, vy, vz = xs[ix] - p[0], ys[iy] - p[1], h - p[2]
             d2 = vx * vx + vy * vy + vz * vz
@@ -94,9 +95,10 @@ def sample_grid(occupancy: OccupancyGrid, camera: CameraModel, position: np.ndar
     ys = np.arange(lo[1], hi[1] + step, step)
     seen = np.zeros((len(ys), len(xs)))
     dens = np.zeros((len(ys), len(xs)))
-    _sample_kernel(occupancy.occupied.view(np.uint8), np.asarray(occupancy.origin, np.float64),
-                   float(occupancy.resolution), p, np.ascontiguousarray(rotation, np.float64), camera.params,
-                   xs, ys, float(height), seen, dens)
+    occ, origin, R = occupancy.occupied.view(np.uint8), np.asarray(occupancy.origin, np.float64), \
+        np.ascontiguousarray(rotation, np.float64)
+    on_threads(len(ys), lambda a, b: _sample_kernel(occ, origin, float(occupancy.resolution), p, R, camera.params, xs,
+                                                    ys[a:b], float(height), seen[a:b], dens[a:b]), min_rows=16)
     seen[[0, -1], :] = seen[:, [0, -1]] = 0.0  # the border row stays empty: every contour closes
     dens[[0, -1], :] = dens[:, [0, -1]] = 0.0
     return xs, ys, seen, dens

@@ -27,6 +27,7 @@ import numpy as np
 
 from camplace.cameras.models import project_nb, px_per_m_nb
 from camplace.core.errors import InputError
+from camplace.core.executors import on_threads
 from camplace.spec.quality import target_min_px
 from camplace.cameras.candidates import Candidates
 from camplace.scene.build import OccupancyGrid
@@ -323,13 +324,10 @@ def default_grid_cell(candidates: Candidates) -> float:
     return max(rng / GRID_CELLS_PER_RANGE, 0.05)
 
 
-MIN_ROWS_PER_THREAD = 64  # a block this small runs on one thread
-
-
 def _block_arrays(occupancy: OccupancyGrid, targets: Targets, candidates: Candidates,
                   start: int, stop: int, grid: TargetGrid | None = None) -> tuple[np.ndarray, np.ndarray]:
     """(indptr (rows + 1,) int64, indices (nnz,) int32) of V rows [start, stop), in pieces on
-    numba.get_num_threads() threads (the kernel releases the GIL)."""
+    threads (camplace.core.executors.on_threads; the kernel releases the GIL)."""
     if grid is None:
         grid = target_grid(targets, default_grid_cell(candidates))
     occ = occupancy.occupied.view(np.uint8)
@@ -340,18 +338,14 @@ def _block_arrays(occupancy: OccupancyGrid, targets: Targets, candidates: Candid
     origin, res = occupancy.origin.astype(np.float64), float(occupancy.resolution)
 
     def piece(a: int, b: int) -> tuple[np.ndarray, np.ndarray]:
+        a, b = start + a, start + b
         return _visibility_kernel(occ, origin, res, np.ascontiguousarray(candidates.positions[a:b], dtype=np.float64),
                                   np.ascontiguousarray(candidates.rotations[a:b], dtype=np.float64),
                                   np.ascontiguousarray(candidates.camera_ids[a:b], dtype=np.int64), params, *shared)
 
-    n_pieces = max(1, min(numba.get_num_threads(), (stop - start) // MIN_ROWS_PER_THREAD))
-    if n_pieces == 1:
-        return piece(start, stop)
-    from concurrent.futures import ThreadPoolExecutor
-
-    cuts = np.linspace(start, stop, n_pieces + 1).astype(np.int64)
-    with ThreadPoolExecutor(n_pieces) as pool:
-        parts = list(pool.map(piece, cuts[:-1], cuts[1:]))
+    parts = on_threads(stop - start, piece)
+    if len(parts) == 1:
+        return parts[0]
     offsets = np.cumsum([0] + [len(ix) for _, ix in parts])
     indptr = np.concatenate([[0]] + [ip[1:] + off for (ip, _), off in zip(parts, offsets)]).astype(np.int64)
     return indptr, np.concatenate([ix for _, ix in parts]).astype(np.int32, copy=False)
