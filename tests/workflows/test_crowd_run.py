@@ -46,6 +46,10 @@ def test_density_0_equals_the_run_without_a_crowd(empty_store):
     assert {k: v for k, v in a.items() if k != "timings_s"} == {k: v for k, v in b.items() if k != "timings_s"}
     assert c["coverage_gap"]["mean"] == a["coverage_gap"] and c["coverage_gap"]["std"] == 0.0
     assert c["triangulatable_pct"]["mean"] == 100.0 - a["non_triangulatable_pct"]
+    exact = run(spec(density=0.0, optimise=True))  # the exact solver keeps its bound too
+    assert np.array_equal(exact.placement.selected, empty_store.placement.selected)
+    assert (exact.placement.objective, exact.placement.bound) == (empty_store.placement.objective,
+                                                                  empty_store.placement.bound)
 
 
 def test_crowd_aware_is_optimal_on_its_own_crowds(empty_store):

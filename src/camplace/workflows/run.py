@@ -441,7 +441,7 @@ def run(scene: str | Path | SceneSpec, budget: int | None = None, solver: str | 
             robust=robust, should_stop=should_stop, progress=progress, log=log,
             guard=None if site is None else site.guard, timings=timings, row_map=None if cp is None else cp.row_map)
         timings["beyond_grid"] = time.perf_counter() - t
-    if cp is not None:  # back to the empty-store problem (the contract's cost); the crowd cost stays in info
+    if cp is not None and cp.stacked:  # back to the empty-store problem (the contract's cost); crowd cost in info
         problem, placement = cp.nominal(vis, problem, placement, grid_selected)
     else:
         problem = solving
