@@ -48,12 +48,15 @@ def font(size: int, bold: bool = False):
 
 
 def draw_apartment(path: str | Path, *, jpeg_quality: int | None = None, noise: float = 0.0, seed: int = 0,
-                   labels: bool = True, hatch: bool = True, furniture: bool = False) -> Sheet:
+                   labels: bool = True, hatch: bool = True, furniture: bool = False,
+                   label_px: tuple[int, int] = (18, 14), names: dict[str, str] | None = None) -> Sheet:
     """The apartment sheet as PNG (or JPEG with ``jpeg_quality``; ``noise``: the grey
     level std of a scan's noise on a slightly grey paper; ``hatch=False``: the outer
     walls as two lines with paper between them, as many CAD exports draw them;
     ``furniture``: a bed, a sofa, a table with chairs, a kitchen counter with a sink, a
-    bathtub and a desk drawn in outline)."""
+    bathtub and a desk drawn in outline; ``label_px``: the font sizes (px) of the room
+    names (bold at the default size, regular below it) and areas; ``names``: the printed
+    name of a room of ROOMS, where it differs from its key)."""
     import numpy as np
     from PIL import Image, ImageDraw
 
@@ -160,10 +163,10 @@ def draw_apartment(path: str | Path, *, jpeg_quality: int | None = None, noise: 
         _furniture(d, p)
     # room labels: name (bold) and area in m² below it
     if labels:
-        f_name, f_area = font(18, bold=True), font(14)
+        f_name, f_area = font(label_px[0], bold=label_px[0] >= 18), font(label_px[1])
         for name, (x0, y0, x1, y1) in ROOMS.items():
             c, r = p((x0 + x1) / 2, (y0 + y1) / 2)
-            d.text((c, r - 2), name, font=f_name, fill="black", anchor="mb")
+            d.text((c, r - 2), (names or {}).get(name, name), font=f_name, fill="black", anchor="mb")
             d.text((c, r + 4), f"{room_area(name):.2f} m²".replace(".", ","), font=f_area, fill="black", anchor="mt")
     # scale bar: 0-1-2-3-4-5 m, alternating blocks, under the plan
     c0, r0 = p(0, -t - 1.6)

@@ -75,6 +75,17 @@ def test_rooms_named_by_their_labels(apartment):
     assert len(printed) >= 4, got.notes  # '21,43 m²' read as an area, never as a name
 
 
+def test_small_word_labels(tmp_path):
+    """Room names at 10 px (capitals about 7 px, regular weight) and areas at 9 px, as on
+    a plan printed small: the words and 'WC' are read (Tesseract alone reads 'WC' as 'wc')."""
+    need_ocr()
+    printed = {"Bathroom": "WC"}
+    sheet = draw_apartment(tmp_path / "small.png", label_px=(10, 9), names=printed)
+    names = {z["name"] for z in read_plan(sheet.path, scale=PX).scene["zones"]}
+    labels = {printed.get(n, n) for n in ROOMS}
+    assert len(names & labels) >= 4 and all(n in labels or n.startswith("room-") for n in names), sorted(names)
+
+
 def test_without_ocr_rooms_are_numbered_with_a_note(apartment, monkeypatch):
     import camplace.scene.importers.image as image
 

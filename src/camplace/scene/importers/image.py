@@ -2,7 +2,7 @@
 what was understood of them (camplace.scene.importers.read_plan).
 
 Scale from ``scale`` (m per pixel) or ``ref`` (two pixel points and their distance in
-m). Step by step (image_walls, image_rooms, image_ocr):
+m). Step by step (image_walls, image_rooms, image_ocr, image_text):
 
 1. Ink: pixels darker than ``threshold`` in their brightest channel (Otsu unless given;
    flat colour room fills are light there, and fills darker than the split are split off).
@@ -189,7 +189,10 @@ def _colour_split(plan: PlanRooms, rgb: np.ndarray, ink: np.ndarray, s: float, m
 
 
 def _name_rooms(engine, dark: np.ndarray, ink: np.ndarray, plans: list[PlanRooms]) -> None:
-    """Room names and printed areas from the text lines inside each room (one OCR call)."""
+    """Room names and printed areas from the text lines in or beside each room (a label
+    whose middle falls on no room, e.g. inside the ring around a room number, goes to
+    the nearest room within 1.5 character heights; none on a wall); one OCR call. A name read for two
+    rooms of a plan stays with the more confident reading (the other is misread)."""
     lines, n, hc = text_lines_mask(ink)
     if n == 0:
         return
@@ -197,22 +200,27 @@ def _name_rooms(engine, dark: np.ndarray, ink: np.ndarray, plans: list[PlanRooms
     where: dict[int, tuple[int, int]] = {}
     for i, plan in enumerate(plans):
         room_at = np.where(np.isin(plan.labels, plan.rooms), plan.labels, 0)
+        gap, (near_r, near_c) = ndimage.distance_transform_edt(room_at == 0, return_indices=True)
         for k, b in enumerate(boxes, 1):
             if b is None:
                 continue
             r, c = (b[0].start + b[0].stop) // 2 - plan.box[0].start, (b[1].start + b[1].stop) // 2 - plan.box[1].start
-            if 0 <= r < room_at.shape[0] and 0 <= c < room_at.shape[1] and room_at[r, c]:
-                where[k] = (i, int(room_at[r, c]))
+            if (0 <= r < room_at.shape[0] and 0 <= c < room_at.shape[1] and gap[r, c] <= 1.5 * hc
+                    and not plan.walls[r, c]):
+                where[k] = (i, int(room_at[near_r[r, c], near_c[r, c]]))
     found: dict[tuple[int, int], list] = {}
     for ln in read_lines(engine, dark, ink, lines, sorted(where), hc):
         k = int(np.max(lines[ln.box[0]:ln.box[2], ln.box[1]:ln.box[3]]))
         found.setdefault(where[k], []).append(ln)
+    best: dict[tuple[int, str], tuple[float, int]] = {}
     for (i, room), got in found.items():
-        name, area = room_name(got, hc)
-        if name:
-            plans[i].names[room] = name
+        name, conf, area = room_name(got, hc)
+        if name and conf > best.get((i, name), (-1.0, 0))[0]:
+            best[(i, name)] = (conf, room)
         if area is not None:
             plans[i].printed[room] = area
+    for (i, name), (_, room) in best.items():
+        plans[i].names[room] = name
 
 
 def _polygons(plan: PlanRooms, sheet: Sheet, min_area: float):

@@ -3,9 +3,11 @@ optional dependency: ``pip install camplace[ocr]`` plus the tesseract program).
 
 Text is found without OCR first: ink marks the size of a character (8-connected pieces
 no taller than twice the sheet's typical character and not framing other marks: the
-circle around a room number is left out) merged into lines. Each line is cut out and
-the lines are stacked into one mosaic image, read by one Tesseract call (block mode),
-and every word goes back to its line, so the words keep their place on the sheet.
+circle around a room number is left out) merged into lines. Each line is cut out of
+the grey sheet and prepared as a tile (image_text: own marks only, stretched, scaled up
+3-4x, binarised, padded); all tiles are read by one Tesseract call as single lines (the
+pages of one TIFF), so each line keeps its place on the sheet and the whole sheet costs
+one engine start.
 """
 
 from __future__ import annotations
@@ -16,14 +18,18 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import ndimage
 
+from camplace.scene.importers.image_text import line_tile, restore_point
 from camplace.scene.importers.image_walls import EIGHT
 
-OCR_HEIGHT_PX = 32  # character height Tesseract reads best (lines are scaled up to it, at most 4x)
+FRAGMENT = 0.6  # lines lower than this many character heights are fragments (a point, a hatch's dash)
 MIN_CONF = 50  # Tesseract word confidence (0..100) below which a word is not used
 WORD_CONF = 70  # ... and below which it does not name a room (numbers need MIN_CONF)
-AREA_RE = re.compile(r"^(\d{1,4})(?:[.,]\s?|\s)(\d{1,2})(?:\s*([mм]2|[mм][^\s\d]{0,3}|sq\.?\s*m|sqm|qm|[^\s\d]{1,3}))?$",
+AREA_RE = re.compile(r"^(\d{1,4})(?:[.,]\s?(\d{1,2})|\s(\d{2}))"  # '14,43', '14.4'; '14 43' (the comma lost)
+                     r"(?:\s*([mм]2|[mм][^\s\d]{0,3}|sq\.?\s*m|sqm|qm|²)|\s*(\S{1,3}))?$",  # unit; misread
                      re.IGNORECASE)
 UNITS = {"m", "mm", "cm", "m2", "m²", "м", "м2", "м²", "sqm", "qm"}
+JUNK = " .,:;|_-—'\"“”‘’()[]{}«»~°*"  # around a label: the rest of a ring, a stray mark
+CASELESS = "cosvwxz"  # letters whose capital has the same shape
 NUMBER_RE = re.compile(r"^[A-Za-z]{0,2}\d{1,4}([.\-/]\d{1,3}){0,2}[A-Za-z]?$")
 
 
@@ -92,48 +98,51 @@ def text_lines_mask(ink: np.ndarray) -> tuple[np.ndarray, int, float]:
 
 def read_lines(engine, dark: np.ndarray, ink: np.ndarray, lines: np.ndarray, wanted: list[int],
                hc: float) -> list[TextLine]:
-    """The text of the lines ``wanted`` (labels of ``lines``), read by one Tesseract call
-    on a mosaic of the lines stacked top to bottom (each scaled to OCR_HEIGHT_PX; grey
-    levels of ``dark`` kept around the line's marks, everything else white)."""
-    from PIL import Image
-
+    """The text of the lines ``wanted`` (labels of ``lines``; fragments lower than
+    FRAGMENT ``hc`` are left out), each prepared as a tile (image_text.line_tile) and
+    read as a single line of text: one Tesseract call for all the tiles (the pages of
+    one TIFF). A decimal point Tesseract dropped from a number is put back
+    (image_text.restore_point)."""
+    boxes = ndimage.find_objects(lines)
+    wanted = [k for k in wanted if boxes[k - 1] is not None and boxes[k - 1][0].stop - boxes[k - 1][0].start
+              >= FRAGMENT * hc]
     if not wanted:
         return []
-    boxes = ndimage.find_objects(lines)
-    up = int(min(4, max(1, round(OCR_HEIGHT_PX / max(hc, 1)))))
-    pad = int(max(2, hc // 2))
-    tiles, rows, y = [], [], 0
-    for k in wanted:
-        b = boxes[k - 1]
-        near = ndimage.binary_dilation(lines[b] == k, EIGHT)
-        tile = np.where(near, dark[b], 255).astype(np.uint8)
-        tile = np.pad(tile, pad, constant_values=255)
-        tiles.append((y, tile))
-        rows.append((y, y + tile.shape[0], k, b))
-        y += tile.shape[0] + pad
-    width = max(t.shape[1] for _, t in tiles)
-    mosaic = np.full((y, width), 255, np.uint8)
-    for y0, tile in tiles:
-        mosaic[y0:y0 + tile.shape[0], :tile.shape[1]] = tile
-    img = Image.fromarray(mosaic).resize((width * up, y * up), Image.BICUBIC)
-    data = engine.image_to_data(img, config="--" + "psm 6", output_type=engine.Output.DICT)  # tesseract's argument
-    words: dict[int, list] = {}
-    for text, conf, top, hgt, left in zip(data["text"], data["conf"], data["top"], data["height"], data["left"]):
-        text = str(text).strip()
-        if not text or float(conf) < 0:
-            continue
-        mid = (top + hgt / 2) / up
-        for y0, y1, k, _ in rows:
-            if y0 <= mid < y1:
-                words.setdefault(k, []).append((left, text, float(conf)))
-                break
+    tiles = [line_tile(dark, ink, lines, k, boxes[k - 1], hc) for k in wanted]
+    first = read_pages(engine, [t.image for t in tiles])
     out = []
-    for y0, y1, k, b in rows:
-        got = sorted(words.get(k, []))
-        if got:
-            out.append(TextLine(" ".join(t for _, t, _ in got), float(np.mean([c for _, _, c in got])),
-                                (b[0].start, b[1].start, b[0].stop, b[1].stop), b[0].stop - b[0].start,
+    for k, tile, (text, conf) in zip(wanted, tiles, first):
+        b = boxes[k - 1]
+        if text:
+            out.append(TextLine(restore_point(text.strip(JUNK), tile.grey) if text.strip(JUNK).isdigit() else text,
+                                conf, (b[0].start, b[1].start, b[0].stop, b[1].stop), b[0].stop - b[0].start,
                                 dimension_row(ink, b, hc) is not None))
+    return out
+
+
+def read_pages(engine, tiles: list[np.ndarray]) -> list[tuple[str, float]]:
+    """(text, mean word confidence 0..100) of each tile, read by one Tesseract call as a
+    single line of text (page segmentation mode 7) on the pages of one TIFF."""
+    import tempfile
+    from pathlib import Path
+
+    from PIL import Image
+
+    config = "--" + "psm 7"  # tesseract's own argument: each page is one line of text
+    pages = [Image.fromarray(t) for t in tiles]
+    with tempfile.TemporaryDirectory(prefix="camplace-ocr-") as tmp:
+        path = Path(tmp) / "lines.tif"
+        pages[0].save(path, save_all=True, append_images=pages[1:])
+        data = engine.image_to_data(str(path), config=config, output_type=engine.Output.DICT)
+    words: dict[int, list] = {}
+    for page, text, conf, left in zip(data["page_num"], data["text"], data["conf"], data["left"]):
+        text = str(text).strip()
+        if text and float(conf) >= 0:
+            words.setdefault(int(page) - 1, []).append((left, text, float(conf)))
+    out = []
+    for i in range(len(tiles)):
+        got = sorted(words.get(i, []))
+        out.append((" ".join(t for _, t, _ in got), float(np.mean([c for *_, c in got])) if got else 0.0))
     return out
 
 
@@ -152,24 +161,29 @@ def dimension_row(ink: np.ndarray, b: tuple[slice, slice], hc: float) -> int | N
 
 def printed_area(text: str) -> float | None:
     """The area (m²) a label like '14,43 m²', '14.4 m2' or '25,50' states; None otherwise
-    (a number needs a unit or a decimal comma with two digits to be an area)."""
+    (a number needs a unit or a decimal comma with two digits to be an area; where the
+    comma was not read, '14 43 m²', two digits after the space; with two decimals a
+    small 'm²' may be misread, '12 25 4?')."""
     m = AREA_RE.match(text.strip())
-    if not m or not m.group(2) or not (m.group(3) or len(m.group(2)) == 2):
+    if not m:
         return None
-    return float(f"{m.group(1)}.{m.group(2)}")
+    decimals = m.group(2) or m.group(3)
+    if not (m.group(4) or len(decimals) == 2):
+        return None
+    return float(f"{m.group(1)}.{decimals}")
 
 
-def room_name(lines: list[TextLine], hc: float) -> tuple[str | None, float | None]:
-    """(name, printed area m²) of a room from the text lines inside it: words (three
-    letters or more, confident) before room numbers such as '1.4' or 'B12' (before plain
-    integers); an area such
-    as '14,43 m²' is not a name, nor a dimension (a lone number on a dimension line, or
-    four digits and more). The tallest, most confident line wins; lines shorter than
-    0.6 ``hc`` (the typical character height) are fragments."""
+def room_name(lines: list[TextLine], hc: float) -> tuple[str | None, float, float | None]:
+    """(name, its confidence 0..100, printed area m²) of a room from the text lines
+    inside it: words (three letters or more, or two capitals such as 'WC', also when read
+    'wc'; confident) before room numbers such as '1.4' or 'B12' (before plain integers); an area such as
+    '14,43 m²' is not a name, nor a dimension (a lone number on a dimension line, or four
+    digits and more). The tallest, most confident line wins; lines shorter than 0.6
+    ``hc`` (the typical character height) are fragments."""
     words, numbers, area = [], [], None
     for ln in lines:
-        text = ln.text.strip(" .,:;|_-—'\"“”‘’()[]{}«»~")
-        if not text or ln.conf < MIN_CONF or ln.height < 0.6 * hc or text.lower() in UNITS:
+        text = ln.text.strip(JUNK)
+        if not text or ln.conf < MIN_CONF or ln.height < FRAGMENT * hc or text.lower() in UNITS:
             continue
         a = printed_area(text)
         if a is not None:
@@ -177,7 +191,10 @@ def room_name(lines: list[TextLine], hc: float) -> tuple[str | None, float | Non
         elif NUMBER_RE.match(text):
             if not ln.dimension and not re.fullmatch(r"\d{4,}", text):
                 numbers.append((not re.search(r"\D", text), -ln.height, -ln.conf, text))
-        elif sum(ch.isalpha() for ch in text) >= 3 and ln.conf >= WORD_CONF:
+        elif ln.conf >= WORD_CONF and sum(ch.isalpha() for ch in text) >= 3:
             words.append((-ln.height, -ln.conf, text))
+        elif ln.conf >= WORD_CONF and re.fullmatch(r"[A-Za-z]{2}", text) and all(c.isupper() or c in CASELESS
+                                                                                 for c in text):
+            words.append((-ln.height, -ln.conf, text.upper()))  # 'wc': Tesseract cannot tell the case
     pick = sorted(words) or sorted(numbers)
-    return (pick[0][-1] if pick else None), area
+    return (pick[0][-1], -pick[0][-2], area) if pick else (None, 0.0, area)
