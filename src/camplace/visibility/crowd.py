@@ -23,6 +23,7 @@ import numba
 import numpy as np
 import scipy.sparse as sp
 
+from camplace.core.executors import on_threads
 from camplace.targets.crowd import Crowds
 
 CHUNK_ROWS = 2048  # rows of V per block (one sample per block)
@@ -165,7 +166,7 @@ def segment_blocked(ax, ay, az, bx, by, bz, xy, items, ptr, x0, y0, g, nx, ny, r
     return False
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, nogil=True)
 def _keep_parts(keep, base, indptr, indices, row0, order, group_ptr, parts, n_parts, n_p, cams, tgts, xy, items,
                 ptr, x0, y0, g, nx, ny, r, h):  # pragma: no cover - compiled
     """Fill ``keep`` (entries from ``base``) for the position groups k = part, part + n_parts, ...
@@ -202,16 +203,7 @@ def _keep_parts(keep, base, indptr, indices, row0, order, group_ptr, parts, n_pa
                 slot[seen[q]] = -1
 
 
-@numba.njit(cache=True, parallel=True)
-def _keep_parallel(keep, base, indptr, indices, row0, order, group_ptr, n_parts, n_p, cams, tgts, xy, items, ptr,
-                   x0, y0, g, nx, ny, r, h):  # pragma: no cover - compiled
-    """_keep_parts with the parts spread over numba's threads."""
-    for part in numba.prange(n_parts):
-        _keep_parts(keep, base, indptr, indices, row0, order, group_ptr, np.array([part]), n_parts, n_p, cams,
-                    tgts, xy, items, ptr, x0, y0, g, nx, ny, r, h)
-
-
-SERIAL_BELOW = 50_000  # entries: smaller blocks (a placement's rows) run on one thread, no parallel launch
+MIN_PARTS = 4  # position groups per thread at least (camplace.core.executors.on_threads)
 
 
 def position_groups(positions: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -241,10 +233,9 @@ def sample_rows(V: sp.csr_matrix, cam_positions: np.ndarray, target_positions: n
     args = (indptr, indices, row0, order, group_ptr)
     rest = (int(V.shape[1]), cams, np.ascontiguousarray(target_positions, np.float64), grid.xy, grid.items,
             grid.cell_ptr[s], grid.x0, grid.y0, grid.cell, grid.nx, grid.ny, grid.radius, grid.height)
-    if hi - lo < SERIAL_BELOW:
-        _keep_parts(keep, lo, *args, np.zeros(1, np.int64), 1, *rest)
-    else:
-        _keep_parallel(keep, lo, *args, n_parts, *rest)
+    # serial nogil kernel on threads: the parts write disjoint entries of keep
+    on_threads(n_parts, lambda a, b: _keep_parts(keep, lo, *args, np.arange(a, b, dtype=np.int64), n_parts, *rest),
+               MIN_PARTS)
     rows = np.repeat(np.arange(row1 - row0), np.diff(indptr[row0:row1 + 1]))
     out_ptr = np.r_[0, np.cumsum(np.bincount(rows[keep], minlength=row1 - row0))].astype(np.int64)
     return out_ptr, indices[lo:hi][keep]
