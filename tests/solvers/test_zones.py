@@ -113,7 +113,7 @@ def test_deterministic_for_a_seed_and_never_worse_than_its_start():
     a, b = solve_zones(p, seed=1, tile_m=10.0), solve_zones(p, seed=1, tile_m=10.0)
     assert np.array_equal(a.selected, b.selected)
     g = SOLVERS["greedy-fast"](p)
-    assert a.objective <= g.objective and a.info["start_objective"] == g.objective
+    assert a.objective <= g.objective and a.info["start_objective"] == pytest.approx(g.objective)  # on the reduced problem
     rng = np.random.default_rng(0)
     start = rng.choice(np.arange(0, p.n_candidates, 3), 8, replace=False)  # one pose per location
     z = solve_zones(p, initial=tuple(start), tile_m=10.0, max_sweeps=1)
@@ -139,14 +139,23 @@ def test_time_limit_and_stop():
     p.check_feasible(s.selected)
 
 
+def saved_checkpoint(folder, p) -> tuple[dict, list[int]]:
+    """The checkpoint of ``p`` (the solver works on the reduced problem: its key, its candidate
+    ids) and its selection in ``p``'s candidate ids."""
+    from camplace.solvers.reduction import reduce_with_positions
+
+    red = reduce_with_positions(p)
+    saved = json.loads(checkpoint_path(folder, problem_key(red.problem)).read_text())
+    return saved, red.lift(np.array(saved["selected"], np.int64)).tolist()
+
+
 def test_checkpoint_resumes(tmp_path):
     p = floor_problem(7, 40, 20, 40, 160, 8)
     one = solve_zones(p, tile_m=10.0, max_sweeps=1, checkpoint=str(tmp_path))
-    f = checkpoint_path(tmp_path, problem_key(p))
-    saved = json.loads(f.read_text())
-    assert saved["sweeps"] == 1 and saved["batches"] == 0 and saved["selected"] == one.selected.tolist()
+    saved, selected = saved_checkpoint(tmp_path, p)
+    assert saved["sweeps"] == 1 and saved["batches"] == 0 and selected == one.selected.tolist()
     again = solve_zones(p, tile_m=10.0, checkpoint=str(tmp_path))
-    assert again.info["resumed_from_sweep"] == 1 and again.info["start_objective"] == one.objective
+    assert again.info["resumed_from_sweep"] == 1 and again.info["start_objective"] == pytest.approx(one.objective)
     assert again.objective <= one.objective
     other = floor_problem(8, 40, 20, 40, 160, 8)
     assert "resumed_from_sweep" not in solve_zones(other, tile_m=10.0, max_sweeps=1,
@@ -192,8 +201,8 @@ def test_checkpoint_after_each_batch_resumes_mid_sweep(tmp_path):
     cut = solve_zones(p, tile_m=10.0, seed=1, checkpoint=str(tmp_path), progress=lambda *a: n.append(a),
                       should_stop=lambda: len(n) >= 1)
     assert cut.status == "interrupted"
-    saved = json.loads(checkpoint_path(tmp_path, problem_key(p)).read_text())
-    assert (saved["sweeps"], saved["batches"]) == (0, 1) and saved["selected"] == cut.selected.tolist()
+    saved, selected = saved_checkpoint(tmp_path, p)
+    assert (saved["sweeps"], saved["batches"]) == (0, 1) and selected == cut.selected.tolist()
     again = solve_zones(p, tile_m=10.0, seed=1, checkpoint=str(tmp_path))
     assert (again.info["resumed_from_sweep"], again.info["resumed_batches"]) == (0, 1)
     assert again.objective == pytest.approx(full.objective) and np.array_equal(again.selected, full.selected)

@@ -145,7 +145,8 @@ class Lagrangian:
         self.problem = problem
         V = problem.V
         self.indptr = V.indptr.astype(np.int64)
-        self.indices = V.indices.astype(np.int64)
+        # as stored (int32 for any V under 2^31 pairs): an int64 copy would double V's memory at site scale
+        self.indices = V.indices if V.indices.dtype in (np.int32, np.int64) else V.indices.astype(np.int64)
         self.gamma = problem.gamma.astype(np.int64)
         self.weights = problem.weights.astype(np.float64)
         self.loc_first, self.loc_members = location_groups(problem.location_ids)

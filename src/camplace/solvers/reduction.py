@@ -216,12 +216,31 @@ def reduce_streaming(problem: PlacementProblem, dominance: bool = True) -> Reduc
     return Reduction(reduced, cand.astype(np.int64), target_map, info)
 
 
-def solve_reduced(problem: PlacementProblem, run: Callable[[PlacementProblem], Placement]) -> Placement:
-    """``run`` on reduce_problem(problem) (same optimum, fewer rows/columns; computed by
-    reduce_streaming): the selection is lifted to original candidate ids, the objective
-    recomputed on ``problem``, the sizes before/after are in info['reduction'] and
-    info['order'] (if any) is mapped back."""
+def reduce_with_positions(problem: PlacementProblem) -> Reduction:
+    """reduce_streaming(problem) that keeps the geometry: each kept candidate its position,
+    each reduced target the position of its first original target (targets merge only when
+    exactly the same candidates see them, so they lie close together). For solvers that
+    need positions only to place candidates and estimate ranges (zones), not for
+    per-target geometry (greedy-triangulated)."""
     red = reduce_streaming(problem)
+    if problem.candidate_positions is None or problem.target_positions is None:
+        return red
+    n_new = red.problem.n_targets
+    first = np.full(n_new, len(red.target_map), np.int64)
+    kept = np.flatnonzero(red.target_map >= 0)
+    np.minimum.at(first, red.target_map[kept], kept)
+    reduced = replace(red.problem, candidate_positions=np.asarray(problem.candidate_positions)[red.candidates],
+                      target_positions=np.asarray(problem.target_positions)[first])
+    return replace(red, problem=reduced)
+
+
+def solve_reduced(problem: PlacementProblem, run: Callable[[PlacementProblem], Placement],
+                  reduce: Callable[[PlacementProblem], Reduction] = reduce_streaming) -> Placement:
+    """``run`` on reduce(problem) (default reduce_streaming: the same as reduce_problem,
+    same optimum, fewer rows/columns): the selection is lifted to original candidate ids,
+    the objective recomputed on ``problem``, the sizes before/after are in info['reduction']
+    and info['order'] (if any) is mapped back."""
+    red = reduce(problem)
     p = run(red.problem)
     sel = red.lift(p.selected)
     info = dict(p.info)
@@ -231,4 +250,4 @@ def solve_reduced(problem: PlacementProblem, run: Callable[[PlacementProblem], P
     return replace(p, selected=sel, objective=problem.cost(sel), info=info)
 
 
-__all__ = ["reduce_streaming", "solve_reduced"]
+__all__ = ["reduce_streaming", "reduce_with_positions", "solve_reduced"]

@@ -88,7 +88,8 @@ def solvers_taking(option: str) -> list[str]:
 
 
 def options_of(opts: Options) -> dict[str, Any]:
-    """The keyword arguments that give ``opts`` back (every field)."""
+    """The keyword arguments that give ``opts`` back (every field; the dry run keeps the
+    plain values only: no callbacks such as certify's on_state, no id lists of the real problem)."""
     return {f.name: getattr(opts, f.name) for f in fields(opts)}
 
 
@@ -115,8 +116,9 @@ def solve(problem: PlacementProblem, solver: str = "greedy", *, reduce: bool = T
     s = get_solver(solver)
     opts, hooks = split_options(s, options, solvers_taking)
     if warm and not s.tags.needs_start:  # the kernels compile here, not inside the solver's time limit
+        plain = {k: v for k, v in options_of(opts).items() if v is None or isinstance(v, (bool, int, float, str))}
         dry_run(s.name, problem, lambda small: solve(small, solver, reduce=reduce, warm=False,
-                                                     **dict(options_of(opts), time_limit_s=DRY_RUN_S)))
+                                                     **dict(plain, time_limit_s=DRY_RUN_S)))
     if not reduce or s.tags.needs_positions or s.tags.needs_start:
         return s.solve(problem, opts, hooks)
     t0 = time.perf_counter()

@@ -203,11 +203,43 @@ def solve_zones(problem: PlacementProblem, *, time_limit_s: float | None = None,
                 moves: bool = True, workers: int = 1, scheduler: str | None = None,
                 checkpoint: str | None = None, initial: tuple | None = None) -> Placement:
     """Zone sweeps with boundary coupling (tight MIP or tabu per tile), budget moves
-    between neighbouring tiles and the full-problem Lagrangian bound (module doc).
+    between neighbouring tiles and the full-problem Lagrangian bound (module doc), on the
+    reduced problem (camplace.solvers.reduction.reduce_with_positions: the same optimum,
+    V's mapped pages released, a fraction of the memory at site scale; the unreduced one
+    when ``initial`` holds a candidate the reduction drops).
     tile_m: tile side (m, default 3 × the camera range); max_tile_nnz: largest tile model
     solved by the MIP; tile_time_s: per-tile limit (s); workers / scheduler: where the tiles
     of one colour run; checkpoint: folder for the per-batch selection (resume); initial:
     start selection (candidate ids; default greedy-fast)."""
+    from camplace.solvers.reduction import reduce_with_positions
+
+    opts = dict(threads=threads, seed=seed, should_stop=should_stop, progress=progress, on_incumbent=on_incumbent,
+                tile_m=tile_m, max_tile_nnz=max_tile_nnz, tile_time_s=tile_time_s, bound_time_s=bound_time_s,
+                max_sweeps=max_sweeps, moves=moves, workers=workers, scheduler=scheduler, checkpoint=checkpoint)
+    t0 = time.perf_counter()
+    if problem.candidate_positions is None or problem.target_positions is None or problem.n_candidates == 0:
+        return _zones_on(problem, time_limit_s=time_limit_s, initial=initial, **opts)
+    red = reduce_with_positions(problem)
+    start = None
+    if initial is not None:
+        where = np.full(problem.n_candidates, -1, np.int64)
+        where[red.candidates] = np.arange(len(red.candidates))
+        start = where[np.asarray(initial, np.int64)]
+        if np.any(start < 0):  # a start camera the reduction dropped: solve the problem as given
+            return _zones_on(problem, time_limit_s=time_limit_s, initial=initial, **opts)
+    left = None if time_limit_s is None else max(0.01, time_limit_s - (time.perf_counter() - t0))
+    p = _zones_on(red.problem, time_limit_s=left, initial=None if start is None else tuple(start.tolist()), **opts)
+    sel = red.lift(p.selected)
+    return replace(p, selected=sel, objective=problem.cost(sel), seconds=time.perf_counter() - t0,
+                   info=dict(p.info, reduction=red.info))
+
+
+def _zones_on(problem: PlacementProblem, *, time_limit_s: float | None, threads: int | None, seed: int,
+              should_stop: ShouldStop | None, progress: ProgressFn | None, on_incumbent: OnIncumbent | None,
+              tile_m: float | None, max_tile_nnz: int, tile_time_s: float, bound_time_s: float,
+              max_sweeps: int | None, moves: bool, workers: int, scheduler: str | None, checkpoint: str | None,
+              initial: tuple | None) -> Placement:
+    """solve_zones on ``problem`` as given (see solve_zones)."""
     from camplace.solvers.bounds import lagrangian_bound
     from camplace.solvers.greedy_fast import solve_greedy_fast
 
