@@ -23,10 +23,15 @@ SCENE = {"name": "crowd-room", "voxel_size": 0.5, "occupancy_resolution": 0.1,
          "crowd": {"density": 1.0, "samples": 4, "score_samples": 8}}
 
 
-def spec(**crowd):
-    d = copy.deepcopy(SCENE)
+def spec_with(d: dict, **crowd):
+    """The scene ``d`` with these crowd keys."""
+    d = copy.deepcopy(d)
     d["crowd"].update(crowd)
     return parse_scene(d)
+
+
+def spec(**crowd):
+    return spec_with(SCENE, **crowd)
 
 
 @pytest.fixture(scope="module")
@@ -86,3 +91,24 @@ def test_evaluate_scores_the_same_held_out_crowds(empty_store, tmp_path):
     assert ev.metrics.crowd.to_dict()["coverage_gap"] == r.metrics.crowd.to_dict()["coverage_gap"]
     other = evaluate(spec(), tmp_path / "placement.json", crowd={"seed": 5})
     assert other.metrics.crowd.to_dict()["coverage_gap"] != r.metrics.crowd.to_dict()["coverage_gap"]
+
+
+def test_existing_cameras_are_thinned_by_the_same_crowds():
+    from camplace.problem.crowd import sample_coverage
+    from camplace.problem.gains import shortfall_cost
+    from camplace.targets.crowd import sample_crowds
+    from camplace.visibility.crowd import crowd_rows
+
+    d = copy.deepcopy(SCENE)
+    d["existing"] = [{"id": "E1", "camera": "cam", "position": [0.5, 0.5, 2.9], "yaw_deg": 45, "pitch_deg": 45}]
+    r = run(spec_with(d, optimise=True), solver="greedy")
+    opt = r.placement.info["crowd"]
+    vis, sel = r.visibility, r.placement.selected  # existing rows folded in and selected
+    crowds = sample_crowds(r.scene, r.scene.spec.crowd)
+    rows = crowd_rows(vis.V[sel], vis.candidates.positions[sel], vis.targets.positions, crowds)
+    cov = sample_coverage(rows, crowds.n_samples, np.arange(len(sel)))
+    t = vis.targets
+    want = np.mean([shortfall_cost(t.gamma, t.weights, c) for c in cov])
+    assert abs(opt["objective"] - want) < 1e-9 * max(1.0, want)  # the offset keeps the full crowd cost
+    assert abs(opt["coverage_gap"] - want / float(np.dot(t.weights, t.gamma ** 2))) < 1e-12
+

@@ -109,7 +109,8 @@ class CrowdProblem:
         (and the crowd grid / refined costs) go to ``info['crowd']``."""
         nominal = extend_problem(problem, vis) if vis.V.shape[0] > problem.n_candidates else problem
         sel = np.asarray(placement.selected, np.int64)
-        norm = self.problem.normalizer
+        t = self.targets  # the full Γ (existing cameras' offset keeps the cost, not Σ w Γ'²): eq. 8 as metrics
+        norm = float(np.dot(t.weights, t.gamma.astype(np.float64) ** 2))
         crowd = {"samples": self.crowds.n_samples, "seed": int(self.crowds.info.get("seed", 0)),
                  "objective": float(placement.objective), "bound": placement.bound, "status": placement.status,
                  "coverage_gap": float(placement.objective) / norm if norm > 0 else 0.0, **self.info}
