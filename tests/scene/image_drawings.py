@@ -240,3 +240,51 @@ def inside(sheet: Sheet, x: float, y: float) -> bool:
     r = sheet.size[1] - y / PX - 0.5
     px, py = (c - sheet.origin[0]) * PX, (sheet.origin[1] - r) * PX
     return -1e-6 <= px <= W and -1e-6 <= py <= D and not math.isnan(px)
+
+
+
+def _draw_walls(path: str | Path, px: float, size: tuple[float, float], walls: list, cuts: list) -> Path:
+    """A plan of solid black wall rectangles with white ``cuts`` (doors, windows) at ``px``
+    m per pixel: rectangles (x0, y0, x1, y1) in m, y up, on a sheet ``size`` m with 1.2 m
+    of paper around it."""
+    from PIL import Image, ImageDraw
+
+    margin = round(1.2 / px)
+    height = round(size[1] / px) + 2 * margin
+    im = Image.new("RGB", (round(size[0] / px) + 2 * margin, height), "white")
+    d = ImageDraw.Draw(im)
+    for rects, fill in ((walls, "black"), (cuts, "white")):
+        for x0, y0, x1, y1 in rects:
+            d.rectangle([margin + round(x0 / px), height - margin - round(y1 / px),
+                         margin + round(x1 / px) - 1, height - margin - round(y0 / px) - 1], fill=fill)
+    im.save(path)
+    return Path(path)
+
+
+def draw_u_plan(path: str | Path, px: float = PX, court: float = 2.4, window: float = 1.2) -> Path:
+    """A U-shaped one-storey plan (0.3 m walls), 12.6 x 11.6 m: a hall along the south and
+    two wings with a room each, a ``court`` wide (clear) between them, open to the north.
+    The south wall and the wall between the court and the hall each have a ``window`` wide
+    window in the middle, so the two halves of the building meet only across those window
+    gaps (columns with no wall from top to bottom): the hall spans them. Rooms: the hall
+    and the two wing rooms."""
+    t, cx0, cx1 = 0.3, 6.3 - court / 2, 6.3 + court / 2
+    walls = [(0, 0, 12.6, t), (0, 0, t, 11.6), (12.6 - t, 0, 12.6, 11.6), (0, 5.0, 12.6, 5.0 + t),
+             (0, 11.6 - t, cx0, 11.6), (cx1, 11.6 - t, 12.6, 11.6), (cx0 - t, 5.0, cx0, 11.6), (cx1, 5.0, cx1 + t, 11.6)]
+    doors = [(x - 0.45, 5.0, x + 0.45, 5.0 + t) for x in (cx0 / 2, (cx1 + 12.6) / 2)]
+    return _draw_walls(path, px, (12.6, 11.6), walls, doors + [(6.3 - window / 2, -0.01, 6.3 + window / 2, 5.0 + t + 0.01)])
+
+
+def draw_two_blocks(path: str | Path, gap: float, px: float = PX) -> Path:
+    """Two storey plans of a 9 x 7 m house (0.3 m walls, two rooms, a door between them,
+    windows 0.3 m from the corners of the walls facing each other) side by side on one
+    sheet, ``gap`` m of paper between them, their north and south walls in line."""
+    t, w, h = 0.3, 9.0, 7.0
+    walls, cuts = [], []
+    for x in (0.0, w + gap):
+        walls += [(x, 0, x + w, t), (x, h - t, x + w, h), (x, 0, x + t, h), (x + w - t, 0, x + w, h),
+                  (x + 4.5, 0, x + 4.5 + t, h)]
+        cuts += [(x + 4.5, 2.0, x + 4.5 + t, 2.9)]  # the door between the rooms
+        cuts += [(x + side, y0, x + side + t, y1) for side in (0.0, w - t) for y0, y1 in ((0.6, 2.2), (4.8, 6.4))]
+    return _draw_walls(path, px, (2 * w + gap, h), walls, cuts)
+

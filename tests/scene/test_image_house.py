@@ -82,7 +82,22 @@ def _point(number: str) -> Point:
     return Point((c + 0.5) * SCALE, (609 - r - 0.5) * SCALE)
 
 
-def test_scale_read_from_the_dimension_lines():
+@pytest.fixture(scope="module")
+def rooms_per_plan(storeys):
+    return [len(s["rooms"]) for s in storeys["plan-1"].storeys]
+
+
+def test_same_plans_at_the_scale_read(rooms_per_plan):
+    """At 0.0314 m/px (the scale read from the sheet) the ground and upper floors, 1.5 m
+    apart with their outer walls in line, stay two plans (once merged into one)."""
+    got = read_plan(HOUSE, scale=0.0314, ocr=False)
+    assert len(got.storeys) == 3
+    assert all(abs(len(s["rooms"]) - k) <= 1 for s, k in zip(got.storeys, rooms_per_plan)), got.storeys
+
+
+def test_scale_read_from_the_dimension_lines(rooms_per_plan):
     need_ocr()
     got = read_plan(HOUSE, ocr=True)  # neither scale nor ref: '10700', '3900', ... over their lines
     assert float(got.used["scale"].split()[0]) == pytest.approx(SCALE, rel=0.02), got.used["scale"]
+    assert len(got.storeys) == 3  # the same plans as with the scale given
+    assert all(abs(len(s["rooms"]) - k) <= 1 for s, k in zip(got.storeys, rooms_per_plan)), got.storeys

@@ -4,7 +4,7 @@ dimension lines, scale bar, title block, sheet frame) gives its five rooms with 
 areas and names, the openings, the scale read from its dimension lines, and a grid-only
 run inside the footprint; a scan of it (grey paper, noise, JPEG), a drawing of its
 outer walls as two lines and one with furniture give the same rooms; two plans side by
-side are two storeys."""
+side are two storeys, also 1.2 m apart, and a U-shaped plan is one."""
 
 from __future__ import annotations
 
@@ -16,7 +16,7 @@ from shapely.geometry import Point, Polygon
 
 from camplace.core.errors import InputError
 from camplace.scene.importers import read_plan, read_storey_plans
-from tests.scene.image_drawings import PX, ROOMS, D, W, draw_apartment, room_area
+from tests.scene.image_drawings import PX, ROOMS, D, W, draw_apartment, draw_two_blocks, draw_u_plan, room_area
 
 
 def need_ocr():
@@ -135,6 +135,17 @@ def test_two_plans_side_by_side_are_two_storeys(tmp_path):
     assert second.storeys[1]["chosen"] and len(second.scene["zones"]) == 5
     with pytest.raises(InputError, match="plan-1, plan-2"):
         read_plan(sheet, scale=PX, ocr=False, storey="Level 3")
+
+
+def test_plans_part_at_gutters_no_room_spans(tmp_path):
+    """Two storeys 1.2 m apart with their outer walls in line (the gaps are bridged as
+    openings) are two plans; a U whose halves meet only across 1.2 m windows (no wall
+    from top to bottom there either) is one, its hall spanning them."""
+    two = read_plan(draw_two_blocks(tmp_path / "two.png", gap=1.2), scale=PX, ocr=False)
+    assert [len(s["rooms"]) for s in two.storeys] == [2, 2]
+    u = read_plan(draw_u_plan(tmp_path / "u.png"), scale=PX, ocr=False)
+    assert len(u.storeys) == 1
+    assert sorted(a for _, a in u.storeys[0]["rooms"]) == pytest.approx([27.0, 27.0, 12.0 * 4.7], rel=0.03)
 
 
 def test_scale_read_from_the_dimension_lines(apartment):

@@ -9,9 +9,10 @@ m). Step by step (image_walls, image_rooms, image_ocr, image_text):
 2. Walls: the ink closed over ``hatch_spacing`` (outlines with a hatch, walls drawn as two
    lines become solid; broad textured areas such as stair treads are given back), strokes
    thinner than ``min_wall_thickness`` opened away (text, dimension lines, door swings).
-3. Plans: the drawn wall pieces near each other form a plan; marks off the plans (title
-   block, legend, scale bar, key plan) and text blocks are dropped. Several plans side by
-   side (storeys on one sheet) are ``storeys``; the default is the one with most rooms.
+3. Plans: the drawn wall pieces joined across their openings form a plan, not across a
+   gutter no room spans (image_walls.gutter_bridges); marks off the plans (title block,
+   legend, scale bar, key plan) and text blocks are dropped. Several plans side by side
+   (storeys on one sheet) are ``storeys``; the default is the one with most rooms.
 4. Rooms: door and window gaps up to ``max_opening`` between walls in line are bridged
    (for the rooms only: the walls keep their openings); the enclosed free regions of at
    least ``min_room_area`` are the rooms, named by the text OCR reads inside them.

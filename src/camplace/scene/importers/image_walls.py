@@ -20,7 +20,7 @@ MAX_PIXELS = 100_000_000
 EIGHT = np.ones((3, 3), bool)  # 8-connectivity
 DOOR_M = 1.0  # the widest door beside a corner
 MIN_JAMB_M = 0.12  # a wall beside a door runs at least this far in line with it
-REACH_M = 1.0  # a small wall piece this close to a plan belongs to it
+REACH_M = 1.0  # a small wall piece this close to a plan belongs to it (to the nearest plan)
 LONG_STROKE_M = 0.6  # ink pieces at least this long across are strokes (wall outlines, dimension lines)
 
 
@@ -226,12 +226,14 @@ def find_plans(raw: np.ndarray, ink: np.ndarray, s: float, max_opening_m: float,
                skipped: Counter) -> Sheet:
     """The separate plans of a sheet in the wall mask ``raw``. A wall piece (8-connected)
     is drawn (its edge is ink: an outline, a solid stroke, ≥ 60 %, and at least 0.05 m²)
-    or a blot of symbols; a thin ring around most of the sheet is its frame. Drawn pieces of some size (a twentieth of the largest) joined
-    across the openings between walls in line (bridge_openings: ``max_opening_m``,
-    ``max_wall_m``) are one plan; smaller drawn pieces within REACH_M of one belong to it. Plans under a quarter of the largest
-    plan's wall area (key plans, title blocks, legends, scale bars) and frames around
-    other plans are not the building; each plan keeps its drawn pieces and any piece at
-    least a quarter of its largest."""
+    or a blot of symbols; a thin ring around most of the sheet is its frame. Drawn pieces
+    of some size (a twentieth of the largest) joined across the openings between walls in
+    line (bridge_openings: ``max_opening_m``, ``max_wall_m``), but not across a gutter no
+    room spans (gutter_bridges), are one plan; smaller drawn pieces within REACH_M of one
+    belong to the nearest. Plans under a quarter of the largest plan's wall area (key
+    plans, title blocks, legends, scale bars) and frames around other plans are not the
+    building; each plan keeps its drawn pieces and any piece at least a quarter of its
+    largest."""
     lab, n = ndimage.label(raw, EIGHT)
     if n == 0:
         return Sheet(raw, np.zeros(raw.shape, np.int32))
@@ -245,10 +247,10 @@ def find_plans(raw: np.ndarray, ink: np.ndarray, s: float, max_opening_m: float,
         drawn &= ~frame
     big = drawn & (area >= 0.05 * area[drawn].max(initial=0))  # the pieces that say where the plans are
     bones = big[lab - 1] & raw
-    bones |= bridge_openings(bones, s, max_opening_m, max_wall_m)  # one plan across its windows and doors
+    bridges = bridge_openings(bones, s, max_opening_m, max_wall_m)
+    bones |= bridges & ~gutter_bridges(bones, bridges)  # one plan across its windows and doors, not across gutters
     glab, ng = ndimage.label(ndimage.maximum_filter(bones, size=3), EIGHT)
-    near = ndimage.maximum_filter(glab, size=odd(2 * REACH_M / s, 3), mode="constant")
-    group = label_max(near, lab, n)[1:].astype(np.int64)  # group of each piece (0: none)
+    group = _nearest_groups(glab, lab, n, REACH_M / s)
     group = _inner_groups_joined(group, ndimage.find_objects(glab), np.bincount(group, weights=area * drawn,
                                                                                minlength=ng + 1))
     biggest = np.zeros(ng + 1)
@@ -272,6 +274,76 @@ def find_plans(raw: np.ndarray, ink: np.ndarray, s: float, max_opening_m: float,
         piece_plan[1:][(group == g) & keep] = k
     plan_of = piece_plan[lab]
     return Sheet(plan_of > 0, plan_of, [boxes[g - 1] for g in order])
+
+
+def _nearest_groups(glab: np.ndarray, lab: np.ndarray, n: int, reach_px: float) -> np.ndarray:
+    """(n + 1,) int64: the group (``glab``) nearest each piece 1..n of ``lab`` (at its
+    nearest pixel), 0 where none is within ``reach_px``; a piece of a group is its own."""
+    dist, (r, c) = ndimage.distance_transform_edt(glab == 0, return_indices=True)
+    m = lab > 0
+    least = np.full(n + 1, np.inf)
+    np.minimum.at(least, lab[m], dist[m])
+    at = m & (dist <= least[lab])
+    group = label_max(np.where(at, glab[r, c], 0), lab, n).astype(np.int64)
+    group[least > reach_px] = 0
+    return group[1:]
+
+
+def gutters(walls: np.ndarray) -> list[tuple[int, slice, slice]]:
+    """The gutters between the wall structures of a sheet (recursive XY cut of ``walls``,
+    (H, W) bool): (axis, rows, cols) of each band of columns (axis 1) or rows (axis 0)
+    with no wall across its whole block, between walls on both sides. A block is cut at
+    all its gutters along one axis, then each part again, till none is left: no size in
+    metres, only where the walls are."""
+    out = []
+    blocks = [(slice(0, walls.shape[0]), slice(0, walls.shape[1]))]
+    while blocks:
+        box = blocks.pop()
+        sub = walls[box]
+        for axis in (1, 0):
+            used = np.flatnonzero(sub.any(axis=1 - axis))
+            if not len(used):
+                break
+            ends = np.flatnonzero(np.diff(used) > 1)  # a gap after used[e]
+            if not len(ends):
+                continue
+            at = box[axis].start
+            starts = np.r_[used[0], used[ends + 1]] + at
+            stops = np.r_[used[ends] + 1, used[-1] + 1] + at
+            for lo, hi in zip(stops[:-1], starts[1:]):
+                band = (box[0], slice(lo, hi)) if axis == 1 else (slice(lo, hi), box[1])
+                out.append((axis, *band))
+            for lo, hi in zip(starts, stops):
+                blocks.append((box[0], slice(lo, hi)) if axis == 1 else (slice(lo, hi), box[1]))
+            break
+    return out
+
+
+def gutter_bridges(walls: np.ndarray, bridges: np.ndarray) -> np.ndarray:
+    """The ``bridges`` (bool, as ``walls``) that cross a gutter (gutters) where no room
+    spans it: no free region enclosed by the walls and all bridges lies in the gutter and
+    on both sides of it. The strip between two storeys drawn side by side, with their
+    outer walls in line, is a gutter no room spans; a hall whose windows part the walls of
+    one building (a U or L whose halves meet only across window gaps) spans its gutter."""
+    out = np.zeros_like(bridges)
+    cuts = [g for g in gutters(walls) if bridges[g[1], g[2]].any()]
+    if not cuts:
+        return out
+    free, nf = ndimage.label(~(walls | bridges))
+    enclosed = np.ones(nf + 1, bool)
+    enclosed[np.r_[0, free[0], free[-1], free[:, 0], free[:, -1]]] = False
+
+    def seen(*box) -> np.ndarray:  # (nf + 1,) bool: the free regions with a pixel in the box
+        hit = np.zeros(nf + 1, bool)
+        hit[free[box]] = True
+        return hit
+
+    for axis, rows, cols in cuts:
+        before = (rows, slice(0, cols.start)) if axis == 1 else (slice(0, rows.start), cols)
+        after = (rows, slice(cols.stop, None)) if axis == 1 else (slice(rows.stop, None), cols)
+        if not (enclosed & seen(rows, cols) & seen(*before) & seen(*after)).any():
+            out[rows, cols] |= bridges[rows, cols]
+    return out
 
 
 def _inner_groups_joined(group: np.ndarray, boxes: list, weight: np.ndarray) -> np.ndarray:
