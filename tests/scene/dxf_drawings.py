@@ -11,6 +11,9 @@
   names: walls as closed polylines, room outlines named by TEXT / MTEXT.
 - ``draw_unnamed_plan``: walls as LINE pairs on a layer named ``L4``, among layers of
   furniture, stairs, an exploded hatch, door swings and text with meaningless names.
+- ``draw_single_line_plan``: a flat in cm drawn as hobby and LibreCAD plans are: every
+  wall one LINE on layer 0 (no pairs, no layer names), door swings as ARC + leaf LINE on
+  layer 0 too, room names as TEXT, a 0.9 m wide hall.
 - ``draw_no_walls``: text, circles and a few loose lines: nothing a wall.
 
 Each returns the file's path; the FM_* and LATIN_* constants are the truths (m).
@@ -252,6 +255,34 @@ def draw_unnamed_plan(path: str | Path) -> Path:
         if piece.length > 0:
             msp.add_line(*piece.coords, dxfattribs={"layer": "L6"})
     msp.add_text("HALLE", height=0.5, dxfattribs={"layer": "L9", "insert": (5, 6)})
+    doc.saveas(path)
+    return Path(path)
+
+
+SINGLE_OUTER = (1200, 600)  # cm, the outer wall lines of the single-line flat
+SINGLE_ROOMS = {"Wohnen": (0, 0, 700, 600), "Flur": (700, 0, 790, 600), "Bad": (790, 0, 1200, 250),
+                "Schlafen": (790, 250, 1200, 600)}  # cm, between the wall lines; Flur 0.9 m wide
+
+
+def draw_single_line_plan(path: str | Path) -> Path:
+    """A 12 x 6 m flat in cm, $INSUNITS 5, everything on layer 0: walls as single LINEs
+    (the outline, the walls at x 700 and 790, a wall between Bad and Schlafen), a door
+    swing (ARC + leaf LINE) into each room from the 0.9 m hall, room names as TEXT."""
+    import ezdxf
+
+    doc = ezdxf.new("R2010")
+    doc.header["$INSUNITS"] = 5
+    msp = doc.modelspace()
+    w, h = SINGLE_OUTER
+    for a, b in [((0, 0), (w, 0)), ((w, 0), (w, h)), ((w, h), (0, h)), ((0, h), (0, 0)), ((700, 0), (700, h)),
+                 ((790, 0), (790, h)), ((790, 250), (w, 250))]:
+        msp.add_line(a, b)
+    for hinge, start, leaf in [((700, 400), 90, (700, 490)), ((790, 100), 0, (880, 100)),
+                               ((790, 400), 0, (880, 400))]:
+        msp.add_arc(hinge, 90, start, start + 90)
+        msp.add_line(hinge, leaf)
+    for name, (x0, y0, x1, y1) in SINGLE_ROOMS.items():
+        msp.add_text(name, height=20, dxfattribs={"insert": ((x0 + x1) / 2 - 20, (y0 + y1) / 2)})
     doc.saveas(path)
     return Path(path)
 

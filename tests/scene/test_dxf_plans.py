@@ -23,7 +23,8 @@ def files(tmp_path_factory):
     tmp = tmp_path_factory.mktemp("dxf")
     return {"fm": dd.draw_fm_plan(tmp / "eg.dxf"), "fr": dd.draw_latin_plan(tmp / "fr.dxf", "fr"),
             "es": dd.draw_latin_plan(tmp / "es.dxf", "es"), "r12": dd.draw_latin_plan(tmp / "r12.dxf", "es", "R12"),
-            "unnamed": dd.draw_unnamed_plan(tmp / "hall.dxf"), "none": dd.draw_no_walls(tmp / "none.dxf")}
+            "unnamed": dd.draw_unnamed_plan(tmp / "hall.dxf"), "none": dd.draw_no_walls(tmp / "none.dxf"),
+            "single": dd.draw_single_line_plan(tmp / "single.dxf")}
 
 
 @pytest.fixture(scope="module")
@@ -94,6 +95,20 @@ def test_walls_found_by_geometry(files):
     assert {o["source"]["layer"] for o in _prisms(got, "wall")} == {"L4"}  # not the shelves, stair or hatch
     assert _area(got) == pytest.approx(dd.UNNAMED_OUTLINE_M2, rel=0.03)
     assert any("parallel line pairs" in n for n in got.notes)
+
+
+def test_single_line_walls_found_rooms_named(files):
+    """Walls drawn as one line each (no pairs, layer 0) are found by the rooms they
+    enclose; the 0.9 m hall, narrower than the doorways bridged for finding rooms, is a
+    room too; door swings (arcs) are no walls."""
+    got = read_plan(files["single"])
+    assert "single lines enclosing rooms" in got.used["wall layers"]
+    w, h = (v / 100 for v in dd.SINGLE_OUTER)
+    assert _area(got) == pytest.approx((w + 0.2) * (h + 0.2), rel=0.02)  # the outer face of 0.2 m walls
+    zones = {z["name"]: Polygon(z["polygon"]).area for z in got.scene["zones"]}
+    assert set(zones) == set(dd.SINGLE_ROOMS)
+    for name, (x0, y0, x1, y1) in dd.SINGLE_ROOMS.items():
+        assert zones[name] == pytest.approx((x1 - x0 - 20) * (y1 - y0 - 20) / 1e4, rel=0.1), name
 
 
 def test_wall_layers_given_replace_the_conventions(files):

@@ -4,7 +4,8 @@
 The modelspace is read with its block references exploded (dxf_read). Each layer's role
 comes from its name in the common conventions and languages (dxf_layers; the
 ``*_layers`` options replace them); wall layers that no name reveals are found by their
-geometry, parallel line pairs a wall's thickness apart (dxf_walls). Walls are the
+geometry, parallel line pairs a wall's thickness apart or single lines that enclose rooms
+(dxf_walls). Walls are the
 linework closed into solids, hatches as they are; glass (window layers) and columns are
 solids too. The main building is the largest cluster of them: what lies apart (title
 block, legend, a second drawing) is left out and counted. Doors are open (their plan
@@ -33,8 +34,9 @@ from camplace.scene.importers.dxf_layers import ROLES, block_role, layer_role, m
 from camplace.scene.importers.dxf_read import FILLED, LINEWORK, Drawing, Shape, filled_polygons, read_dxf
 from camplace.scene.importers.dxf_rooms import enclosed_rooms, room_names, room_polygons
 from camplace.scene.importers.dxf_units import check_span, read_in_units
-from camplace.scene.importers.dxf_walls import (closing_solid, column_solid, components, fill_gap, is_wall_fill,
-                                                layer_pairs, main_building, span, wall_layers_by_geometry)
+from camplace.scene.importers.dxf_walls import (MIN_SEGMENT_M, closing_solid, column_solid, components, fill_gap,
+                                                is_wall_fill, layer_pairs, main_building, single_line_rooms, span,
+                                                wall_layers_by_geometry)
 
 OPTIONS = ("wall_layers", "door_layers", "window_layers", "column_layers", "furniture_layers", "furniture_heights",
            "room_layers", "doors", "wall_thickness", "max_wall_thickness")
@@ -47,6 +49,7 @@ FURNITURE_MAX_M = 6.0
 COLUMN_MAX_M2 = 10.0  # larger closed shapes on column layers are no column
 ROOM_BRIDGE_M = 1.05  # doorways up to this wide (a 1 m opening) are closed when rooms are found from the walls
 MAX_HANDLES = 30  # handles named in one obstacle's provenance
+STRAIGHT = {"LINE", "LWPOLYLINE", "POLYLINE"}  # single-line walls: these, not arcs (door swings) or splines
 MIN_NAMED_WALLS_M = 8.0  # less linework than this on the wall layers (a legend's stub): ask the geometry too
 ALSO_WALLS_SHARE = 0.2  # wall-like pairs elsewhere, this share of the named walls' linework or more, get a note
 
@@ -190,43 +193,54 @@ def _wall_linework(path: Path, d: Drawing, parts: dict, role: dict, how: dict, g
         geo = _walls_by_geometry(d, parts, role)
         if geo is not None and sum(ln.length for ln in geo[0]) > 2 * named:
             d.notes.append(f"{'no layer is named like walls' if not named else 'little on the wall layers'}; took "
-                           f"{', '.join(geo[2])} by their parallel line pairs ({geo[3]}); if that is wrong, name "
+                           f"{', '.join(geo[2])} by their geometry ({geo[3]}); if that is wrong, name "
                            "the wall layers (wall_layers)")
             for n in geo[2]:
                 role[n] = "wall"
-            return (lines + geo[0], thin + geo[1]), {**found, **{n: f"by geometry: parallel pairs {geo[3]}"
+            return (lines + geo[0], thin + geo[1]), {**found, **{n: f"by geometry: {geo[3]}"
                                                                for n in geo[2]}}
     if lines or thin:
         if given is None:  # walls on a layer no name explains besides the named ones? say so, take nothing
             geo = _walls_by_geometry(d, parts, role)
             extra = sum(ln.length for ln in geo[0]) if geo else 0.0
             if extra >= ALSO_WALLS_SHARE * named:
-                d.notes.append(f"{', '.join(geo[2])} also hold{'s' if len(geo[2]) == 1 else ''} parallel line pairs "
-                               f"like walls ({extra:.0f} m, {geo[3]}); if they are walls, name every wall layer "
+                d.notes.append(f"{', '.join(geo[2])} also hold{'s' if len(geo[2]) == 1 else ''} {geo[3]} like walls "
+                               f"({extra:.0f} m); if they are walls, name every wall layer "
                                "(wall_layers)")
         return (lines, thin), found
     raise InputError(_no_walls_message(path, d, given), option="wall_layers")
 
 
 def _walls_by_geometry(d: Drawing, parts: dict, role: dict) -> tuple | None:
-    """(paired lines, wall-thin fills, layers, 'a-b m apart') of the layers no name
-    explains whose linework looks like walls (dxf_walls.wall_layers_by_geometry); None
-    when there are none."""
-    by_line, by_fill = defaultdict(list), defaultdict(list)
+    """(wall lines, wall-thin fills, layers, what they hold: 'parallel line pairs 0.25 m
+    apart' / 'single lines enclosing rooms') of the layers no name explains whose
+    linework looks like walls (dxf_walls.wall_layers_by_geometry: of a layer of pairs its
+    wall faces, of a layer of single-line walls its straight lines); None when there are
+    none."""
+    by_line, by_fill, straight = defaultdict(list), defaultdict(list), defaultdict(list)
     for sh in parts.get("none", []) + parts.get("other", []):
         if not isinstance(sh.geom, LineString):
             by_fill[sh.layer] += polygons_of(sh.geom)
         elif role.get(sh.layer) is None:
             by_line[sh.layer].append(sh.geom)
+            if sh.kind in STRAIGHT and sh.geom.length >= MIN_SEGMENT_M:
+                straight[sh.layer].append(sh.geom)
     stats = layer_pairs(by_line, by_fill)
-    chosen = wall_layers_by_geometry(stats)
+    chosen = wall_layers_by_geometry(stats, {n: single_line_rooms(ls) for n, ls in straight.items()})
     if not chosen:
         return None
-    gaps = np.concatenate([stats[n].gaps for n in chosen])
-    lo, hi = np.percentile(gaps, [10, 90]) if len(gaps) else (0.0, 0.0)
-    apart = f"{lo:.2f} m apart" if hi - lo < 0.005 else f"{lo:.2f}-{hi:.2f} m apart"
-    return ([ln for n in chosen for ln in stats[n].lines],
-            [q for n in chosen for q in by_fill.get(n, []) if is_wall_fill(q)], chosen, apart)
+    what = []
+    paired = [n for n, m in chosen.items() if m == "pairs"]
+    gaps = np.concatenate([stats[n].gaps for n in paired] or [np.zeros(0)])
+    if len(gaps):
+        lo, hi = np.percentile(gaps, [10, 90])
+        what.append(f"parallel line pairs {lo:.2f} m apart" if hi - lo < 0.005 else
+                    f"parallel line pairs {lo:.2f}-{hi:.2f} m apart")
+    if len(paired) < len(chosen):
+        what.append("single lines enclosing rooms")
+    lines = [ln for n, m in chosen.items() for ln in (stats[n].lines if m == "pairs" else straight[n])]
+    return (lines, [q for n in chosen for q in by_fill.get(n, []) if is_wall_fill(q)], list(chosen),
+            "; ".join(what) or "wall-thin filled areas")
 
 
 def _no_walls_message(path: Path, d: Drawing, given) -> str:
@@ -239,7 +253,7 @@ def _no_walls_message(path: Path, d: Drawing, given) -> str:
     listing += f" and {len(ranked) - 12} more" if len(ranked) > 12 else ""
     where = (f"on the layers {', '.join(given)}" if given else
              "(no layer is named like walls - WALL, WAND, MUR, MURO, PARED, PAREDE, PARETE, A-WALL, ... - and none "
-             "holds parallel line pairs 5-60 cm apart)")
+             "holds parallel line pairs 5-60 cm apart or single lines enclosing rooms)")
     have = f"the layers with linework are {listing}" if ranked else "the drawing has no linework"
     return f"{path}: no walls found {where}; {have}; name the wall layers (wall_layers)"
 

@@ -16,6 +16,7 @@ from camplace.scene.importers import polygons_of
 from camplace.scene.importers.dxf_layers import normalise
 
 MIN_ROOM_M2 = 0.5  # smaller closed outlines on room layers are symbols, not rooms
+MIN_ROOM_WIDTH_M = 0.5  # a free piece narrower than this everywhere is no room (the gap beside a counter, a shaft)
 MAX_NAME_CHARS = 40  # longer texts are notes, not room names
 _NAME_TAG = re.compile(r"NAM|BEZ|NOM|DESC|USE|NUTZ|FUNC|TITLE|LABEL|BENENN|DENOM|LONG")
 _NUMBER_TAG = re.compile(r"NUM|NR|NO\b|^NO|ID|CODE|KEY|NUMMER|NUMERO")
@@ -119,8 +120,10 @@ def enclosed_rooms(footprint: Polygon, barrier, bridge: float, min_area: float =
     """The free pieces (m) of ``footprint`` the ``barrier`` (walls, glass, columns, door
     gaps) encloses once gaps up to ``bridge`` m are closed, at least ``min_area`` m²
     each, grown back into the corners the closing took (each piece up to ``bridge`` / 2,
-    larger rooms first; never into another room). For finding rooms only: the walls keep
-    their openings."""
+    larger rooms first; never into another room); then the free space no room took, less
+    its parts narrower than MIN_ROOM_WIDTH_M, in pieces of at least ``min_area`` (a galley
+    kitchen, a corridor narrower than ``bridge``: the closing filled them). For finding
+    rooms only: the walls keep their openings."""
     d = bridge / 2
     if barrier.is_empty:
         return [footprint]
@@ -135,4 +138,7 @@ def enclosed_rooms(footprint: Polygon, barrier, bridge: float, min_area: float =
         piece = max((q for q in polygons_of(grown) if q.intersects(seed)), key=lambda q: q.area, default=seed)
         out.append(piece)
         taken = taken.union(piece)
-    return reading_order(out)
+    w = MIN_ROOM_WIDTH_M / 2
+    rest = free.difference(taken)
+    opened = rest.buffer(-w, join_style="mitre").buffer(w, join_style="mitre").intersection(rest)
+    return reading_order(out + [q for q in polygons_of(opened) if q.area >= min_area])

@@ -1,5 +1,6 @@
 """Walls of a DXF plan from its linework (m): which layers hold walls when their names do
-not say it (parallel line pairs a wall's thickness apart), the wall solids (double lines
+not say it (parallel line pairs a wall's thickness apart, or single lines that enclose
+rooms on their own: walls drawn as one line each), the wall solids (double lines
 closed into solids, single lines given a thickness, hatches as they are), and the main
 building (the largest cluster of walls; a title block, a legend or a second drawing on
 the sheet is left out).
@@ -22,8 +23,12 @@ MIN_PAIRED_M = 4.0  # a wall layer holds at least this much paired linework, m
 MIN_PAIRED_SHARE = 0.3  # ... and at least this share of its linework is paired
 MAX_LADDER_SHARE = 0.6  # ... and at most this share of the paired lines has partners on both sides (stairs, hatching)
 MIN_LAYER_SHARE = 0.15  # a layer joins the walls with at least this share of the best layer's paired length
+MIN_SOLID_M2 = 1e-4  # a closed piece of linework smaller than this is numerical dust, no solid
 MAX_WALL_WIDTH_M = 1.5  # a filled area wider than this (mean width 2 A / P) is no wall
 BUILDING_GAP_M = 5.0  # walls, glass and columns closer than this belong to one building
+MIN_ROOM_FACE_M2 = 1.0  # a face of a layer's lines this large and wider on average than a wall is a room
+MIN_SINGLE_ROOMS_M2 = 8.0  # single-line walls enclose at least this much room area ...
+MIN_SINGLE_SHARE = 0.5  # ... with at least this share of the layer's straight linework on the rooms' edges
 
 
 @dataclass
@@ -109,19 +114,46 @@ def layer_pairs(lines_by_layer: dict[str, list], fills_by_layer: dict[str, list]
     return out
 
 
-def wall_layers_by_geometry(stats: dict[str, LayerPairs]) -> list[str]:
-    """The layers whose linework looks like walls: enough parallel pairs a wall's
-    thickness apart, few ladders (stairs, hatching), or wall-thin filled areas; each at
-    least MIN_LAYER_SHARE of the best layer's."""
-    score = {}
+def single_line_rooms(lines: list) -> tuple[float, float]:
+    """(area m², edge m) of the rooms a layer's straight ``lines`` enclose on their own:
+    the faces of the noded lines at least MIN_ROOM_FACE_M2 and wider on average (2 A / P)
+    than the widest wall (a wall's two faces enclose a thin strip, no room); ``edge`` the
+    length of their boundaries, shared ones once."""
+    if not lines:
+        return 0.0, 0.0
+    noded = shapely.union_all(np.asarray(lines, dtype=object))
+    faces = np.asarray(polygons_of(shapely.polygonize(shapely.get_parts(noded))), dtype=object)
+    if not len(faces):
+        return 0.0, 0.0
+    area, perimeter = shapely.area(faces), shapely.length(faces)
+    rooms = faces[(area >= MIN_ROOM_FACE_M2) & (2 * area > PAIR_M[1] * perimeter)]
+    if not len(rooms):
+        return 0.0, 0.0
+    return float(shapely.area(rooms).sum()), float(shapely.union_all(shapely.boundary(rooms)).length)
+
+
+def wall_layers_by_geometry(stats: dict[str, LayerPairs],
+                            rooms: dict[str, tuple[float, float]] | None = None) -> dict[str, str]:
+    """The layers whose linework looks like walls -> how ('pairs' or 'single'): enough
+    parallel pairs a wall's thickness apart with few ladders (stairs, hatching), or
+    wall-thin filled areas ('pairs': the wall faces are taken); else, where pairs are
+    few, single lines that enclose rooms on their own (``rooms``: layer -> (area, edge)
+    of single_line_rooms of its straight lines; 'single': every straight line is a
+    wall). Each at least MIN_LAYER_SHARE of the best layer's score (paired or room-edge
+    length, m), best first."""
+    score, mode = {}, {}
     for name, st in stats.items():
         lines_ok = (st.paired >= MIN_PAIRED_M and st.paired >= MIN_PAIRED_SHARE * st.total
                     and st.ladder <= MAX_LADDER_SHARE * st.paired)
+        area, edge = (rooms or {}).get(name, (0.0, 0.0))
+        single_ok = (not lines_ok and area >= MIN_SINGLE_ROOMS_M2 and edge >= MIN_SINGLE_SHARE * st.total
+                     and st.paired < MIN_PAIRED_SHARE * st.total)
         fills_ok = st.thin >= 1.0
-        if lines_ok or fills_ok:
-            score[name] = (st.paired if lines_ok else 0.0) + (st.thin / 0.2 if fills_ok else 0.0)
+        if lines_ok or single_ok or fills_ok:
+            score[name] = (st.paired if lines_ok else edge if single_ok else 0.0) + (st.thin / 0.2 if fills_ok else 0.0)
+            mode[name] = "single" if single_ok else "pairs"
     best = max(score.values(), default=0.0)
-    return sorted((n for n, v in score.items() if v >= MIN_LAYER_SHARE * best), key=lambda n: -score[n])
+    return {n: mode[n] for n in sorted(score, key=lambda n: -score[n]) if score[n] >= MIN_LAYER_SHARE * best}
 
 
 def closing_solid(lines: list, fills: list, radius: float, single: float):
@@ -133,7 +165,8 @@ def closing_solid(lines: list, fills: list, radius: float, single: float):
     if lines:
         arr = np.asarray(lines, dtype=object)
         grown = shapely.union_all(shapely.buffer(arr, radius, join_style="mitre")).simplify(1e-6)  # (no spikes)
-        closed = shapely.make_valid(grown.buffer(-radius, join_style="mitre"))
+        closed = shapely.union_all([q for q in polygons_of(shapely.make_valid(grown.buffer(-radius, join_style="mitre")))
+                                    if q.area > MIN_SOLID_M2] or [Polygon()])  # (a lone line's closing: no area)
         parts.append(closed)
         near = closed.buffer(single)
         shapely.prepare(near)
