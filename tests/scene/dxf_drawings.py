@@ -14,6 +14,7 @@
 - ``draw_single_line_plan``: a flat in cm drawn as hobby and LibreCAD plans are: every
   wall one LINE on layer 0 (no pairs, no layer names), door swings as ARC + leaf LINE on
   layer 0 too, room names as TEXT, a 0.9 m wide hall.
+- ``draw_wc_plan``: a hall with a 1.2 m wide WC whose door swings into it (AIA layers, m).
 - ``draw_no_walls``: text, circles and a few loose lines: nothing a wall.
 
 Each returns the file's path; the FM_* and LATIN_* constants are the truths (m).
@@ -283,6 +284,31 @@ def draw_single_line_plan(path: str | Path) -> Path:
         msp.add_line(hinge, leaf)
     for name, (x0, y0, x1, y1) in SINGLE_ROOMS.items():
         msp.add_text(name, height=20, dxfattribs={"insert": ((x0 + x1) / 2 - 20, (y0 + y1) / 2)})
+    doc.saveas(path)
+    return Path(path)
+
+
+WC_ROOMS = {"Halle": 4.6 * 3.6 - 1.3 * 1.45, "WC": 1.1 * 1.25}  # m², clear areas (walls 0.2 m thick)
+WC_LABELS = {"Halle": (3.0, 1.5), "WC": (0.5, 3.2)}  # m
+
+
+def draw_wc_plan(path: str | Path) -> Path:
+    """A 5 x 4 m plan in m: walls 0.2 m thick as LINE pairs on A-WALL, a 1.2 x 1.4 m WC
+    in a corner whose 0.8 m door (leaf LINE + ARC on A-DOOR, hinged on the WC's wall at
+    x 1.4) swings into the WC, room names as TEXT."""
+    import ezdxf
+
+    doc = ezdxf.new("R2010")
+    doc.header["$INSUNITS"] = 6
+    msp = doc.modelspace()
+    t = 0.2
+    for a, b, gaps in [((0, 0.1), (5, 0.1), ()), ((0, 3.9), (5, 3.9), ()), ((0.1, 0), (0.1, 4), ()),
+                       ((4.9, 0), (4.9, 4), ()), ((0, 2.45), (1.5, 2.45), ()), ((1.4, 2.35), (1.4, 4), [(2.7, 3.5)])]:
+        _wall(msp, a, b, t, "A-WALL", gaps)
+    msp.add_line((1.3, 2.7), (0.5, 2.7), dxfattribs={"layer": "A-DOOR"})  # the leaf, open into the WC
+    msp.add_arc((1.3, 2.7), 0.8, 90, 180, dxfattribs={"layer": "A-DOOR"})
+    for name, at in WC_LABELS.items():
+        msp.add_text(name, height=0.15, dxfattribs={"insert": at})
     doc.saveas(path)
     return Path(path)
 

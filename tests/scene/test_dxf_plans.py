@@ -24,7 +24,7 @@ def files(tmp_path_factory):
     return {"fm": dd.draw_fm_plan(tmp / "eg.dxf"), "fr": dd.draw_latin_plan(tmp / "fr.dxf", "fr"),
             "es": dd.draw_latin_plan(tmp / "es.dxf", "es"), "r12": dd.draw_latin_plan(tmp / "r12.dxf", "es", "R12"),
             "unnamed": dd.draw_unnamed_plan(tmp / "hall.dxf"), "none": dd.draw_no_walls(tmp / "none.dxf"),
-            "single": dd.draw_single_line_plan(tmp / "single.dxf")}
+            "single": dd.draw_single_line_plan(tmp / "single.dxf"), "wc": dd.draw_wc_plan(tmp / "wc.dxf")}
 
 
 @pytest.fixture(scope="module")
@@ -109,6 +109,16 @@ def test_single_line_walls_found_rooms_named(files):
     assert set(zones) == set(dd.SINGLE_ROOMS)
     for name, (x0, y0, x1, y1) in dd.SINGLE_ROOMS.items():
         assert zones[name] == pytest.approx((x1 - x0 - 20) * (y1 - y0 - 20) / 1e4, rel=0.1), name
+
+
+def test_door_swinging_into_a_small_room_leaves_the_room(files):
+    """The gap fill of a door that swings into a 1.2 m wide WC closes the doorway, not the
+    WC behind it (the jambs there join the walls across the WC)."""
+    got = read_plan(files["wc"])
+    zones = {z["name"]: Polygon(z["polygon"]).area for z in got.scene["zones"]}
+    assert set(zones) == set(dd.WC_ROOMS)
+    for name, area in dd.WC_ROOMS.items():
+        assert zones[name] == pytest.approx(area, rel=0.05), name
 
 
 def test_wall_layers_given_replace_the_conventions(files):

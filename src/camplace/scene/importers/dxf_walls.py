@@ -216,11 +216,20 @@ def main_building(pieces: list, weights: list[float], gap: float = BUILDING_GAP_
 def fill_gap(walls, opening, reach: float, touch: float = 0.1):
     """The wall gap beside an ``opening`` (a door's plan rectangle, m): the hull of the
     jambs (the pieces of the walls within ``reach`` of it that come within ``touch`` of
-    it), less the walls."""
+    it), less the walls. Where that is larger than a gap can be (the door's length times
+    ``reach``: in a room narrower than the band, a WC or closet, the jambs join the walls
+    across it), only the jambs' ends within ``touch`` of the door: a thin fill across the
+    doorway, never the room behind it."""
     band = opening.buffer(reach, join_style="mitre")
     local = shapely.make_valid(shapely.clip_by_rect(walls, *band.bounds))
     jambs = [q for q in polygons_of(local.intersection(band)) if q.distance(opening) <= touch]
-    return shapely.union_all(jambs).convex_hull.difference(local) if jambs else Polygon()
+    if not jambs:
+        return Polygon()
+    gap = shapely.union_all(jambs).convex_hull.difference(local)
+    if gap.area <= span(opening) * reach:
+        return gap
+    ends = local.intersection(opening.buffer(touch, join_style="mitre"))
+    return ends.convex_hull.difference(local).difference(opening) if not ends.is_empty else Polygon()
 
 
 def components(geoms: list, join: float = 0.05) -> list[Polygon]:
