@@ -12,7 +12,7 @@ from shapely.geometry import Polygon, box
 pytest.importorskip("ifcopenshell")
 
 from camplace.scene.importers import read_plan, read_storey_plans  # noqa: E402
-from camplace.scene.importers.ifc_build import GridBuilding, write_grid_building  # noqa: E402
+from camplace.scene.importers.ifc_build import GridBuilding, write_grid_building, write_ring_room  # noqa: E402
 from camplace.scene.importers.ifc_model import unique_names  # noqa: E402
 from camplace.scene.importers.ifc_storey import join_pieces  # noqa: E402
 from camplace.spec.loading import parse_scene  # noqa: E402
@@ -52,6 +52,15 @@ def test_units_override_scales_the_building(tmp_path):
     assert rooms == pytest.approx([100 * 4.8 * 3.8] * 2, rel=0.01)  # the 2 m wall between them: two pieces
     assert g.scene["room"]["height"] == pytest.approx(10 * B.height)
     assert g.used["units"].startswith("cm (units option")
+
+
+def test_walls_of_a_room_as_one_element_keep_the_room_free(tmp_path):
+    """One IfcWall whose profile is a ring (the room's four walls in one element): its
+    prism keeps the hole (the room is not a wall), and the ceiling grid has mounts."""
+    g = read_plan(write_ring_room(tmp_path / "ring.ifc", (4.0, 3.0), 0.2))
+    walls = [Polygon(o["prism"]["polygon"], o["prism"].get("holes", [])) for o in g.scene["obstacles"]]
+    assert sum(q.area for q in walls) == pytest.approx(4 * 3 - 3.6 * 2.6, rel=0.01)
+    assert Polygon(g.scene["room"]["footprint"]).area == pytest.approx(12.0, rel=0.01)
 
 
 def test_separate_blocks_join_into_one_simple_polygon_with_a_thin_seam():

@@ -184,6 +184,32 @@ def write_grid_building(path: str | Path, b: GridBuilding = GridBuilding(), unit
     return atomic_write_text(Path(path), wr.m.to_string())
 
 
+def write_ring_room(path: str | Path, size: tuple[float, float] = (4.0, 3.0), wall: float = 0.2,
+                    height: float = 3.0) -> Path:
+    """Write a room whose four walls are one IfcWall, its profile the ``size`` (m) rectangle
+    with a hole ``wall`` m in from it (an IfcArbitraryProfileDefWithVoids extruded
+    ``height`` m), as SketchUp, Blender and FreeCAD exports model a room's walls; one
+    storey, no IfcSpace, no slab."""
+    wr = _Writer("m")
+    m = wr.m
+    st = wr.storey("Ground Floor", 0.0, 1.0)
+    (w, d), t = size, wall
+
+    def ring(x0, y0, x1, y1):
+        pts = [(x0, y0), (x1, y0), (x1, y1), (x0, y1), (x0, y0)]
+        return m.createIfcPolyline([m.createIfcCartesianPoint((float(x), float(y))) for x, y in pts])
+
+    profile = m.createIfcArbitraryProfileDefWithVoids("AREA", None, ring(0, 0, w, d), [ring(t, t, w - t, d - t)])
+    origin = m.createIfcAxis2Placement3D(m.createIfcCartesianPoint((0.0, 0.0, 0.0)), None, None)
+    solid = m.createIfcExtrudedAreaSolid(profile, origin, m.createIfcDirection((0.0, 0.0, 1.0)), float(height))
+    walls = wr.entity("IfcWall", "Walls")
+    wr.api.geometry.assign_representation(m, product=walls, representation=m.createIfcShapeRepresentation(
+        wr.body, "Body", "SweptSolid", [solid]))
+    wr.place(walls, np.zeros(3))
+    wr.api.spatial.assign_container(m, products=[walls], relating_structure=st)
+    return atomic_write_text(Path(path), m.to_string())
+
+
 def _floor(wr: _Writer, b: GridBuilding, storey, z0: float, n: int, space_parent, space_body: str) -> None:
     """One storey's floor slab, spaces (aggregated to ``space_parent``; with a body, or only a
     'footprint'), walls, doors and window, lifted by z0 m."""

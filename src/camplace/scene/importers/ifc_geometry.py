@@ -107,12 +107,22 @@ def footprint_shapes(model, elements: list) -> list[Element]:
 
 
 def _even_odd(segments: np.ndarray):
-    """The region (shapely) that closed outlines of (S, 2, 2) xy segments enclose, even-odd filled."""
-    lines = shapely.linestrings(np.round(segments, 6))
-    out = Polygon()
-    for f in polygons_of(shapely.polygonize(list(shapely.get_parts(shapely.union_all(lines))))):
-        out = out.symmetric_difference(f)
-    return out
+    """The region (shapely) that closed outlines of (S, 2, 2) xy segments enclose, even-odd
+    filled: a face of the noded outlines is inside when a ray from it crosses them an odd
+    number of times (a ring wall's hole, a hollow column's core stay empty)."""
+    seg = np.round(segments, 6)
+    faces = np.asarray(polygons_of(shapely.polygonize(list(shapely.get_parts(
+        shapely.union_all(shapely.linestrings(seg)))))), dtype=object)
+    if not len(faces):
+        return Polygon()
+    pts = shapely.get_coordinates(shapely.point_on_surface(faces))  # (F, 2)
+    (x0, y0), (x1, y1) = seg[:, 0].T, seg[:, 1].T  # (S,) each
+    py = pts[:, 1:2]
+    spans = (y0 > py) != (y1 > py)  # (F, S): the segment straddles the ray's height
+    with np.errstate(divide="ignore", invalid="ignore"):
+        xc = x0 + (py - y0) * (x1 - x0) / (y1 - y0)
+    inside = (spans & (xc > pts[:, 0:1])).sum(axis=1) % 2 == 1
+    return shapely.union_all(faces[inside]) if inside.any() else Polygon()
 
 
 def plan_shape(el: Element, zmin: float = -np.inf, zmax: float = np.inf, min_nz: float = 0.1):
