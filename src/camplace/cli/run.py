@@ -37,6 +37,7 @@ def run_pipeline(scene, budget: Optional[int], solver: Optional[str], out: Optio
     (``leave``; else typer.Exit(130))."""
     from camplace.outputs.plan_data import check_paper
     from camplace.outputs.write import check_frame
+    from camplace.workflows import warm
     from camplace.workflows.run import run
 
     check_options(budget, time_limit, max_memory_gb, out)
@@ -44,12 +45,16 @@ def run_pipeline(scene, budget: Optional[int], solver: Optional[str], out: Optio
     paper = check_paper(paper)
     repeatable = repeatable_requested(repeatable)
     stop = StopFlag()
+    warming = warm.start(solver)  # a fresh install: the later stages' kernels compile beside visibility's
     with stop.installed():  # first Ctrl-C: finish with the best placement so far; second: abort
-        with progress_bars() as prog:
-            bars = RichProgress(prog, stop)
-            result = run(scene, budget=budget, solver=solver, progress=bars, on_incumbent=bars.incumbent,
-                         time_limit_s=time_limit, should_stop=stop, require_feasible=require_feasible,
-                         max_memory_bytes=memory_bytes(max_memory_gb), **options)
+        try:
+            with progress_bars() as prog:
+                bars = RichProgress(prog, stop)
+                result = run(scene, budget=budget, solver=solver, progress=bars, on_incumbent=bars.incumbent,
+                             time_limit_s=time_limit, should_stop=stop, require_feasible=require_feasible,
+                             max_memory_bytes=memory_bytes(max_memory_gb), **options)
+        finally:
+            warm.stop(warming)
         out_dir = out or Path("camplace-out") / result.scene.name
         write_and_summarise(result, out_dir, repeatable, frame, plan, paper, extra=run_extra(preview, out_dir),
                             stop=stop)
