@@ -265,19 +265,23 @@ SINGLE_ROOMS = {"Wohnen": (0, 0, 700, 600), "Flur": (700, 0, 790, 600), "Bad": (
                 "Schlafen": (790, 250, 1200, 600)}  # cm, between the wall lines; Flur 0.9 m wide
 
 
-def draw_single_line_plan(path: str | Path) -> Path:
+def draw_single_line_plan(path: str | Path, named_partition: bool = False) -> Path:
     """A 12 x 6 m flat in cm, $INSUNITS 5, everything on layer 0: walls as single LINEs
     (the outline, the walls at x 700 and 790, a wall between Bad and Schlafen), a door
-    swing (ARC + leaf LINE) into each room from the 0.9 m hall, room names as TEXT."""
+    swing (ARC + leaf LINE) into each room from the 0.9 m hall, room names as TEXT. With
+    ``named_partition`` the wall at x 700 is a new partition instead, a LINE pair 10 cm
+    apart on the layer 'Wand neu' (a renovation plan: only the new wall named)."""
     import ezdxf
 
     doc = ezdxf.new("R2010")
     doc.header["$INSUNITS"] = 5
     msp = doc.modelspace()
     w, h = SINGLE_OUTER
-    for a, b in [((0, 0), (w, 0)), ((w, 0), (w, h)), ((w, h), (0, h)), ((0, h), (0, 0)), ((700, 0), (700, h)),
-                 ((790, 0), (790, h)), ((790, 250), (w, 250))]:
+    for a, b in [((0, 0), (w, 0)), ((w, 0), (w, h)), ((w, h), (0, h)), ((0, h), (0, 0)), ((790, 0), (790, h)),
+                 ((790, 250), (w, 250))] + ([] if named_partition else [((700, 0), (700, h))]):
         msp.add_line(a, b)
+    if named_partition:
+        _wall(msp, (700, 0), (700, h), 10, "Wand neu")
     for hinge, start, leaf in [((700, 400), 90, (700, 490)), ((790, 100), 0, (880, 100)),
                                ((790, 400), 0, (880, 400))]:
         msp.add_arc(hinge, 90, start, start + 90)

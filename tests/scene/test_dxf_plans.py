@@ -24,7 +24,8 @@ def files(tmp_path_factory):
     return {"fm": dd.draw_fm_plan(tmp / "eg.dxf"), "fr": dd.draw_latin_plan(tmp / "fr.dxf", "fr"),
             "es": dd.draw_latin_plan(tmp / "es.dxf", "es"), "r12": dd.draw_latin_plan(tmp / "r12.dxf", "es", "R12"),
             "unnamed": dd.draw_unnamed_plan(tmp / "hall.dxf"), "none": dd.draw_no_walls(tmp / "none.dxf"),
-            "single": dd.draw_single_line_plan(tmp / "single.dxf"), "wc": dd.draw_wc_plan(tmp / "wc.dxf")}
+            "single": dd.draw_single_line_plan(tmp / "single.dxf"), "wc": dd.draw_wc_plan(tmp / "wc.dxf"),
+            "renovation": dd.draw_single_line_plan(tmp / "renovation.dxf", named_partition=True)}
 
 
 @pytest.fixture(scope="module")
@@ -109,6 +110,17 @@ def test_single_line_walls_found_rooms_named(files):
     assert set(zones) == set(dd.SINGLE_ROOMS)
     for name, (x0, y0, x1, y1) in dd.SINGLE_ROOMS.items():
         assert zones[name] == pytest.approx((x1 - x0 - 20) * (y1 - y0 - 20) / 1e4, rel=0.1), name
+
+
+def test_named_walls_that_close_no_room_take_the_single_line_walls_around(files):
+    """Only the new partition is on a layer named like walls (a renovation plan); the
+    building's walls, single lines on layer 0 around it, are taken too: the footprint is
+    the flat, not the partition's sliver."""
+    got = read_plan(files["renovation"])
+    assert "Wand neu" in got.used["wall layers"] and "around the named walls" in got.used["wall layers"]
+    w, h = (v / 100 for v in dd.SINGLE_OUTER)
+    assert _area(got) == pytest.approx((w + 0.2) * (h + 0.2), rel=0.02)
+    assert any("close no room" in n for n in got.notes)
 
 
 def test_door_swinging_into_a_small_room_leaves_the_room(files):

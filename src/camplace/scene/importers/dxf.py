@@ -34,9 +34,9 @@ from camplace.scene.importers.dxf_layers import ROLES, block_role, layer_role, m
 from camplace.scene.importers.dxf_read import FILLED, LINEWORK, Drawing, Shape, filled_polygons, read_dxf
 from camplace.scene.importers.dxf_rooms import enclosed_rooms, room_names, room_polygons
 from camplace.scene.importers.dxf_units import check_span, read_in_units
-from camplace.scene.importers.dxf_walls import (MIN_SEGMENT_M, closing_solid, column_solid, components, fill_gap,
-                                                is_wall_fill, layer_pairs, main_building, single_line_rooms, span,
-                                                wall_layers_by_geometry)
+from camplace.scene.importers.dxf_walls import (MIN_SEGMENT_M, closing_solid, column_solid, components,
+                                                encloses_room, fill_gap, is_wall_fill, layer_pairs, main_building,
+                                                single_line_rooms, span, wall_layers_by_geometry)
 
 OPTIONS = ("wall_layers", "door_layers", "window_layers", "column_layers", "furniture_layers", "furniture_heights",
            "room_layers", "doors", "wall_thickness", "max_wall_thickness")
@@ -73,7 +73,8 @@ def read(path: Path, *, name: str | None = None, units: str | None = None, wall_
     out = PlanImport({}, "dxf", used={"units": unit_text}, skipped=d.skipped, notes=d.notes)
     role, how = _layer_roles(d, given)
     parts = _by_role(d, role)
-    walls, wall_how = _wall_linework(path, d, parts, role, how, given["wall"])
+    walls, wall_how = _wall_linework(path, d, parts, role, how, given["wall"], max_wall_thickness / 2,
+                                     wall_thickness)
     out.used["wall layers"] = _listing(d, wall_how)
     r = max_wall_thickness / 2
     wall_solid = closing_solid(walls[0], walls[1], r, wall_thickness)
@@ -180,9 +181,13 @@ def _lines_fills(shapes: list[Shape]) -> tuple[list, list]:
     return lines, fills
 
 
-def _wall_linework(path: Path, d: Drawing, parts: dict, role: dict, how: dict, given) -> tuple[tuple, dict]:
+def _wall_linework(path: Path, d: Drawing, parts: dict, role: dict, how: dict, given, radius: float,
+                   single: float) -> tuple[tuple, dict]:
     """((wall lines, wall fills), layer -> how found) by name or given patterns, else by
-    geometry; InputError listing the layers with linework when there are none."""
+    geometry; where the named walls (closed into solids: closing_solid with ``radius``,
+    ``single``) close no room, the single-line wall layers around them too (a renovation
+    plan's new walls named, the building's walls on a layer no name explains); InputError
+    listing the layers with linework when there are none."""
     lines, fills = _lines_fills(parts["wall"])
     thin = [q for q in fills if is_wall_fill(q)]
     if len(fills) > len(thin):
@@ -202,6 +207,14 @@ def _wall_linework(path: Path, d: Drawing, parts: dict, role: dict, how: dict, g
     if lines or thin:
         if given is None:  # walls on a layer no name explains besides the named ones? say so, take nothing
             geo = _walls_by_geometry(d, parts, role)
+            around = _enclosing(geo[4], closing_solid(lines, thin, radius, single)) if geo else []
+            if around:
+                d.notes.append(f"the named wall layers close no room; took {', '.join(around)} too: single lines "
+                               "enclosing rooms around them; if that is wrong, name the wall layers (wall_layers)")
+                for n in around:
+                    role[n] = "wall"
+                return (lines + [ln for n in around for ln in geo[4][n]], thin), {
+                    **found, **{n: "by geometry: single lines enclosing rooms around the named walls" for n in around}}
             extra = sum(ln.length for ln in geo[0]) if geo else 0.0
             if extra >= ALSO_WALLS_SHARE * named:
                 d.notes.append(f"{', '.join(geo[2])} also hold{'s' if len(geo[2]) == 1 else ''} {geo[3]} like walls "
@@ -213,10 +226,10 @@ def _wall_linework(path: Path, d: Drawing, parts: dict, role: dict, how: dict, g
 
 def _walls_by_geometry(d: Drawing, parts: dict, role: dict) -> tuple | None:
     """(wall lines, wall-thin fills, layers, what they hold: 'parallel line pairs 0.25 m
-    apart' / 'single lines enclosing rooms') of the layers no name explains whose
-    linework looks like walls (dxf_walls.wall_layers_by_geometry: of a layer of pairs its
-    wall faces, of a layer of single-line walls its straight lines); None when there are
-    none."""
+    apart' / 'single lines enclosing rooms', the single-line layers -> their straight
+    lines) of the layers no name explains whose linework looks like walls
+    (dxf_walls.wall_layers_by_geometry: of a layer of pairs its wall faces, of a layer of
+    single-line walls its straight lines); None when there are none."""
     by_line, by_fill, straight = defaultdict(list), defaultdict(list), defaultdict(list)
     for sh in parts.get("none", []) + parts.get("other", []):
         if not isinstance(sh.geom, LineString):
@@ -240,7 +253,17 @@ def _walls_by_geometry(d: Drawing, parts: dict, role: dict) -> tuple | None:
         what.append("single lines enclosing rooms")
     lines = [ln for n, m in chosen.items() for ln in (stats[n].lines if m == "pairs" else straight[n])]
     return (lines, [q for n in chosen for q in by_fill.get(n, []) if is_wall_fill(q)], list(chosen),
-            "; ".join(what) or "wall-thin filled areas")
+            "; ".join(what) or "wall-thin filled areas", {n: straight[n] for n, m in chosen.items() if m == "single"})
+
+
+def _enclosing(singles: dict[str, list], named) -> list[str]:
+    """The single-line wall layers (layer -> straight lines, m) whose lines span the
+    ``named`` wall solid (90 % of it within their hull grown by 0.5 m), where those named
+    walls close no room; [] where they do."""
+    if not singles or named.is_empty or encloses_room(named):
+        return []
+    return [n for n, ls in singles.items()
+            if shapely.union_all(ls).convex_hull.buffer(0.5).intersection(named).area >= 0.9 * named.area]
 
 
 def _no_walls_message(path: Path, d: Drawing, given) -> str:

@@ -132,6 +132,14 @@ def single_line_rooms(lines: list) -> tuple[float, float]:
     return float(shapely.area(rooms).sum()), float(shapely.union_all(shapely.boundary(rooms)).length)
 
 
+def encloses_room(solid) -> bool:
+    """True when wall solids (m) enclose a free area of at least MIN_ROOM_FACE_M2 that is
+    wider on average than a wall (a room, not the strip between two faces)."""
+    filled = shapely.union_all([Polygon(q.exterior) for q in polygons_of(solid)] or [Polygon()])
+    return any(q.area >= MIN_ROOM_FACE_M2 and 2 * q.area > PAIR_M[1] * q.length
+               for q in polygons_of(filled.difference(solid)))
+
+
 def wall_layers_by_geometry(stats: dict[str, LayerPairs],
                             rooms: dict[str, tuple[float, float]] | None = None) -> dict[str, str]:
     """The layers whose linework looks like walls -> how ('pairs' or 'single'): enough

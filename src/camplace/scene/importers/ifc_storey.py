@@ -76,7 +76,8 @@ def choose_storeys(s: Structure, rooms: dict[int, StoreyRooms], storey: str | No
         plain = [st for st in s.storeys if not st.roof_or_foundation and rooms.get(st.key, empty).elements]
         picked = with_rooms or plain or list(s.storeys)
         left = [st for st in s.storeys if st not in picked]
-        why = "the storeys with rooms to plan" if with_rooms else "the storeys with elements"
+        why = ("every storey: the storeys with rooms to plan" if with_rooms else
+               "every storey: the storeys with elements (none has a room to plan)")
         return picked, why + (f"; left out: {'; '.join(_describe(x, rooms.get(x.key, empty)) for x in left)}"
                               if left else "")
 
