@@ -8,7 +8,7 @@ import pytest
 
 from camplace.core.errors import InputError
 from camplace.scene.build import build_scene
-from camplace.scene.importers import import_plan, plan_kind, prism_obstacles, read_plan
+from camplace.scene.importers import import_plan, plan_kind, prism_obstacles, read_plan, room_zones
 from tests.conftest import box_room
 
 L_WALL = [[1, 1], [3, 1], [3, 3], [2.5, 3], [2.5, 1.5], [1, 1.5]]  # a non-convex (L-shaped) wall in plan
@@ -50,6 +50,19 @@ def test_prism_and_box_together_are_refused():
     with pytest.raises(Exception, match="exactly one"):
         box_room(obstacles=[{"name": "w", "prism": {"polygon": L_WALL, "z": [0, 1]},
                              "box": {"min": [0, 0, 0], "max": [1, 1, 1]}}])
+
+
+def test_a_rooms_specks_are_no_zones():
+    """A room in two real pieces gives name and name-2; a speck a pinch left beside it
+    (0.09 m²) is no zone; a small room of its own (a 0.36 m² shaft) stays a zone."""
+    from collections import Counter
+
+    from shapely.geometry import MultiPolygon, box
+
+    skipped = Counter()
+    zones = room_zones([("Hall", MultiPolygon([box(0, 0, 4, 3), box(5, 0, 7, 1), box(8, 0, 8.3, 0.3)])),
+                        ("Shaft", box(9, 0, 9.6, 0.6))], 1, skipped=skipped)
+    assert [z["name"] for z in zones] == ["Hall", "Hall-2", "Shaft"] and skipped["slivers"] == 1
 
 
 def test_registry_kinds_and_refusals(tmp_path):

@@ -29,6 +29,7 @@ UNITS_M = {"mm": 0.001, "cm": 0.01, "m": 1.0, "in": 0.0254, "ft": 0.3048}  # met
 COMMON_OPTIONS = ("name", "units", "wall_height", "ceiling_height", "heights", "coverage", "budget")
 DEFAULT_CEILING_M = 3.0
 MIN_PRISM_AREA_M2 = 1e-4  # wall pieces smaller than this (1 cm²) are dropped
+MIN_ZONE_PIECE_M2 = 0.5  # a room's further pieces smaller than this are specks, no zones
 GRID_M = 1e-4  # every imported polygon is snapped to this grid (the 4 decimals the YAML keeps) and made valid on it
 SLIVER_M = 0.002  # a piece thinner than this (2 mm: area / half its perimeter) is a sliver, dropped
 
@@ -194,11 +195,18 @@ def prism_obstacles(geom, zmin: float, zmax: float, prefix: str, source: dict[st
 
 def room_zones(rooms: list[tuple[str, Polygon]], coverage: int, skipped: Counter | None = None) -> list[dict]:
     """Volume zones (``zones:``) of named room polygons (m; outer rings, made valid);
-    a room in several pieces gives name, name-2, ...; duplicate names get -2, -3..."""
+    a room in several pieces gives name, name-2, ... (its pieces but the largest only from
+    MIN_ZONE_PIECE_M2 up: smaller ones are specks a pinch left, counted as slivers);
+    duplicate names get -2, -3..."""
     out, seen = [], {}
     for name, poly in rooms:
         pieces = sorted(clean_polygons(poly, tolerance=0.005, min_area=0.01, holes=False, skipped=skipped),
                         key=lambda q: -q.area)
+        specks = [q for q in pieces[1:] if q.area < MIN_ZONE_PIECE_M2]
+        if specks:
+            pieces = [q for q in pieces if not any(q is x for x in specks)]
+            if skipped is not None:
+                skipped["slivers"] += len(specks)
         for k, piece in enumerate(pieces):
             base = name if k == 0 else f"{name}-{k + 1}"
             seen[base] = seen.get(base, 0) + 1
