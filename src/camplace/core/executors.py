@@ -57,12 +57,15 @@ def run_task(fn: TaskFn, shared: Any, task: Any, n_threads: int | None = None) -
         return fn(shared, task)
 
 
+_POOL: dict = {}  # the on_threads pool of this process, by size (created at first use, kept: no thread start per call)
+
+
 def on_threads(n_rows: int, run: Callable[[int, int], Any], min_rows: int = 64) -> list[Any]:
     """``run(a, b)`` over consecutive pieces [a, b) of range(n_rows), on up to
     numba.get_num_threads() threads (pieces of at least ``min_rows``); the results in order.
     For numba kernels compiled serial and ``nogil``: such a kernel compiles about twice as
     fast as a ``parallel=True`` one (a new install compiles every kernel once) and launches
-    no thread team per call."""
+    no thread team per call. The pieces never call on_threads themselves."""
     import numba
 
     n = max(1, min(numba.get_num_threads(), n_rows // max(1, min_rows)))
@@ -70,9 +73,11 @@ def on_threads(n_rows: int, run: Callable[[int, int], Any], min_rows: int = 64) 
         return [run(0, n_rows)]
     from concurrent.futures import ThreadPoolExecutor
 
+    pool = _POOL.get(n)
+    if pool is None:
+        pool = _POOL[n] = ThreadPoolExecutor(n, thread_name_prefix="camplace-kernel")
     cuts = [n_rows * k // n for k in range(n + 1)]
-    with ThreadPoolExecutor(n) as pool:
-        return list(pool.map(run, cuts[:-1], cuts[1:]))
+    return list(pool.map(run, cuts[:-1], cuts[1:]))
 
 
 class Executor(abc.ABC):

@@ -18,6 +18,8 @@ an executor and the cache.
 from __future__ import annotations
 
 import math
+import threading
+import weakref
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -299,8 +301,29 @@ class TargetGrid:
     cell_tids: np.ndarray
 
 
+_MEMO: dict = {}  # per-targets arrays of the last Targets seen: refine raycasts a few poses at a time
+_MEMO_LOCK = threading.Lock()
+
+
+def _of_targets(targets: Targets, key, build):
+    """``build()``, remembered for the last ``targets`` object (by identity, while it lives;
+    Targets is frozen) and ``key``."""
+    with _MEMO_LOCK:
+        ref = _MEMO.get("targets")
+        if ref is None or ref() is not targets:
+            _MEMO.clear()
+            _MEMO["targets"] = weakref.ref(targets)
+        if key not in _MEMO:
+            _MEMO[key] = build()
+        return _MEMO[key]
+
+
 def target_grid(targets: Targets, cell: float) -> TargetGrid:
     """Bucket the targets in square xy cells of ``cell`` metres (``np.inf`` = one cell)."""
+    return _of_targets(targets, ("grid", float(cell)), lambda: _target_grid(targets, cell))
+
+
+def _target_grid(targets: Targets, cell: float) -> TargetGrid:
     pos = np.asarray(targets.positions, np.float64)
     cell = BRUTE_FORCE_CELL if not np.isfinite(cell) else float(cell)
     if cell <= 0:
@@ -332,9 +355,10 @@ def _block_arrays(occupancy: OccupancyGrid, targets: Targets, candidates: Candid
         grid = target_grid(targets, default_grid_cell(candidates))
     occ = occupancy.occupied.view(np.uint8)
     params = np.stack([c.params for c in candidates.cameras])
-    shared = (np.ascontiguousarray(targets.positions, dtype=np.float64),
-              np.ascontiguousarray(targets.normals, dtype=np.float64), target_cos_limits(targets),
-              grid.params, grid.cell_start, grid.cell_tids, target_min_px(targets))
+    pos, nrm, cos, min_px = _of_targets(targets, "arrays", lambda: (
+        np.ascontiguousarray(targets.positions, dtype=np.float64), np.ascontiguousarray(targets.normals, dtype=np.float64),
+        target_cos_limits(targets), target_min_px(targets)))
+    shared = (pos, nrm, cos, grid.params, grid.cell_start, grid.cell_tids, min_px)
     origin, res = occupancy.origin.astype(np.float64), float(occupancy.resolution)
 
     def piece(a: int, b: int) -> tuple[np.ndarray, np.ndarray]:
@@ -343,7 +367,7 @@ def _block_arrays(occupancy: OccupancyGrid, targets: Targets, candidates: Candid
                                   np.ascontiguousarray(candidates.rotations[a:b], dtype=np.float64),
                                   np.ascontiguousarray(candidates.camera_ids[a:b], dtype=np.int64), params, *shared)
 
-    parts = on_threads(stop - start, piece)
+    parts = on_threads(stop - start, piece, min_rows=4)  # refine casts ~8 poses a call: two threads
     if len(parts) == 1:
         return parts[0]
     offsets = np.cumsum([0] + [len(ix) for _, ix in parts])
