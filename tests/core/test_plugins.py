@@ -117,3 +117,14 @@ def test_registering_in_process_is_checked_the_same_way(plugins):
         plugins["other"] = first
     del plugins["again"]
     assert list(plugins) == ["first"]
+
+
+def test_an_entry_point_object_put_back_keeps_its_distribution(monkeypatch):
+    """A test that swaps a built-in and puts it back (monkeypatch.setitem) leaves it a built-in."""
+    import dataclasses
+
+    real = SOLVERS["greedy"]
+    with monkeypatch.context() as m:
+        m.setitem(SOLVERS, "greedy", dataclasses.replace(real, summary="a stand-in"))
+        assert SOLVERS.distribution("greedy") == "(registered in this process)"
+    assert SOLVERS["greedy"] is real and SOLVERS.distribution("greedy") == "camplace"

@@ -77,6 +77,7 @@ class Registry(MutableMapping):
         self._check = check
         self._items: dict[str, Any] | None = None
         self._dist: dict[str, str] = {}
+        self._origin: dict[str, tuple[Any, str]] = {}  # name -> (object, distribution) as the entry point gave it
         self.problems: list[tuple[str, str, str]] = []
         self._lock = threading.RLock()
         self._loading = False
@@ -99,7 +100,7 @@ class Registry(MutableMapping):
 
     def _read(self) -> dict[str, Any]:
         items: dict[str, Any] = {}
-        self._dist, self.problems = {}, []
+        self._dist, self._origin, self.problems = {}, {}, []
         for ep, dist in group_entry_points(self.group):
             if ep.name in items:
                 self._skip(ep.name, dist, f"the name is taken by the one from {self._dist[ep.name]}")
@@ -111,6 +112,7 @@ class Registry(MutableMapping):
                 continue
             items[ep.name] = obj
             self._dist[ep.name] = dist
+            self._origin[ep.name] = (obj, dist)
         return items
 
     def _skip(self, name: str, dist: str, why: str) -> None:
@@ -137,7 +139,8 @@ class Registry(MutableMapping):
     def __setitem__(self, name: str, obj: Any) -> None:
         items = self._load()
         items[name] = self._check(name, obj)
-        self._dist[name] = "(registered in this process)"
+        origin = self._origin.get(name)  # putting back the entry point's own object keeps its distribution
+        self._dist[name] = origin[1] if origin is not None and origin[0] is obj else "(registered in this process)"
 
     def __delitem__(self, name: str) -> None:
         del self._load()[name]
