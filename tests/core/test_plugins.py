@@ -123,6 +123,8 @@ def test_an_entry_point_object_put_back_keeps_its_distribution(monkeypatch):
     """A test that swaps a built-in and puts it back (monkeypatch.setitem) leaves it a built-in."""
     import dataclasses
 
+    from camplace.solvers import SOLVERS
+
     real = SOLVERS["greedy"]
     with monkeypatch.context() as m:
         m.setitem(SOLVERS, "greedy", dataclasses.replace(real, summary="a stand-in"))
