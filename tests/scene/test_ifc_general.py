@@ -63,6 +63,16 @@ def test_walls_of_a_room_as_one_element_keep_the_room_free(tmp_path):
     assert Polygon(g.scene["room"]["footprint"]).area == pytest.approx(12.0, rel=0.01)
 
 
+def test_a_level_holding_only_the_roof_is_no_storey_to_plan(tmp_path):
+    """Revit's 'Level 1' holding only the roof (no walls, no slab, a name not saying roof):
+    storey 'all' imports the storey with the walls and says why the roof level was left out."""
+    path = write_ring_room(tmp_path / "ring.ifc", (4.0, 3.0), 0.2, roof_level="Level 1")
+    got = read_storey_plans(path)
+    assert [n for n, _, _ in got] == ["Ground Floor"]
+    assert any("'Level 1' no rooms (no walls, no floor slab)" in note for note in got[0][1].notes)
+    assert got[0][1].scene["room"]["height"] == pytest.approx(3.0)  # the roof's underside
+
+
 def test_separate_blocks_join_into_one_simple_polygon_with_a_thin_seam():
     a, b = box(0, 0, 4, 4), box(7, 1, 10, 3)
     outline, seam = join_pieces([a, b], width=0.1)

@@ -76,9 +76,13 @@ def _storey_rooms(model, s: Structure, spaces: list[Element]) -> tuple[dict, dic
     labels: dict[int, str] = {}
     for key in set(where.values()):
         labels.update(room_labels([ents[i] for i, k in where.items() if k == key]))
-    counts = Counter(s.storey_key(e.id()) for e in _occluder_entities(model))
+    occluders = _occluder_entities(model)
+    counts = Counter(s.storey_key(e.id()) for e in occluders)
+    makers = Counter(s.storey_key(e.id()) for e in occluders if any(e.is_a(c) for c in WALLS) or (
+        e.is_a("IfcSlab") and str(getattr(e, "PredefinedType", "") or "") not in NOT_FLOORS))
     rooms = {st.key: StoreyRooms([(labels[e.eid], plan_shape(e).area, occupiable(ents[e.eid], labels[e.eid]))
-                                  for e in spaces if where[e.eid] == st.key], counts.get(st.key, 0))
+                                  for e in spaces if where[e.eid] == st.key], counts.get(st.key, 0),
+                                 makers.get(st.key, 0))
              for st in s.storeys}
     return rooms, where, labels
 

@@ -185,11 +185,12 @@ def write_grid_building(path: str | Path, b: GridBuilding = GridBuilding(), unit
 
 
 def write_ring_room(path: str | Path, size: tuple[float, float] = (4.0, 3.0), wall: float = 0.2,
-                    height: float = 3.0) -> Path:
+                    height: float = 3.0, roof_level: str | None = None) -> Path:
     """Write a room whose four walls are one IfcWall, its profile the ``size`` (m) rectangle
     with a hole ``wall`` m in from it (an IfcArbitraryProfileDefWithVoids extruded
     ``height`` m), as SketchUp, Blender and FreeCAD exports model a room's walls; one
-    storey, no IfcSpace, no slab."""
+    storey, no IfcSpace, no slab. ``roof_level``: a second storey of that name on the walls
+    holding only an IfcRoof over the room (as Revit's 'Level 1' holding the roof)."""
     wr = _Writer("m")
     m = wr.m
     st = wr.storey("Ground Floor", 0.0, 1.0)
@@ -207,6 +208,9 @@ def write_ring_room(path: str | Path, size: tuple[float, float] = (4.0, 3.0), wa
         wr.body, "Body", "SweptSolid", [solid]))
     wr.place(walls, np.zeros(3))
     wr.api.spatial.assign_container(m, products=[walls], relating_structure=st)
+    if roof_level:
+        wr.box("IfcRoof", "Roof", np.array([0.0, 0.0, height]), np.array([w, d, height + t]),
+               wr.storey(roof_level, height, 1.0))
     return atomic_write_text(Path(path), m.to_string())
 
 

@@ -40,10 +40,12 @@ class Footprint:
 
 @dataclass(frozen=True)
 class StoreyRooms:
-    """What the default choice weighs: a storey's rooms [(name, m², occupiable)] and its element count."""
+    """What the default choice weighs: a storey's rooms [(name, m², occupiable)], its element
+    count and how many of them are walls or floor slabs (what a footprint is made of)."""
 
     rooms: list[tuple[str, float, bool]]
     elements: int
+    makers: int = 0
 
     @property
     def occupiable(self) -> tuple[int, float]:
@@ -55,13 +57,15 @@ def _describe(st: Storey, r: StoreyRooms) -> str:
     n, area = r.occupiable
     if n:
         return f"'{st.name}' {n} room{'s' * (n != 1)}, {area:.1f} m²"
-    why = " (a roof or foundation level)" if st.roof_or_foundation else ""
+    why = (" (a roof or foundation level)" if st.roof_or_foundation else
+           " (no walls, no floor slab)" if not r.makers else "")
     return f"'{st.name}' {'no rooms' if not r.rooms else 'no room to plan'}{why}"
 
 
 def choose_storeys(s: Structure, rooms: dict[int, StoreyRooms], storey: str | None, path) -> tuple[list[Storey], str]:
     """The storeys to import and a note saying why: the one named ``storey``; for 'all' every
-    storey with a room to plan (else every storey not named a roof or foundation level);
+    storey with a room to plan (else every storey not named a roof or foundation level that
+    has walls or a floor slab: not a level holding only its roof);
     by default the one a user plans: not a roof or foundation level, the most rooms to
     plan (occupiable IfcSpaces: not external, not a roof), then the most floor area, then
     the most elements."""
@@ -73,17 +77,19 @@ def choose_storeys(s: Structure, rooms: dict[int, StoreyRooms], storey: str | No
     empty = StoreyRooms([], 0)
     if storey == "all":
         with_rooms = [st for st in s.storeys if rooms.get(st.key, empty).occupiable[0]]
-        plain = [st for st in s.storeys if not st.roof_or_foundation and rooms.get(st.key, empty).elements]
-        picked = with_rooms or plain or list(s.storeys)
+        plain = [st for st in s.storeys if not st.roof_or_foundation and rooms.get(st.key, empty).makers]
+        some = [st for st in s.storeys if not st.roof_or_foundation and rooms.get(st.key, empty).elements]
+        picked = with_rooms or plain or some or list(s.storeys)
         left = [st for st in s.storeys if st not in picked]
         why = ("every storey: the storeys with rooms to plan" if with_rooms else
-               "every storey: the storeys with elements (none has a room to plan)")
+               "every storey: the storeys with walls or a floor slab (none has a room to plan)" if plain else
+               "every storey: the storeys with elements (none has a room to plan, walls or a floor slab)")
         return picked, why + (f"; left out: {'; '.join(_describe(x, rooms.get(x.key, empty)) for x in left)}"
                               if left else "")
 
     def key(st: Storey):
         r = rooms.get(st.key, empty)
-        return (not st.roof_or_foundation, *r.occupiable, r.elements)
+        return (not st.roof_or_foundation, *r.occupiable, r.makers > 0, r.elements)
 
     best = max(s.storeys, key=key)
     others = [x for x in s.storeys if x is not best]
