@@ -22,6 +22,7 @@ Each returns the file's path; the FM_* and LATIN_* constants are the truths (m).
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 
 FM_OUTER = (3100, 2000)  # cm, outer faces of the exterior walls
@@ -268,7 +269,8 @@ SINGLE_ROOMS = {"Wohnen": (0, 0, 700, 600), "Flur": (700, 0, 790, 600), "Bad": (
 def draw_single_line_plan(path: str | Path, named_partition: bool = False) -> Path:
     """A 12 x 6 m flat in cm, $INSUNITS 5, everything on layer 0: walls as single LINEs
     (the outline, the walls at x 700 and 790, a wall between Bad and Schlafen), a door
-    swing (ARC + leaf LINE) into each room from the 0.9 m hall, room names as TEXT. With
+    swing (ARC + leaf LINE) into each room from the 0.9 m hall, the front door's leaf
+    drawn open outward (60 degrees into its swing, below the outline), room names as TEXT. With
     ``named_partition`` the wall at x 700 is a new partition instead, a LINE pair 10 cm
     apart on the layer 'Wand neu' (a renovation plan: only the new wall named)."""
     import ezdxf
@@ -286,6 +288,8 @@ def draw_single_line_plan(path: str | Path, named_partition: bool = False) -> Pa
                                ((790, 400), 0, (880, 400))]:
         msp.add_arc(hinge, 90, start, start + 90)
         msp.add_line(hinge, leaf)
+    msp.add_arc((300, 0), 90, 270, 360)  # the front door, open outward
+    msp.add_line((300, 0), (300 + 90 * math.cos(math.radians(300)), 90 * math.sin(math.radians(300))))
     for name, (x0, y0, x1, y1) in SINGLE_ROOMS.items():
         msp.add_text(name, height=20, dxfattribs={"insert": ((x0 + x1) / 2 - 20, (y0 + y1) / 2)})
     doc.saveas(path)

@@ -101,11 +101,14 @@ def test_walls_found_by_geometry(files):
 def test_single_line_walls_found_rooms_named(files):
     """Walls drawn as one line each (no pairs, layer 0) are found by the rooms they
     enclose; the 0.9 m hall, narrower than the doorways bridged for finding rooms, is a
-    room too; door swings (arcs) are no walls."""
+    room too; door swings (arcs) and the leaves drawn as lines from their centres are no
+    walls (the front door's, open outward, leaves the footprint at the outer wall)."""
     got = read_plan(files["single"])
     assert "single lines enclosing rooms" in got.used["wall layers"]
     w, h = (v / 100 for v in dd.SINGLE_OUTER)
     assert _area(got) == pytest.approx((w + 0.2) * (h + 0.2), rel=0.02)  # the outer face of 0.2 m walls
+    assert Polygon(got.scene["room"]["footprint"]).bounds[1] == pytest.approx(-0.1, abs=0.05)
+    assert got.skipped["door leaves drawn as a line from a swing's centre (no wall)"] == 4
     zones = {z["name"]: Polygon(z["polygon"]).area for z in got.scene["zones"]}
     assert set(zones) == set(dd.SINGLE_ROOMS)
     for name, (x0, y0, x1, y1) in dd.SINGLE_ROOMS.items():

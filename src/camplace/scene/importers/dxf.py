@@ -35,7 +35,7 @@ from camplace.scene.importers.dxf_read import FILLED, LINEWORK, Drawing, Shape, 
 from camplace.scene.importers.dxf_rooms import enclosed_rooms, room_names, room_polygons
 from camplace.scene.importers.dxf_units import check_span, read_in_units
 from camplace.scene.importers.dxf_walls import (MIN_SEGMENT_M, closing_solid, column_solid, components,
-                                                encloses_room, fill_gap, is_wall_fill, layer_pairs, main_building,
+                                                door_leaves, encloses_room, fill_gap, is_wall_fill, layer_pairs, main_building,
                                                 single_line_rooms, span, wall_layers_by_geometry)
 
 OPTIONS = ("wall_layers", "door_layers", "window_layers", "column_layers", "furniture_layers", "furniture_heights",
@@ -231,6 +231,7 @@ def _walls_by_geometry(d: Drawing, parts: dict, role: dict) -> tuple | None:
     (dxf_walls.wall_layers_by_geometry: of a layer of pairs its wall faces, of a layer of
     single-line walls its straight lines); None when there are none."""
     by_line, by_fill, straight = defaultdict(list), defaultdict(list), defaultdict(list)
+    arcs = [sh.geom for got in parts.values() for sh in got if sh.kind == "ARC" and isinstance(sh.geom, LineString)]
     for sh in parts.get("none", []) + parts.get("other", []):
         if not isinstance(sh.geom, LineString):
             by_fill[sh.layer] += polygons_of(sh.geom)
@@ -238,6 +239,11 @@ def _walls_by_geometry(d: Drawing, parts: dict, role: dict) -> tuple | None:
             by_line[sh.layer].append(sh.geom)
             if sh.kind in STRAIGHT and sh.geom.length >= MIN_SEGMENT_M:
                 straight[sh.layer].append(sh.geom)
+    for n, ls in straight.items():  # door leaves drawn as lines are no single-line walls
+        leaf = door_leaves(ls, arcs)
+        straight[n] = [ln for ln, x in zip(ls, leaf) if not x]
+        if leaf.any():
+            d.skipped["door leaves drawn as a line from a swing's centre (no wall)"] += int(leaf.sum())
     stats = layer_pairs(by_line, by_fill)
     chosen = wall_layers_by_geometry(stats, {n: single_line_rooms(ls) for n, ls in straight.items()})
     if not chosen:

@@ -29,6 +29,10 @@ BUILDING_GAP_M = 5.0  # walls, glass and columns closer than this belong to one 
 MIN_ROOM_FACE_M2 = 1.0  # a face of a layer's lines this large and wider on average than a wall is a room
 MIN_SINGLE_ROOMS_M2 = 8.0  # single-line walls enclose at least this much room area ...
 MIN_SINGLE_SHARE = 0.5  # ... with at least this share of the layer's straight linework on the rooms' edges
+SWING_RADIUS_M = (0.3, 1.6)  # an arc this wide (a cupboard's to a double door's leaf) may be a door's swing
+LEAF_LENGTH = (0.9, 1.15)  # a door leaf drawn as a line: its length over its swing's radius
+LEAF_HINGE = 0.1  # ... starting this share of the radius from the swing's centre
+LEAF_ANGLE_DEG = 10.0  # ... pointing into the swing's sweep, give or take this
 
 
 @dataclass
@@ -130,6 +134,45 @@ def single_line_rooms(lines: list) -> tuple[float, float]:
     if not len(rooms):
         return 0.0, 0.0
     return float(shapely.area(rooms).sum()), float(shapely.union_all(shapely.boundary(rooms)).length)
+
+
+def _swing(arc: LineString) -> tuple[np.ndarray, float, float, float] | None:
+    """(centre (2,), radius m, start angle, sweep) of a flattened arc (its first, middle and
+    last points on the circle); None when they lie on a line."""
+    c = np.asarray(arc.coords)[:, :2]
+    a, b, e = c[0], c[len(c) // 2], c[-1]
+    d = 2 * (a[0] * (b[1] - e[1]) + b[0] * (e[1] - a[1]) + e[0] * (a[1] - b[1]))
+    if len(c) < 3 or abs(d) < 1e-12:
+        return None
+    sq = (a * a).sum(), (b * b).sum(), (e * e).sum()
+    centre = np.array([sq[0] * (b[1] - e[1]) + sq[1] * (e[1] - a[1]) + sq[2] * (a[1] - b[1]),
+                       sq[0] * (e[0] - b[0]) + sq[1] * (a[0] - e[0]) + sq[2] * (b[0] - a[0])]) / d
+    ang = np.unwrap(np.arctan2(c[:, 1] - centre[1], c[:, 0] - centre[0]))
+    lo, hi = float(ang.min()), float(ang.max())
+    return centre, float(np.linalg.norm(a - centre)), lo, hi - lo
+
+
+def door_leaves(lines: list, arcs: list) -> np.ndarray:
+    """Which of the straight ``lines`` (m) are door leaves drawn as a line: from the centre
+    of a door swing among ``arcs`` (radius SWING_RADIUS_M) out to about its radius, within
+    its sweep (a door drawn open on a wall layer, no wall)."""
+    out = np.zeros(len(lines), bool)
+    swings = [w for w in (_swing(a) for a in arcs) if w and SWING_RADIUS_M[0] <= w[1] <= SWING_RADIUS_M[1]]
+    if not swings or not lines:
+        return out
+    tol = np.radians(LEAF_ANGLE_DEG)
+    for i, ln in enumerate(lines):
+        c = np.asarray(ln.coords)[:, :2]
+        if len(c) != 2:
+            continue
+        for centre, r, lo, sweep in swings:
+            for p, q in ((c[0], c[1]), (c[1], c[0])):
+                v = q - p
+                if (np.linalg.norm(p - centre) <= LEAF_HINGE * r
+                        and LEAF_LENGTH[0] * r <= np.linalg.norm(v) <= LEAF_LENGTH[1] * r
+                        and (np.arctan2(v[1], v[0]) - lo + tol) % (2 * np.pi) <= sweep + 2 * tol):
+                    out[i] = True
+    return out
 
 
 def encloses_room(solid) -> bool:
