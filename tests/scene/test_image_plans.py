@@ -16,7 +16,8 @@ from shapely.geometry import Point, Polygon
 
 from camplace.core.errors import InputError
 from camplace.scene.importers import read_plan, read_storey_plans
-from tests.scene.image_drawings import PX, ROOMS, D, W, draw_apartment, draw_two_blocks, draw_u_plan, room_area
+from tests.scene.image_drawings import (PX, ROOMS, D, W, draw_apartment, draw_line_plan, draw_two_blocks, draw_u_plan,
+                                       room_area)
 
 
 def need_ocr():
@@ -49,6 +50,28 @@ def test_five_rooms_with_their_areas(apartment):
     outline = (W + 0.6) * (D + 0.6)  # the outer faces of the 0.3 m outer walls
     assert Polygon(got.scene["room"]["footprint"]).area == pytest.approx(outline, rel=0.05)
     assert got.storeys[0]["outline_m2"] == pytest.approx(outline, rel=0.05)
+
+
+def test_a_plan_drawn_in_single_lines(tmp_path):
+    """Hairline walls (every wall one 1 px line, as CAD exports draw them): no stroke is
+    thick enough for solid_walls, so the walls are the straight lines, drawn 0.1 m thick;
+    the sheet frame and title block are not the building, the rooms are found (a door's
+    swing drawn into a room is left out of it), and OCR names them."""
+    sheet = draw_line_plan(tmp_path / "lines.png")
+    got = read_plan(sheet.path, scale=PX)
+    assert got.used["walls"].endswith("from single lines (no stroke 0.08 m thick encloses a room), drawn 0.1 m thick")
+    areas = sorted(p.area for p in _zones(got).values())
+    assert areas == pytest.approx(sorted(room_area(n) for n in ROOMS), rel=0.15), areas
+    outline = (W + 0.2) * (D + 0.2)  # the outer lines 0.05 m out, drawn 0.1 m thick
+    assert Polygon(got.scene["room"]["footprint"]).area == pytest.approx(outline, rel=0.03)
+    assert len(got.storeys) == 1
+    need_ocr()
+    assert sorted(_zones(got)) == sorted(ROOMS)
+
+
+def test_thick_walls_are_not_read_as_lines(apartment):
+    _, got = apartment
+    assert got.used["walls"].endswith("from strokes at least 0.08 m thick")
 
 
 def test_openings_title_block_and_summary(apartment):

@@ -9,6 +9,8 @@ m). Step by step (image_walls, image_rooms, image_ocr, image_text):
 2. Walls: the ink closed over ``hatch_spacing`` (outlines with a hatch, walls drawn as two
    lines become solid; broad textured areas such as stair treads are given back), strokes
    thinner than ``min_wall_thickness`` opened away (text, dimension lines, door swings).
+   When no such stroke encloses a room, the plan is drawn in single lines (hairlines):
+   the straight lines are the walls, drawn LINE_WALL_M thick (image_walls.line_walls).
 3. Plans: the drawn wall pieces joined across their openings form a plan, not across a
    gutter no room spans (image_walls.gutter_bridges); marks off the plans (title block,
    legend, scale bar, key plan) and text blocks are dropped. Several plans side by side
@@ -35,8 +37,9 @@ from camplace.scene.importers import (DEFAULT_CEILING_M, PlanImport, clean_polyg
 from camplace.scene.importers.image_ocr import ocr_engine, read_lines, room_name, text_lines_mask
 from camplace.scene.importers.image_rooms import colour_rooms, free_regions, mask_polygons
 from camplace.scene.importers.image_scale import scale_from_dimensions
-from camplace.scene.importers.image_walls import (EIGHT, bridge_openings, brightness, find_plans, ink_threshold,
-                                                  otsu_threshold, read_image, solid_walls)
+from camplace.scene.importers.image_walls import (EIGHT, LINE_WALL_M, REACH_M, bridge_openings, brightness,
+                                                  find_plans, ink_threshold, line_walls, otsu_threshold, read_image,
+                                                  solid_walls)
 
 OPTIONS = ("scale", "ref", "threshold", "storey", "min_wall_thickness", "max_wall_thickness", "hatch_spacing",
            "max_opening", "min_room_area", "ocr")
@@ -93,6 +96,7 @@ class Sheet:
     ocr: str
     skipped: Counter
     max_wall: float
+    walls_from: str = "strokes"
 
 
 def analyse(path: Path, scale=None, ref=None, threshold=None, min_wall_thickness=0.08, max_wall_thickness=0.8,
@@ -124,19 +128,36 @@ def analyse(path: Path, scale=None, ref=None, threshold=None, min_wall_thickness
     ink = dark < t
     skipped: Counter = Counter()
     raw = solid_walls(ink, s, hatch_spacing, min_wall_thickness, max_wall_thickness, skipped)
-    if not raw.any():
-        raise InputError(f"{path}: no walls found (no dark strokes at least {min_wall_thickness} m thick)")
-    found = find_plans(raw, ink, s, max_opening, max_wall_thickness, skipped)
-    plans = [_plan_rooms(found.plan_of, k, box, s, max_opening, max_wall_thickness, min_room_area, skipped)
-             for k, box in enumerate(found.plans, 1)]
-    for plan in plans:
-        _colour_split(plan, rgb, ink, s, min_room_area)
+    plans = _plans(raw, ink, rgb, s, max_opening, max_wall_thickness, min_room_area, skipped) if raw.any() else []
+    walls_from = f"strokes at least {min_wall_thickness:g} m thick"
+    if not any(p.rooms for p in plans):  # a plan drawn in single lines (hairlines)?
+        lines, line_skipped = line_walls(ink, s, max_opening), Counter()
+        line_plans = _plans(lines, lines, rgb, s, max_opening, max_wall_thickness, min_room_area, line_skipped,
+                            reach=max_opening) if lines.any() else []  # wall pieces between windows join
+        if any(p.rooms for p in line_plans):
+            plans, skipped = line_plans, line_skipped
+            walls_from = (f"single lines (no stroke {min_wall_thickness:g} m thick encloses a room), "
+                          f"drawn {LINE_WALL_M:g} m thick")
+    if not raw.any() and not plans:
+        raise InputError(f"{path}: no walls found (no dark strokes at least {min_wall_thickness} m thick, "
+                         "nor single lines enclosing a room)")
     if not any(p.rooms for p in plans):
         raise InputError(f"{path}: no closed room found (no free region of at least {min_room_area} m² "
                          "enclosed by walls)")
     if engine is not None:
         _name_rooms(engine, dark, ink, plans)
-    return Sheet(s, scale_from, t, how, plans, dark.shape[0], ocr_line, skipped, max_wall_thickness)
+    return Sheet(s, scale_from, t, how, plans, dark.shape[0], ocr_line, skipped, max_wall_thickness, walls_from)
+
+
+def _plans(raw: np.ndarray, ink: np.ndarray, rgb: np.ndarray, s: float, max_opening: float, max_wall: float,
+           min_room_area: float, skipped: Counter, reach: float = REACH_M) -> list[PlanRooms]:
+    """The plans of the wall mask ``raw`` with their openings and rooms (``reach``: m, see find_plans)."""
+    found = find_plans(raw, ink, s, max_opening, max_wall, skipped, reach)
+    plans = [_plan_rooms(found.plan_of, k, box, s, max_opening, max_wall, min_room_area, skipped)
+             for k, box in enumerate(found.plans, 1)]
+    for plan in plans:
+        _colour_split(plan, rgb, ink, s, min_room_area)
+    return plans
 
 
 def _plan_rooms(plan_of: np.ndarray, k: int, box, s: float, max_opening: float, max_wall: float,
@@ -297,7 +318,8 @@ def plan_import(path: Path, sheet: Sheet, index: int, why: str, *, name=None, wa
     used = {"scale": f"{sheet.s:g} m/px ({sheet.scale_from})",
             "threshold": f"{sheet.threshold:g} of 255, brightest channel ({sheet.threshold_from})",
             "plans": f"{len(sheet.plans)} on the sheet; plan-{index + 1} ({why})",
-            "walls": f"{len(obstacles)} wall prisms", "openings": f"{len(openings)} door and window gaps bridged",
+            "walls": f"{len(obstacles)} wall prisms from {sheet.walls_from}",
+            "openings": f"{len(openings)} door and window gaps bridged",
             "ocr": sheet.ocr if not sheet.ocr.startswith("tesseract") else
             f"{sheet.ocr}: {named} of {len(plan.rooms)} rooms named"}
     notes = []

@@ -22,6 +22,9 @@ DOOR_M = 1.0  # the widest door beside a corner
 MIN_JAMB_M = 0.12  # a wall beside a door runs at least this far in line with it
 REACH_M = 1.0  # a small wall piece this close to a plan belongs to it (to the nearest plan)
 LONG_STROKE_M = 0.6  # ink pieces at least this long across are strokes (wall outlines, dimension lines)
+LINE_RUN_M = 1.0  # a wall drawn as a single line runs straight this far somewhere along its piece of ink
+LINE_PIECE_M = 0.4  # ... or is a straight piece this long in line with such walls
+LINE_WALL_M = 0.1  # the thickness given to walls drawn as single lines (m)
 
 
 def read_image(path: Path) -> np.ndarray:
@@ -132,7 +135,7 @@ def solid_walls(ink: np.ndarray, s: float, hatch_m: float, min_wall_m: float, ma
         return ink
     extent = np.r_[0, [max(b[0].stop - b[0].start, b[1].stop - b[1].start) for b in ndimage.find_objects(lab)]]
     strokes = square_morphology(extent[lab] * s >= LONG_STROKE_M, 3, "close")  # small breaks sealed
-    free = ~strokes
+    free = ~strokes & ~_edge_paper(~strokes)  # the paper between a sheet's frame and its edge is no wall
     cells = free & ~square_morphology(free, hatch_m / s, "open")  # hatch cells, the inside of thin walls
     bands = free & ~square_morphology(free, max_wall_m / s, "open")  # strips no wider than a wall
     blab, nb = ndimage.label(bands)
@@ -156,6 +159,40 @@ def solid_walls(ink: np.ndarray, s: float, hatch_m: float, min_wall_m: float, ma
             back = textured[blab]
             solid[back] = ink[back]
     return square_morphology(solid, max(min_wall_m / s, 2), "open")
+
+
+def _edge_paper(free: np.ndarray) -> np.ndarray:
+    """The pixels of ``free`` (bool) connected to the image's edge."""
+    lab, _ = ndimage.label(free)
+    edge = np.unique(np.r_[lab[0], lab[-1], lab[:, 0], lab[:, -1]])
+    return np.isin(lab, edge[edge > 0])
+
+
+def line_walls(ink: np.ndarray, s: float, max_opening_m: float) -> np.ndarray:
+    """Walls of a plan drawn in single lines (hairlines: a CAD export or a sketch with no
+    wall drawn thicker than a pen, which solid_walls opens away): the pieces of ink with a
+    straight run of at least LINE_RUN_M along either axis somewhere (text, whose letters
+    are separate pieces, symbols and loose door swings have none; a door's leaf and swing
+    drawn onto its wall stay with it), and the straight pieces of at least LINE_PIECE_M in
+    line with those walls, no more than ``max_opening_m`` from them (between windows,
+    beside doors); small breaks sealed, drawn LINE_WALL_M thick (m) so they occlude and
+    part rooms."""
+    lab, n = ndimage.label(ink, EIGHT)
+    keep = np.zeros(n + 1, bool)
+    for axis in (0, 1):
+        keep[np.unique(lab[_line(ink, odd(LINE_RUN_M / s, 3), axis, "open")])] = True
+    keep[0] = False
+    walls = keep[lab]
+    for axis in (0, 1):  # short pieces in line with the walls: between windows, beside doors
+        short = _line(ink & ~walls, odd(LINE_PIECE_M / s, 3), axis, "open")
+        along = _line(walls, odd(LINE_PIECE_M / s, 3), axis, "open")
+        joined, _ = ndimage.label(_line(along | short, odd(max_opening_m / s, 3), axis, "close"), EIGHT)
+        hit = np.unique(joined[along])
+        ok = np.isin(joined, hit[hit > 0]) & short
+        keep[np.unique(lab[ok])] = True
+    keep[0] = False
+    sealed = square_morphology(keep[lab], 3, "close")
+    return ndimage.maximum_filter(sealed, size=odd(LINE_WALL_M / s, 1)).astype(bool)
 
 
 def _line(mask: np.ndarray, length: int, axis: int, op: str) -> np.ndarray:
@@ -223,14 +260,14 @@ class Sheet:
 
 
 def find_plans(raw: np.ndarray, ink: np.ndarray, s: float, max_opening_m: float, max_wall_m: float,
-               skipped: Counter) -> Sheet:
+               skipped: Counter, reach_m: float = REACH_M) -> Sheet:
     """The separate plans of a sheet in the wall mask ``raw``. A wall piece (8-connected)
     is drawn (its edge is ink: an outline, a solid stroke, ≥ 60 %, and at least 0.05 m²)
     or a blot of symbols; a thin ring around most of the sheet is its frame. Drawn pieces
     of some size (a twentieth of the largest) joined across the openings between walls in
     line (bridge_openings: ``max_opening_m``, ``max_wall_m``), but not across a gutter no
-    room spans (gutter_bridges), are one plan; smaller drawn pieces within REACH_M of one
-    belong to the nearest. Plans under a quarter of the largest plan's wall area (key
+    room spans (gutter_bridges), are one plan; smaller drawn pieces within ``reach_m`` of
+    one belong to the nearest. Plans under a quarter of the largest plan's wall area (key
     plans, title blocks, legends, scale bars) and frames around other plans are not the
     building; each plan keeps its drawn pieces and any piece at least a quarter of its
     largest."""
@@ -250,12 +287,12 @@ def find_plans(raw: np.ndarray, ink: np.ndarray, s: float, max_opening_m: float,
     bridges = bridge_openings(bones, s, max_opening_m, max_wall_m)
     bones |= bridges & ~gutter_bridges(bones, bridges)  # one plan across its windows and doors, not across gutters
     glab, ng = ndimage.label(ndimage.maximum_filter(bones, size=3), EIGHT)
-    group = _nearest_groups(glab, lab, n, REACH_M / s)
+    group = _nearest_groups(glab, lab, n, reach_m / s)
     group = _inner_groups_joined(group, ndimage.find_objects(glab), np.bincount(group, weights=area * drawn,
                                                                                minlength=ng + 1))
     biggest = np.zeros(ng + 1)
     np.maximum.at(biggest, group, area)
-    keep = drawn | (area >= 0.25 * biggest[group])
+    keep = (drawn | (area >= 0.25 * biggest[group])) & ~frame
     keep &= group > 0
     gsum = np.bincount(group, weights=area * keep, minlength=ng + 1)
     gsum[0] = 0
