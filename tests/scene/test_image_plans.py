@@ -69,6 +69,20 @@ def test_a_plan_drawn_in_single_lines(tmp_path):
     assert sorted(_zones(got)) == sorted(ROOMS)
 
 
+def test_a_fine_scan_is_read_at_a_coarser_scale(apartment, tmp_path):
+    """The sheet at 4x the pixels (0.005 m/px, a 1:50 plan at 500 dpi) is read at 1/2 of
+    its pixels, the darkest of each 2 x 2 block: the same rooms."""
+    from PIL import Image
+
+    sheet, got = apartment
+    with Image.open(sheet.path) as im:
+        im.resize((im.width * 4, im.height * 4), Image.LANCZOS).save(tmp_path / "fine.png")
+    fine = read_plan(tmp_path / "fine.png", scale=PX / 4, ocr=False)
+    assert fine.used["scale"] == f"{PX / 2:g} m/px (given; the image's {PX / 4:g} m/px read at 1/2 of its pixels)"
+    areas = sorted(p.area for p in _zones(fine).values())
+    assert areas == pytest.approx(sorted(p.area for p in _zones(got).values()), rel=0.03)
+
+
 def test_thick_walls_are_not_read_as_lines(apartment):
     _, got = apartment
     assert got.used["walls"].endswith("from strokes at least 0.08 m thick")

@@ -41,8 +41,17 @@ from camplace.scene.importers.image_walls import (EIGHT, LINE_WALL_M, REACH_M, b
                                                   find_plans, ink_threshold, line_walls, otsu_threshold, read_image,
                                                   solid_walls)
 
+WORK_M_PER_PX = 0.01  # images finer than this are read at an integer fraction of their pixels
 OPTIONS = ("scale", "ref", "threshold", "storey", "min_wall_thickness", "max_wall_thickness", "hatch_spacing",
            "max_opening", "min_room_area", "ocr")
+
+
+def darkest_of_blocks(rgb: np.ndarray, f: int) -> np.ndarray:
+    """(H // f, W // f, 3) uint8: each channel's darkest value in every f x f block of
+    ``rgb`` (H, W, 3), so hairlines and small text stay ink at the coarser scale (the
+    last rows and columns that do not fill a block are left out)."""
+    h, w = rgb.shape[0] // f * f, rgb.shape[1] // f * f
+    return rgb[:h, :w].reshape(h // f, f, w // f, f, 3).min(axis=(1, 3))
 
 
 def metres_per_pixel(path: Path, scale: float | None, ref) -> tuple[float, str]:
@@ -119,6 +128,11 @@ def analyse(path: Path, scale=None, ref=None, threshold=None, min_wall_thickness
         s, scale_from = read
     else:
         s, scale_from = metres_per_pixel(path, scale, ref)
+    if s * 2 <= WORK_M_PER_PX:  # a fine scan: read at WORK_M_PER_PX or finer (4x fewer pixels at 1/2)
+        f = int(WORK_M_PER_PX // s)
+        scale_from += f"; the image's {s:g} m/px read at 1/{f} of its pixels"
+        rgb, s = darkest_of_blocks(rgb, f), s * f
+        dark = brightness(rgb)
     if threshold is None:
         t, how = ink_threshold(dark, s, max_wall_thickness)
     else:
