@@ -136,6 +136,28 @@ def test_ctrl_c_by_phase():
     assert signal.getsignal(signal.SIGINT) is before  # the handler it found is restored
 
 
+def test_ctrl_c_in_a_finalizer_prints_no_traceback_and_still_stops(capfd):
+    """A Ctrl-C raised while Python runs a finalizer (a weakref callback, __del__) cannot
+    leave it: Python prints it with a traceback and goes on. Installed, the flag keeps it
+    quiet and delivers it again outside, so the command still stops."""
+    from camplace.cli.common import StopFlag
+
+    class Finalized:
+        def __del__(self):
+            raise KeyboardInterrupt
+
+    stop = StopFlag()
+    with stop.installed():
+        stop.stage("solve")
+        stop.contract_written()
+        stop.count = 1  # after the first Ctrl-C: a second one ends the report set
+        with pytest.raises(KeyboardInterrupt):
+            Finalized()  # dropped at once: __del__ raises inside the finalizer
+            time.sleep(2)
+        stop.finished()
+    assert "Traceback" not in capfd.readouterr().err
+
+
 def test_interrupted_run_writes_the_contract_files_fast_and_lists_what_it_skipped(tmp_path):
     """After a Ctrl-C the report set gets what is left of its time: past the deadline each
     part is skipped and listed; a KeyboardInterrupt (a second Ctrl-C) during it only ends it."""

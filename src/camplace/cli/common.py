@@ -177,6 +177,19 @@ class StopFlag:
 
         _thread.interrupt_main(signal.SIGINT)
 
+    def _unraisable(self, args) -> None:
+        """sys.unraisablehook while installed: a Ctrl-C that landed in a finalizer or a weakref
+        callback (where Python can only print it, with a traceback, and go on) is delivered
+        again a moment later, outside it; anything else goes to the previous hook."""
+        if issubclass(args.exc_type, KeyboardInterrupt) and self.phase != "done":
+            import threading
+
+            again = threading.Timer(0.05, self._late)
+            again.daemon = True
+            again.start()
+            return
+        self._prev_unraisable(args)
+
     @contextmanager
     def installed(self):
         try:
@@ -184,12 +197,14 @@ class StopFlag:
         except ValueError:  # not the main thread: leave Ctrl-C alone
             yield self
             return
+        self._prev_unraisable, sys.unraisablehook = sys.unraisablehook, self._unraisable
         try:
             yield self
         finally:
             if self._timer is not None:
                 self._timer.cancel()
             signal.signal(signal.SIGINT, prev)
+            sys.unraisablehook = self._prev_unraisable
 
 
 class RichProgress:
