@@ -42,7 +42,7 @@ FLAGS = {
     "units": "--units", "wall_height": "--wall-height", "ceiling_height": "--ceiling-height", "scale": "--scale",
     "ref": "--ref", "storey": "--storey", "wall_layers": "--wall-layers", "furniture_heights": "--layer-height",
     "doors": "--doors", "glass": "--glass", "threshold": "--threshold", "max_opening": "--max-opening",
-    "min_room_area": "--min-room-area", "ocr": "--no-ocr",
+    "min_room_area": "--min-room-area", "ocr": "--no-ocr", "page": "--page",
     **CROWD_FLAGS,
 }
 

@@ -19,6 +19,7 @@ from camplace.cli.common import (CACHE_OPT, FRAME_OPT, MAX_MEMORY_OPT, NO_CACHE_
                                  console, memory_bytes, progress_bars, repeatable_requested, scale_options, state)
 from camplace.cli.space import (CEILING_OPT, REF_OPT, SCALE_OPT, STOREY_OPT, UNITS_OPT, WALL_HEIGHT_OPT,
                                  DOORS_OPT, GLASS_OPT, LAYER_HEIGHT_OPT, MAX_OPENING_OPT, MIN_ROOM_OPT, NO_OCR_OPT,
+                                 PAGE_OPT,
                                  THRESHOLD_OPT, WALL_LAYERS_OPT,
                                  ImportOptions, describe_import, plan_import_options, scene_data_from_file, scene_yaml,
                                  space_kind)
@@ -176,12 +177,13 @@ def run_cmd(scene: Optional[str] = typer.Argument(None, help="Scene YAML file, b
                                                     "(solver 'certify')."),
             option: Optional[list[str]] = OPTION_OPT, seed: Optional[int] = SEED_OPT,
             units: Optional[str] = UNITS_OPT, wall_height: Optional[float] = WALL_HEIGHT_OPT,
-            ceiling_height: Optional[float] = CEILING_OPT, scale: Optional[float] = SCALE_OPT,
+            ceiling_height: Optional[float] = CEILING_OPT, scale: Optional[str] = SCALE_OPT,
             ref: Optional[str] = REF_OPT, storey: Optional[str] = STOREY_OPT,
             wall_layers: Optional[str] = WALL_LAYERS_OPT, layer_height: Optional[list[str]] = LAYER_HEIGHT_OPT,
             doors: Optional[str] = DOORS_OPT, glass: Optional[str] = GLASS_OPT,
             threshold: Optional[float] = THRESHOLD_OPT, max_opening: Optional[float] = MAX_OPENING_OPT,
             min_room_area: Optional[float] = MIN_ROOM_OPT, no_ocr: bool = NO_OCR_OPT,
+            page: Optional[int] = PAGE_OPT,
             crowd_density: Optional[float] = crowd.DENSITY_OPT, crowd_samples: Optional[int] = crowd.SAMPLES_OPT,
             crowd_score_samples: Optional[int] = crowd.SCORE_SAMPLES_OPT, crowd_seed: Optional[int] = crowd.SEED_OPT,
             crowd_aware: bool = crowd.AWARE_OPT,
@@ -215,7 +217,7 @@ def run_cmd(scene: Optional[str] = typer.Argument(None, help="Scene YAML file, b
                                wall_height=wall_height, ceiling_height=ceiling_height, scale=scale, ref=ref,
                                storey=storey, wall_layers=wall_layers, layer_height=layer_height, doors=doors,
                                glass=glass, threshold=threshold, max_opening=max_opening, min_room_area=min_room_area,
-                               no_ocr=no_ocr)
+                               no_ocr=no_ocr, page=page)
     storeys = preview = None
     if storey == "all":  # every storey of an IFC file, each into its own folder
         from camplace.cli.scene_import import storey_scenes

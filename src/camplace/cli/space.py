@@ -29,8 +29,10 @@ UNITS_OPT = typer.Option(None, "--units", help="Plan units mm|cm|m|in|ft (defaul
                          "length unit; a DXF that says none is read in the unit its geometry suggests, with a note).")
 WALL_HEIGHT_OPT = typer.Option(None, "--wall-height", help="Plan walls: height (m; default the ceiling height).")
 CEILING_OPT = typer.Option(None, "--ceiling-height", help="Plans: ceiling height (m; default 3, IFC: the storey's).")
-SCALE_OPT = typer.Option(None, "--scale", help="Plan images: metres per pixel (default: read from the dimension "
-                         "lines by OCR, said in a note).")
+SCALE_OPT = typer.Option(None, "--scale", help="Plan images and PDFs: metres per pixel, or the drawing scale 1:N "
+                         "(e.g. 1:100; a PDF's page size, or the dpi a raster file records, turns it into metres "
+                         "per pixel); default: read from the dimension lines by OCR, said in a note.")
+PAGE_OPT = typer.Option(None, "--page", help="PDF plans: the page to read (1-based; default 1).")
 REF_OPT = typer.Option(None, "--ref", help="Plan images: two points 'x1,y1,x2,y2,DIST' (pixels, metres) for the scale.")
 STOREY_OPT = typer.Option(None, "--storey", help="IFC: the IfcBuildingStorey name (default: the storey a user plans, "
                           "most rooms, never a roof or foundation level); plan images: plan-N, the N-th plan on a "
@@ -55,7 +57,24 @@ NO_OCR_OPT = typer.Option(False, "--no-ocr", help="Plan images: no OCR (rooms na
 PLAN_FLAGS = {"units": "--units", "wall_height": "--wall-height", "ceiling_height": "--ceiling-height",
               "scale": "--scale", "ref": "--ref", "storey": "--storey", "wall_layers": "--wall-layers",
               "layer_height": "--layer-height", "doors": "--doors", "glass": "--glass", "threshold": "--threshold",
-              "max_opening": "--max-opening", "min_room_area": "--min-room-area", "no_ocr": "--no-ocr"}
+              "max_opening": "--max-opening", "min_room_area": "--min-room-area", "no_ocr": "--no-ocr",
+              "page": "--page"}
+
+def drawing_scale(text: str | None) -> bool:
+    """True when ``text`` (--scale) is a drawing scale such as 1:100."""
+    return text is not None and ":" in text
+
+
+def plan_scale(text: str | None) -> float | None:
+    """--scale as metres per pixel (None: not given or a drawing scale 1:N, which the importer reads)."""
+    if text is None or drawing_scale(text):
+        return None
+    try:
+        return float(text)
+    except ValueError:
+        raise InputError(f"--scale: expected metres per pixel (e.g. 0.02) or a drawing scale 1:N (e.g. 1:100), "
+                         f"got '{text}'") from None
+
 
 @dataclass(frozen=True)
 class ImportOptions:
@@ -73,7 +92,7 @@ class ImportOptions:
     units: str | None = None
     wall_height: float | None = None
     ceiling_height: float | None = None
-    scale: float | None = None
+    scale: str | None = None
     ref: str | None = None
     storey: str | None = None
     wall_layers: str | None = None
@@ -84,15 +103,17 @@ class ImportOptions:
     max_opening: float | None = None
     min_room_area: float | None = None
     no_ocr: bool = False
+    page: int | None = None
 
     def plan_kwargs(self, budget: int | None) -> dict:
         """camplace.scene.importers.import_plan keyword arguments (None: the importer's default)."""
         for flag, v in (("--wall-height", self.wall_height), ("--ceiling-height", self.ceiling_height),
-                        ("--scale", self.scale)):
+                        ("--scale", plan_scale(self.scale))):
             if v is not None and not v > 0:
                 raise InputError(f"{flag}: expected a positive number, got {v}")
         return dict(units=self.units, wall_height=self.wall_height, ceiling_height=self.ceiling_height,
-                    scale=self.scale, ref=floats(self.ref, "--ref", 5) if self.ref else None, storey=self.storey,
+                    scale=self.scale if drawing_scale(self.scale) else plan_scale(self.scale),
+                    ref=floats(self.ref, "--ref", 5) if self.ref else None, storey=self.storey, page=self.page,
                     heights=floats(self.heights, "--heights"), coverage=self.coverage, budget=budget,
                     wall_layers=tuple(p.strip() for p in self.wall_layers.split(",") if p.strip())
                     if self.wall_layers else None, furniture_heights=layer_heights(self.layer_height),
@@ -244,7 +265,7 @@ def scene_data_from_file(path: str | Path, opts: ImportOptions, budget: int | No
     if kind is None:
         raise InputError(f"{p}: not a space file; expected a scan ({', '.join(POINT_CLOUD_SUFFIXES)}), a mesh "
                          f"({', '.join(MESH_SUFFIXES)}), an OctoMap ({', '.join(OCTOMAP_SUFFIXES)}) or a plan "
-                         "(.dxf, .png/.jpg/.tif, .ifc)")
+                         "(.dxf, .png/.jpg/.tif, .pdf, .ifc)")
     if not p.is_file():
         raise InputError(f"{p}: file not found" if not p.exists() else f"{p}: is a folder, expected a file")
     if kind == "plan":

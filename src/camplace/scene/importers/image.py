@@ -35,15 +35,15 @@ from camplace.core.errors import InputError
 from camplace.scene.importers import (DEFAULT_CEILING_M, PlanImport, clean_polygons, plan_scene, polygons_of,
                                       prism_obstacles, room_zones, rooms_footprint)
 from camplace.scene.importers.image_ocr import ocr_engine, read_lines, room_name, text_lines_mask
+from camplace.scene.importers.image_read import metres_per_pixel, read_sheet
 from camplace.scene.importers.image_rooms import colour_rooms, free_regions, mask_polygons
 from camplace.scene.importers.image_scale import scale_from_dimensions
 from camplace.scene.importers.image_walls import (EIGHT, LINE_WALL_M, REACH_M, bridge_openings, brightness,
-                                                  find_plans, ink_threshold, line_walls, otsu_threshold, read_image,
-                                                  solid_walls)
+                                                  find_plans, ink_threshold, line_walls, otsu_threshold, solid_walls)
 
 WORK_M_PER_PX = 0.01  # images finer than this are read at an integer fraction of their pixels
 OPTIONS = ("scale", "ref", "threshold", "storey", "min_wall_thickness", "max_wall_thickness", "hatch_spacing",
-           "max_opening", "min_room_area", "ocr")
+           "max_opening", "min_room_area", "ocr", "page")
 
 
 def darkest_of_blocks(rgb: np.ndarray, f: int) -> np.ndarray:
@@ -52,22 +52,6 @@ def darkest_of_blocks(rgb: np.ndarray, f: int) -> np.ndarray:
     last rows and columns that do not fill a block are left out)."""
     h, w = rgb.shape[0] // f * f, rgb.shape[1] // f * f
     return rgb[:h, :w].reshape(h // f, f, w // f, f, 3).min(axis=(1, 3))
-
-
-def metres_per_pixel(path: Path, scale: float | None, ref) -> tuple[float, str]:
-    """(m per pixel, where it came from) of ``scale`` or ``ref``; InputError without either."""
-    if scale is not None:
-        if not scale > 0:
-            raise InputError(f"scale: expected metres per pixel > 0, got {scale}", option="scale")
-        return float(scale), "given"
-    if ref is not None:
-        x1, y1, x2, y2, dist = (float(v) for v in ref)
-        px = math.hypot(x2 - x1, y2 - y1)
-        if px <= 0 or not dist > 0:
-            raise InputError(f"ref: expected two distinct points and a distance > 0 m, got {list(ref)}", option="ref")
-        return dist / px, f"reference: {dist:g} m over {px:.1f} px"
-    raise InputError(f"{path}: the plan's scale is unknown; give metres per pixel (scale) or two reference points "
-                     "and their distance (ref)", option="scale")  # (read: analyse tries the dimension lines first)
 
 
 @dataclass
@@ -109,25 +93,29 @@ class Sheet:
 
 
 def analyse(path: Path, scale=None, ref=None, threshold=None, min_wall_thickness=0.08, max_wall_thickness=0.8,
-            hatch_spacing=0.3, max_opening=1.8, min_room_area=1.0, ocr=True) -> Sheet:
-    """The plans, walls, openings, rooms and room names of a plan image."""
+            hatch_spacing=0.3, max_opening=1.8, min_room_area=1.0, ocr=True, page=None) -> Sheet:
+    """The plans, walls, openings, rooms and room names of a plan image (or of page ``page``
+    of a PDF; ``scale`` m per pixel or a drawing scale '1:N', see image_read)."""
     for key, value in (("min_wall_thickness", min_wall_thickness), ("max_wall_thickness", max_wall_thickness),
                        ("hatch_spacing", hatch_spacing), ("max_opening", max_opening), ("min_room_area", min_room_area)):
         if not (isinstance(value, (int, float)) and math.isfinite(value) and value > 0):
             raise InputError(f"{key}: expected a number > 0 ({'m²' if key == 'min_room_area' else 'm'}), got {value}",
                              option=key)
-    rgb = read_image(path)
+    paper = read_sheet(path, page, scale)
+    rgb = paper.rgb
     dark = brightness(rgb)
     engine, ocr_line = ocr_engine() if ocr else (None, "off")
-    if scale is None and ref is None:
+    read = metres_per_pixel(path, paper, scale, ref)
+    if read is None:
         read = scale_from_dimensions(engine, dark, dark < otsu_threshold(dark)) if engine is not None else None
         if read is None:
             why = "no dimension line could be read" if engine is not None else f"OCR not available: {ocr_line}"
-            raise InputError(f"{path}: the plan's scale is unknown ({why}); give metres per pixel (scale) or two "
-                             "reference points and their distance (ref)", option="scale")
-        s, scale_from = read
-    else:
-        s, scale_from = metres_per_pixel(path, scale, ref)
+            how = ("its drawing scale (scale, e.g. 1:100)" if paper.pdf else "metres per pixel or a drawing scale "
+                   "1:N (scale) or two reference points and their distance (ref)")
+            raise InputError(f"{path}: the plan's scale is unknown ({why}); give {how}", option="scale")
+    s, scale_from = read
+    if paper.about:
+        scale_from += f"; {paper.about}"
     if s * 2 <= WORK_M_PER_PX:  # a fine scan: read at WORK_M_PER_PX or finer (4x fewer pixels at 1/2)
         f = int(WORK_M_PER_PX // s)
         scale_from += f"; the image's {s:g} m/px read at 1/{f} of its pixels"

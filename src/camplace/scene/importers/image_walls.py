@@ -9,14 +9,11 @@ from __future__ import annotations
 
 from collections import Counter
 from dataclasses import dataclass, field
-from pathlib import Path
 
 import numpy as np
 from scipy import ndimage
 
-from camplace.core.errors import InputError
 
-MAX_PIXELS = 100_000_000
 EIGHT = np.ones((3, 3), bool)  # 8-connectivity
 DOOR_M = 1.0  # the widest door beside a corner
 MIN_JAMB_M = 0.12  # a wall beside a door runs at least this far in line with it
@@ -25,28 +22,6 @@ LONG_STROKE_M = 0.6  # ink pieces at least this long across are strokes (wall ou
 LINE_RUN_M = 1.0  # a wall drawn as a single line runs straight this far somewhere along its piece of ink
 LINE_PIECE_M = 0.4  # ... or is a straight piece this long in line with such walls
 LINE_WALL_M = 0.1  # the thickness given to walls drawn as single lines (m)
-
-
-def read_image(path: Path) -> np.ndarray:
-    """(H, W, 3) uint8 RGB of an image file: transparency laid on white paper, 16-bit
-    and float scans stretched to 0..255."""
-    from PIL import Image, UnidentifiedImageError
-
-    Image.MAX_IMAGE_PIXELS = MAX_PIXELS
-    try:
-        with Image.open(path) as im:
-            im.load()
-            if im.mode in ("I;16", "I;16B", "I;16L", "I", "F"):
-                a = np.asarray(im, np.float64)
-                lo, hi = np.percentile(a, [0.1, 99.9])
-                grey = np.clip((a - lo) * 255.0 / max(hi - lo, 1e-9), 0, 255).astype(np.uint8)
-                return np.repeat(grey[..., None], 3, axis=2)
-            if im.mode in ("RGBA", "LA", "PA") or (im.mode == "P" and "transparency" in im.info):
-                rgba = im.convert("RGBA")
-                im = Image.alpha_composite(Image.new("RGBA", rgba.size, (255, 255, 255, 255)), rgba)
-            return np.asarray(im.convert("RGB"))
-    except (UnidentifiedImageError, OSError, Image.DecompressionBombError, ValueError) as err:
-        raise InputError(f"{path}: not a readable image ({str(err).splitlines()[0]})") from None
 
 
 def brightness(rgb: np.ndarray) -> np.ndarray:

@@ -1,0 +1,75 @@
+"""PDF floor plans and drawing scales (issue 25): a PDF page is rendered (PDFium) and read
+as a plan image; '1:N' turns into metres per pixel through the page's size on paper, or
+through the DPI a raster file records; what cannot be used says so in one line."""
+
+from __future__ import annotations
+
+import pytest
+from PIL import Image
+
+from camplace.core.errors import InputError
+from camplace.scene.importers import read_plan
+from camplace.scene.importers.image_read import drawing_ratio
+from tests.scene.image_drawings import PX, ROOMS, draw_line_plan, room_area
+
+DPI = 127  # 0.2 mm of paper per pixel: the 0.02 m pixels of the drawing are 1:100
+
+
+@pytest.fixture(scope="module")
+def drawn(tmp_path_factory):
+    """(png path, pdf path, what the PNG gives at its scale): the hairline plan and the
+    same pixels as a one-page PDF at 1:100."""
+    folder = tmp_path_factory.mktemp("pdf")
+    sheet = draw_line_plan(folder / "plan.png")
+    with Image.open(sheet.path) as im:
+        im.convert("RGB").save(folder / "plan.pdf", resolution=DPI)
+        im.save(folder / "plan-dpi.png", dpi=(DPI, DPI))
+    return sheet.path, folder / "plan.pdf", read_plan(sheet.path, scale=PX, ocr=False)
+
+
+def _areas(got) -> list[float]:
+    from shapely.geometry import Polygon
+
+    return sorted(Polygon(z["polygon"]).area for z in got.scene["zones"])
+
+
+def test_a_pdf_page_at_its_drawing_scale(drawn):
+    _, pdf, png = drawn
+    got = read_plan(pdf, scale="1:100", ocr=False)  # rendered at 0.01 m/px: twice the PNG's pixels
+    assert got.used["scale"] == "0.01 m/px (1:100 at 254 dpi; page 1 of 1, rendered at 254 dpi)"
+    assert _areas(got) == pytest.approx(sorted(room_area(n) for n in ROOMS), rel=0.15)
+    assert len(_areas(got)) == len(_areas(png))
+
+
+def test_a_raster_file_at_its_recorded_dpi(drawn):
+    png, _, ref = drawn
+    got = read_plan(png.with_name("plan-dpi.png"), scale="1:100", ocr=False)
+    assert float(got.used["scale"].split()[0]) == pytest.approx(PX, rel=1e-3)
+    assert _areas(got) == pytest.approx(_areas(ref), rel=1e-6)
+
+
+@pytest.mark.parametrize("name, options, option, words", [
+    ("plan.pdf", {"scale": 0.02}, "scale", "is a PDF, whose pixels are rendered here"),
+    ("plan.pdf", {"scale": "1:100", "page": 2}, "page", "has 1 page; expected 1..1, got 2"),
+    ("plan.png", {"scale": "1:100"}, "scale", "does not record its resolution (dpi)"),
+    ("plan.png", {"scale": 0.02, "page": 1}, "page", "is an image, not a PDF"),
+    ("plan.png", {"scale": "1:x"}, "scale", "expected metres per pixel (e.g. 0.02) or a drawing scale 1:N"),
+])
+def test_what_cannot_be_used_says_so(drawn, name, options, option, words):
+    png, _, _ = drawn
+    with pytest.raises(InputError) as err:
+        read_plan(png.with_name(name), ocr=False, **options)
+    assert err.value.option == option and words in str(err.value)
+
+
+def test_a_damaged_pdf_is_one_line(tmp_path):
+    bad = tmp_path / "plan.pdf"
+    bad.write_bytes(b"%PDF-1.7\nnot really\n")
+    with pytest.raises(InputError, match=r"plan\.pdf: not a readable PDF"):
+        read_plan(bad, scale="1:100")
+
+
+@pytest.mark.parametrize("text, ratio", [("1:100", 100.0), (" 1 / 50 ", 50.0), ("1:62.5", 62.5), ("0.02", None),
+                                         (0.02, None), (None, None)])
+def test_drawing_ratio(text, ratio):
+    assert drawing_ratio(text) == ratio
