@@ -73,3 +73,17 @@ def test_a_damaged_pdf_is_one_line(tmp_path):
                                          (0.02, None), (None, None)])
 def test_drawing_ratio(text, ratio):
     assert drawing_ratio(text) == ratio
+
+
+@pytest.mark.parametrize("paper", [(0, 0, 0), (20, 60, 170)])  # a dark-mode screenshot, a blueprint
+def test_light_lines_on_dark_paper_are_read_inverted(drawn, tmp_path, paper):
+    import numpy as np
+
+    png, _, ref = drawn
+    with Image.open(png) as im:
+        a = np.asarray(im.convert("L"), np.float32)[..., None] / 255.0
+    ink = np.array([255, 255, 255], np.float32)  # white lines
+    Image.fromarray((a * np.array(paper, np.float32) + (1 - a) * ink).astype(np.uint8)).save(tmp_path / "dark.png")
+    got = read_plan(tmp_path / "dark.png", scale=PX, ocr=False)
+    assert got.used["scale"].endswith("light lines on dark paper, read inverted)")
+    assert _areas(got) == pytest.approx(_areas(ref), rel=0.02)

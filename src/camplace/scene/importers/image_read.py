@@ -5,7 +5,8 @@ is rendered with PDFium (pypdfium2) at a resolution of our choosing, so its pixe
 known size on paper. The scale is metres per pixel (``scale`` a number), a drawing scale
 ``'1:100'`` (needs the pixels' size on paper: a PDF's, or the DPI a raster file records),
 two reference points and their distance (``ref``, raster files only), or, with none of
-these, read from the dimension lines by the caller.
+these, read from the dimension lines by the caller. Light lines on dark paper (blueprints,
+dark-mode screenshots) are inverted to dark ink on light paper.
 """
 
 from __future__ import annotations
@@ -24,6 +25,7 @@ INCH_M = 0.0254
 PDF_DPI = 200  # a PDF page rendered without a drawing scale: text stays readable for OCR
 PDF_TARGET_M_PER_PX = 0.01  # with a drawing scale 1:N, a page is rendered at about this many m per pixel ...
 PDF_MAX_PIXELS = 40_000_000  # ... but never with more pixels than this
+DARK_PAPER = 100  # median luminance below which the paper is dark and the lines light
 RATIO_RE = re.compile(r"^\s*1\s*[:/]\s*(\d+(?:\.\d+)?)\s*$")
 
 
@@ -59,13 +61,26 @@ def drawing_ratio(scale) -> float | None:
 
 def read_sheet(path: Path, page: int | None = None, scale=None) -> SheetImage:
     """The pixels of ``path``: a raster file, or page ``page`` (1-based, default 1) of a PDF
-    rendered at PDF_DPI, or, given a drawing scale 1:N, at about PDF_TARGET_M_PER_PX."""
+    rendered at PDF_DPI, or, given a drawing scale 1:N, at about PDF_TARGET_M_PER_PX;
+    inverted when the paper is dark (dark_paper)."""
     if path.suffix.lower() == ".pdf":
-        return _pdf_page(path, page or 1, drawing_ratio(scale))
-    if page is not None:
+        sheet = _pdf_page(path, page or 1, drawing_ratio(scale))
+    elif page is not None:
         raise InputError(f"page: {path.name} is an image, not a PDF; it has no pages to choose", option="page")
-    rgb, dpi = read_image(path)
-    return SheetImage(rgb, dpi)
+    else:
+        sheet = SheetImage(*read_image(path))
+    if dark_paper(sheet.rgb):
+        sheet.rgb = 255 - sheet.rgb
+        sheet.about = "; ".join(a for a in (sheet.about, "light lines on dark paper, read inverted") if a)
+    return sheet
+
+
+def dark_paper(rgb: np.ndarray) -> bool:
+    """True for light lines on dark paper (a blueprint, a dark-mode screenshot): the sheet's
+    median luminance (ITU-R 601, 0..255) is below DARK_PAPER."""
+    step = max(1, int(math.sqrt(rgb.shape[0] * rgb.shape[1] / 1e6)))  # about a million pixels decide
+    sample = rgb[::step, ::step].astype(np.float32)
+    return float(np.median(sample @ np.array([0.299, 0.587, 0.114], np.float32))) < DARK_PAPER
 
 
 def read_image(path: Path) -> tuple[np.ndarray, float | None]:
