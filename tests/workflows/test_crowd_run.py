@@ -112,3 +112,21 @@ def test_existing_cameras_are_thinned_by_the_same_crowds():
     assert abs(opt["objective"] - want) < 1e-9 * max(1.0, want)  # the offset keeps the full crowd cost
     assert abs(opt["coverage_gap"] - want / float(np.dot(t.weights, t.gamma ** 2))) < 1e-12
 
+
+
+def test_a_ctrl_c_while_sampling_the_crowds_drops_them():
+    """should_stop() turning true between V_s's blocks: the crowds are dropped, the solver
+    leaves at once with its best, the held-out crowds are not scored (the contract files
+    come first after a Ctrl-C)."""
+    calls = []
+
+    def progress(stage, done, total):
+        calls.append(stage)
+
+    def should_stop():
+        return "crowd" in calls
+
+    r = run(spec(optimise=True), solver="greedy", progress=progress, should_stop=should_stop)
+    assert "crowd-aware: skipped (interrupted while sampling the crowds)" in r.log
+    assert "crowd: held-out crowds not scored (interrupted)" in r.log
+    assert r.metrics.crowd is None and r.placement.status == "interrupted"

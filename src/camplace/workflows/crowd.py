@@ -160,32 +160,56 @@ def describe(cp: CrowdProblem, crowd: CrowdSpec) -> str:
             f"{cp.seconds_per_sample:.3f} s per sample; the solvers see {cp.problem.n_targets} stacked targets")
 
 
+class _Stopped(Exception):
+    """should_stop() turned true between two blocks of V_s."""
+
+
 def crowd_stage(sc: Scene, vis: Visibility, problem: PlacementProblem, crowd: CrowdSpec | None, site=None, *,
                 workers: int = 1, scheduler: str | None = None, progress=None, log: list | None = None,
-                timings: dict | None = None) -> CrowdProblem | None:
+                timings: dict | None = None, should_stop=None) -> CrowdProblem | None:
     """A run's crowd-aware problem (None unless ``crowd.optimise``): V_s on the run's
-    executor (``workers`` / ``scheduler`` as for V), its log line and ``timings['crowd']``."""
+    executor (``workers`` / ``scheduler`` as for V), its log line and ``timings['crowd']``.
+    ``should_stop()`` is polled between V_s's blocks: once true the crowds are dropped
+    (None, said in ``log``) and the run solves the empty-store problem, which its solver
+    leaves at once."""
     if crowd is None or not crowd.optimise:
         return None
     from camplace.core.executors import make_executor
 
+    def polled(stage: str, done: int, total: int) -> None:
+        if progress:
+            progress(stage, done, total)
+        if should_stop is not None and should_stop():
+            raise _Stopped
+
     t0 = time.perf_counter()
     if progress:
         progress("crowd", 0, 1)
-    with make_executor(workers, scheduler) as executor:
-        cp = crowd_problem(sc, vis, problem, crowd, site, executor, progress)
-    if timings is not None:
-        timings["crowd"] = time.perf_counter() - t0
+    try:
+        with make_executor(workers, scheduler) as executor:
+            cp = crowd_problem(sc, vis, problem, crowd, site, executor, polled)
+    except _Stopped:
+        if log is not None:
+            log.append("crowd-aware: skipped (interrupted while sampling the crowds)")
+        return None
+    finally:
+        if timings is not None:
+            timings["crowd"] = time.perf_counter() - t0
     if log is not None:
         log.append(describe(cp, crowd))
     return cp
 
 
 def crowd_scores(sc: Scene, vis: Visibility, placement: Placement, crowd: CrowdSpec | None,
-                 cp: CrowdProblem | None = None, log: list | None = None) -> CrowdMetrics | None:
+                 cp: CrowdProblem | None = None, log: list | None = None, should_stop=None) -> CrowdMetrics | None:
     """The metrics.json ``crowd`` of a run's (folded) placement; with a crowd-aware ``cp``
-    also what the optimisation reached on its own crowds (``optimisation``)."""
+    also what the optimisation reached on its own crowds (``optimisation``). None after an
+    interrupt (``should_stop()`` true): scoring the held-out crowds takes seconds."""
     if crowd is None:
+        return None
+    if should_stop is not None and should_stop():  # interrupted: the contract files come first
+        if log is not None:
+            log.append("crowd: held-out crowds not scored (interrupted)")
         return None
     extra = {"optimised": cp is not None}
     if cp is not None:

@@ -416,7 +416,7 @@ def run(scene: str | Path | SceneSpec, budget: int | None = None, solver: str | 
     problem = with_type_limits(problem, vis.candidates.camera_ids, [c.name for c in vis.candidates.cameras],
                                sc.spec.mount_rules.max_per_type)  # new cameras per type (mount_rules)
     cp = crowd_stage(sc, vis, problem, crowd_spec, site, workers=workers, scheduler=scheduler, progress=progress,
-                     log=log, timings=timings)  # crowd-aware: the sample-average problem (else None)
+                     log=log, timings=timings, should_stop=should_stop)  # crowd-aware: the sample-average problem
     if site is not None:  # Γ' = max(Γ - existing coverage, 0): the solvers see what remains
         problem = site.solver_problem(problem)
     solving = problem if cp is None else cp.problem
@@ -453,7 +453,7 @@ def run(scene: str | Path | SceneSpec, budget: int | None = None, solver: str | 
     if site is not None:
         metrics = site.report(vis, placement, metrics)
     metrics = replace(metrics, grid_cost=grid_cost(placement),
-                      crowd=crowd_scores(sc, vis, placement, crowd_spec, cp, log))  # in held-out crowds
+                      crowd=crowd_scores(sc, vis, placement, crowd_spec, cp, log, should_stop))  # held-out
     timings["metrics"] = time.perf_counter() - t
     return RunResult(sc, vis, problem, placement, metrics, timings, log)
 
