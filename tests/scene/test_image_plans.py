@@ -112,6 +112,16 @@ def test_rooms_named_by_their_labels(apartment):
     assert len(printed) >= 4, got.notes  # '21,43 m²' read as an area, never as a name
 
 
+def test_two_rooms_with_one_name(tmp_path):
+    """Two rooms labelled alike (two bedrooms, two flats' kitchens) are both named."""
+    need_ocr()
+    sheet = draw_apartment(tmp_path / "twice.png", names={"Office": "Bedroom"})
+    zones = _zones(read_plan(sheet.path, scale=PX))
+    assert {"Bedroom", "Bedroom-2"} <= set(zones), sorted(zones)
+    assert sorted(zones[n].area for n in ("Bedroom", "Bedroom-2")) == pytest.approx(
+        sorted(room_area(n) for n in ("Bedroom", "Office")), rel=0.1)
+
+
 def test_small_word_labels(tmp_path):
     """Room names at 10 px (capitals about 7 px, regular weight) and areas at 9 px, as on
     a plan printed small: the words and 'WC' are read (Tesseract alone reads 'WC' as 'wc')."""

@@ -34,7 +34,7 @@ from scipy import ndimage
 from camplace.core.errors import InputError
 from camplace.scene.importers import (DEFAULT_CEILING_M, PlanImport, clean_polygons, plan_scene, polygons_of,
                                       prism_obstacles, room_zones, rooms_footprint)
-from camplace.scene.importers.image_ocr import ocr_engine, read_lines, room_name, text_lines_mask
+from camplace.scene.importers.image_ocr import NUMBER_RE, ocr_engine, read_lines, room_name, text_lines_mask
 from camplace.scene.importers.image_read import metres_per_pixel, read_sheet
 from camplace.scene.importers.image_rooms import colour_rooms, free_regions, mask_polygons
 from camplace.scene.importers.image_scale import scale_from_dimensions
@@ -215,8 +215,10 @@ def _colour_split(plan: PlanRooms, rgb: np.ndarray, ink: np.ndarray, s: float, m
 def _name_rooms(engine, dark: np.ndarray, ink: np.ndarray, plans: list[PlanRooms]) -> None:
     """Room names and printed areas from the text lines in or beside each room (a label
     whose middle falls on no room, e.g. inside the ring around a room number, goes to
-    the nearest room within 1.5 character heights; none on a wall); one OCR call. A name read for two
-    rooms of a plan stays with the more confident reading (the other is misread)."""
+    the nearest room within 1.5 character heights; none on a wall); one OCR call. A room
+    number read for two rooms of a plan stays with the more confident reading (the other is
+    misread); a word may name several rooms (two flats' 'Living Room'; the zones become
+    'Living Room', 'Living Room-2')."""
     lines, n, hc = text_lines_mask(ink)
     if n == 0:
         return
@@ -236,14 +238,15 @@ def _name_rooms(engine, dark: np.ndarray, ink: np.ndarray, plans: list[PlanRooms
     for ln in read_lines(engine, dark, ink, lines, sorted(where), hc):
         k = int(np.max(lines[ln.box[0]:ln.box[2], ln.box[1]:ln.box[3]]))
         found.setdefault(where[k], []).append(ln)
-    best: dict[tuple[int, str], tuple[float, int]] = {}
+    best: dict[tuple, tuple[float, int]] = {}
     for (i, room), got in found.items():
         name, conf, area = room_name(got, hc)
-        if name and conf > best.get((i, name), (-1.0, 0))[0]:
-            best[(i, name)] = (conf, room)
+        key = (i, name) if name and NUMBER_RE.match(name) else (i, name, room)  # words repeat: 'Bedroom', 'WC'
+        if name and conf > best.get(key, (-1.0, 0))[0]:
+            best[key] = (conf, room)
         if area is not None:
             plans[i].printed[room] = area
-    for (i, name), (_, room) in best.items():
+    for (i, name, *_), (_, room) in best.items():
         plans[i].names[room] = name
 
 
