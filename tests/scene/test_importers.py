@@ -38,6 +38,17 @@ def test_prism_with_a_hole_leaves_the_hole_free():
     assert occ.is_occupied(np.array([[1.2, 2.0, 1.0], [2.0, 2.0, 1.0]])).tolist() == [True, False]
 
 
+def test_prisms_sharing_a_mitred_edge_leave_no_free_cell_on_the_seam():
+    # two walls mitred at 45 degrees (BlenderBIM, ArchiCAD): cell centres lie exactly on
+    # the shared diagonal; they were in neither prism and came out free inside the wall
+    lower = {"polygon": [[1, 1], [2, 1], [2, 2]], "z": [0, 3]}
+    upper = {"polygon": [[1, 1], [2, 2], [1, 2]], "z": [0, 3]}
+    occ = build_scene(box_room(obstacles=[{"name": "a", "prism": lower}, {"name": "b", "prism": upper}])).occupancy
+    c = np.arange(1.025, 2.0, occ.resolution)
+    diagonal = np.c_[c, c, np.full(len(c), 1.0)]
+    assert occ.is_occupied(diagonal).all()
+
+
 @pytest.mark.parametrize("prism, key", [({"polygon": [[0, 0], [1, 0]], "z": [0, 1]}, "polygon"),
                                         ({"polygon": L_WALL, "z": [2, 1]}, "z"),
                                         ({"polygon": [[0, 0], [1, 1], [1, 0], [0, 1]], "z": [0, 1]}, "polygon")])

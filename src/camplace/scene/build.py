@@ -174,8 +174,10 @@ def rasterize_box(grid: OccupancyGrid, bmin: np.ndarray, bmax: np.ndarray) -> No
 
 
 def rasterize_prism(grid: OccupancyGrid, poly: Polygon, zmin: float, zmax: float) -> None:
-    """Mark (in place) every cell whose centre lies inside ``poly`` (plan, m) and in
-    [zmin, zmax] (m) as occupied; only the polygon's bounding box is tested."""
+    """Mark (in place) every cell whose centre lies inside ``poly`` (plan, m) or on its
+    boundary, and in [zmin, zmax] (m), as occupied (like ``rasterize_box``: a centre on the
+    seam of two prisms that share an edge, a mitred wall corner, is in both, not in
+    neither); only the polygon's bounding box is tested."""
     x0, y0, x1, y1 = poly.bounds
     idx = []
     for a, (lo, hi) in enumerate(((x0, x1), (y0, y1), (zmin, zmax))):
@@ -186,5 +188,5 @@ def rasterize_prism(grid: OccupancyGrid, poly: Polygon, zmin: float, zmax: float
         idx.append(slice(k[0], k[-1] + 1))
     xs, ys = grid.cell_centres(0)[idx[0]], grid.cell_centres(1)[idx[1]]
     gx, gy = np.meshgrid(xs, ys, indexing="ij")
-    inside = shapely.contains_xy(poly, gx, gy)
+    inside = shapely.intersects_xy(poly, gx, gy)
     grid.occupied[idx[0], idx[1], idx[2]][inside] = True  # a view: slices only
