@@ -16,6 +16,8 @@
   layer 0 too, room names as TEXT, a 0.9 m wide hall.
 - ``draw_wc_plan``: a hall with a 1.2 m wide WC whose door swings into it (AIA layers, m).
 - ``draw_no_walls``: text, circles and a few loose lines: nothing a wall.
+- ``draw_walls_on_door_layer``: a room whose walls are LINE pairs on the door layer
+  (as a web planner exports them), with a 1 m stub on A-WALL.
 
 Each returns the file's path; the FM_* and LATIN_* constants are the truths (m).
 """
@@ -317,6 +319,29 @@ def draw_wc_plan(path: str | Path) -> Path:
     msp.add_arc((1.3, 2.7), 0.8, 90, 180, dxfattribs={"layer": "A-DOOR"})
     for name, at in WC_LABELS.items():
         msp.add_text(name, height=0.15, dxfattribs={"insert": at})
+    doc.saveas(path)
+    return Path(path)
+
+
+DOOR_LAYER_ROOM = (6.0, 4.0)  # m, the outer faces of the room drawn on the door layer
+
+
+def draw_walls_on_door_layer(path: str | Path) -> Path:
+    """A 6 x 4 m room in m whose 0.1 m walls are LINE pairs on A-DOOR-INTERNAL (a 0.9 m
+    door gap in the bottom wall, its leaf and swing on the same layer), and a 1 m stub on
+    A-WALL: the only linework named like walls."""
+    import ezdxf
+
+    doc = ezdxf.new("R2010")
+    doc.header["$INSUNITS"] = 6
+    msp = doc.modelspace()
+    w, h = DOOR_LAYER_ROOM
+    for a, b, gaps in [((0, 0.05), (w, 0.05), [(4.5, 5.4)]), ((0, h - 0.05), (w, h - 0.05), ()),
+                       ((0.05, 0), (0.05, h), ()), ((w - 0.05, 0), (w - 0.05, h), ())]:
+        _wall(msp, a, b, 0.1, "A-DOOR-INTERNAL", gaps)
+    msp.add_line((4.5, 0.1), (4.5, 1.0), dxfattribs={"layer": "A-DOOR-INTERNAL"})
+    msp.add_arc((4.5, 0.1), 0.9, 0, 90, dxfattribs={"layer": "A-DOOR-INTERNAL"})
+    msp.add_line((2.0, 2.0), (3.0, 2.0), dxfattribs={"layer": "A-WALL"})
     doc.saveas(path)
     return Path(path)
 

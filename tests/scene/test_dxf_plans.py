@@ -25,7 +25,8 @@ def files(tmp_path_factory):
             "es": dd.draw_latin_plan(tmp / "es.dxf", "es"), "r12": dd.draw_latin_plan(tmp / "r12.dxf", "es", "R12"),
             "unnamed": dd.draw_unnamed_plan(tmp / "hall.dxf"), "none": dd.draw_no_walls(tmp / "none.dxf"),
             "single": dd.draw_single_line_plan(tmp / "single.dxf"), "wc": dd.draw_wc_plan(tmp / "wc.dxf"),
-            "renovation": dd.draw_single_line_plan(tmp / "renovation.dxf", named_partition=True)}
+            "renovation": dd.draw_single_line_plan(tmp / "renovation.dxf", named_partition=True),
+            "door layer": dd.draw_walls_on_door_layer(tmp / "door-layer.dxf")}
 
 
 @pytest.fixture(scope="module")
@@ -124,6 +125,16 @@ def test_named_walls_that_close_no_room_take_the_single_line_walls_around(files)
     w, h = (v / 100 for v in dd.SINGLE_OUTER)
     assert _area(got) == pytest.approx((w + 0.2) * (h + 0.2), rel=0.02)
     assert any("close no room" in n for n in got.notes)
+
+
+def test_walls_drawn_on_the_door_layer_are_found_by_their_geometry(files):
+    """A web planner's export puts the walls on the door layer: lines longer than any
+    door are measured like unnamed linework (the 1 m stub on A-WALL is all that is named),
+    so the room is the footprint, not the stub; the door still cuts its gap."""
+    got = read_plan(files["door layer"])
+    assert "A-DOOR-INTERNAL" in got.used["wall layers"] and "by geometry" in got.used["wall layers"]
+    assert _area(got) == pytest.approx(dd.DOOR_LAYER_ROOM[0] * dd.DOOR_LAYER_ROOM[1], rel=0.05)
+    assert len(got.scene["zones"]) == 1 and got.openings
 
 
 def test_door_swinging_into_a_small_room_leaves_the_room(files):

@@ -137,7 +137,9 @@ def _layer_roles(d: Drawing, given: dict) -> tuple[dict[str, str | None], dict[s
 def _by_role(d: Drawing, role: dict) -> dict[str, list[Shape]]:
     """Shapes per role: the role of the innermost block reference around them that is
     named like a door, window or furniture and at most BLOCK_MAX_M large, else their
-    layer's."""
+    layer's; a straight line longer than any door (DOOR_MAX_M) on a door layer is no door
+    piece but linework no name explains (walls drawn on the door layer: measured like
+    the layers no name explains)."""
     size = _part_sizes(d)
     named: dict[int, str | None] = {}
     out: dict[str, list[Shape]] = defaultdict(list)
@@ -145,7 +147,10 @@ def _by_role(d: Drawing, role: dict) -> dict[str, list[Shape]]:
         if sh.part not in named:
             named[sh.part] = next((r for p in _chain(d, sh.part) if size[p] <= BLOCK_MAX_M
                                    for r in [block_role(d.parts[p][1])] if r), None)
-        out[named[sh.part] or role.get(sh.layer) or "none"].append(sh)
+        mine = named[sh.part] or role.get(sh.layer) or "none"
+        if not named[sh.part] and mine == "door" and sh.kind in STRAIGHT and sh.geom.length > DOOR_MAX_M:
+            mine = "none"
+        out[mine].append(sh)
     return out
 
 
@@ -235,7 +240,7 @@ def _walls_by_geometry(d: Drawing, parts: dict, role: dict) -> tuple | None:
     for sh in parts.get("none", []) + parts.get("other", []):
         if not isinstance(sh.geom, LineString):
             by_fill[sh.layer] += polygons_of(sh.geom)
-        elif role.get(sh.layer) is None:
+        elif role.get(sh.layer) in (None, "door"):  # a door layer's lines here are longer than a door
             by_line[sh.layer].append(sh.geom)
             if sh.kind in STRAIGHT and sh.geom.length >= MIN_SEGMENT_M:
                 straight[sh.layer].append(sh.geom)
