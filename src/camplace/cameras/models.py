@@ -334,6 +334,12 @@ def project_nb(params: np.ndarray, x: float, y: float, z: float) -> tuple[float,
     return u, v, ok
 
 
+@numba.njit(cache=True)  # a call, not inlined: px_per_m_nb evaluates it four times (compiles in 1/4 the time)
+def _image_plane_call(params: np.ndarray, x: float, y: float, z: float) -> tuple[float, float, bool]:
+    """``_image_plane_nb`` as a function call."""
+    return _image_plane_nb(params, x, y, z)
+
+
 @numba.njit(cache=True)
 def px_per_m_nb(params: np.ndarray, x: float, y: float, z: float, nx: float, ny: float, nz: float) -> float:
     """Pixel density (px/m) at a camera-frame point: the smallest singular value of the
@@ -357,10 +363,10 @@ def px_per_m_nb(params: np.ndarray, x: float, y: float, z: float, nx: float, ny:
     e1x, e1y, e1z = e1x / l1, e1y / l1, e1z / l1
     e2x, e2y, e2z = ny * e1z - nz * e1y, nz * e1x - nx * e1z, nx * e1y - ny * e1x
     h = 1e-5 * d
-    ua, va, oka = _image_plane_nb(params, x + h * e1x, y + h * e1y, z + h * e1z)
-    ub, vb, okb = _image_plane_nb(params, x - h * e1x, y - h * e1y, z - h * e1z)
-    uc, vc, okc = _image_plane_nb(params, x + h * e2x, y + h * e2y, z + h * e2z)
-    ud, vd, okd = _image_plane_nb(params, x - h * e2x, y - h * e2y, z - h * e2z)
+    ua, va, oka = _image_plane_call(params, x + h * e1x, y + h * e1y, z + h * e1z)
+    ub, vb, okb = _image_plane_call(params, x - h * e1x, y - h * e1y, z - h * e1z)
+    uc, vc, okc = _image_plane_call(params, x + h * e2x, y + h * e2y, z + h * e2z)
+    ud, vd, okd = _image_plane_call(params, x - h * e2x, y - h * e2y, z - h * e2z)
     if not (oka and okb and okc and okd):
         return 0.0
     m11 = (ua - ub) / (2 * h)

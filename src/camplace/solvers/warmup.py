@@ -42,6 +42,9 @@ def small_problem(problem: PlacementProblem, n_candidates: int = DRY_CANDIDATES,
     money = None
     if problem.money_budget is not None and small.camera_costs is not None:
         money = float(np.sort(np.asarray(small.camera_costs, np.float64))[:b].sum())
+    for name in ("data", "indices", "indptr"):  # numba compiles a read-only array's kernels apart from a
+        if not getattr(problem.V, name).flags.writeable:  # writable one's (V memory-mapped from the cache)
+            getattr(small.V, name).flags.writeable = False
     return replace(small, budget=b, money_budget=money)
 
 

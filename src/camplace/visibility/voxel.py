@@ -26,6 +26,7 @@ from typing import Any
 
 import numba
 import numpy as np
+import scipy.sparse as sp
 
 from camplace.cameras.models import project_nb, px_per_m_nb
 from camplace.core.errors import InputError
@@ -99,15 +100,17 @@ def _compact(buf, offs, seen):
     for i in range(n_c):
         indptr[i + 1] = indptr[i] + seen[i]
     indices = np.empty(indptr[n_c], np.int32)
-    for i in range(n_c):
-        indices[indptr[i]:indptr[i + 1]] = buf[offs[i]:offs[i] + seen[i]]
+    for i in range(n_c):  # element by element: a slice assignment compiles its shape-mismatch message (~2 s)
+        for k in range(seen[i]):
+            indices[indptr[i] + k] = buf[offs[i] + k]
     return indptr, indices
 
 
 @numba.njit(cache=True, nogil=True)
 def _visibility_kernel(occ, origin, res, cam_pos, cam_rot, cam_ids, cam_params,
                        tpos, tnrm, tcos, grid, cell_start, cell_tids, tpx):
-    """CSR (indptr, indices) of V for a chunk of candidates, indices ascending per row.
+    """CSR (indptr, indices) of V for a chunk of candidates, each row's indices in the order
+    its cells are visited (``_sorted_rows`` sorts them).
 
     Targets are bucketed in an xy grid (``grid`` = [x0, y0, cell, nx, ny], CSR
     ``cell_start`` / ``cell_tids``, see ``target_grid``): each candidate visits only the
@@ -162,8 +165,7 @@ def _visibility_kernel(occ, origin, res, cam_pos, cam_rot, cam_ids, cam_params,
                         buf[k] = j
                         k += 1
         seen[i] = k - offs[i]
-        buf[offs[i]:k].sort()  # cells are visited out of id order: restore ascending ids
-    return _compact(buf, offs, seen)
+    return _compact(buf, offs, seen)  # ids in cell order: _sorted_rows sorts them
 
 
 @numba.njit(cache=True, inline="always")
@@ -233,8 +235,8 @@ def _part_seen(occ, origin, res, p, R, params, tpos, tnrm, tcos, tpx, j, half, l
 def _probe_kernel(occ, origin, res, cam_pos, cam_rot, cam_ids, cam_params, tpos, tnrm, tcos, tpx,
                   grid, cell_start, cell_tids, half, pad, lattice, s_start, s_pts):
     """CSR (indptr, indices) of V under the any-part rule (``_part_seen``) for a chunk of
-    candidates, indices ascending per row. Pass 1 bounds each row by the targets within
-    range + ``pad`` (m, the footprints' reach from their centres); pass 2 tests them."""
+    candidates, each row in cell order (``_sorted_rows`` sorts them). Pass 1 bounds each row by
+    the targets within range + ``pad`` (m, the footprints' reach from their centres); pass 2 tests them."""
     n_c = cam_pos.shape[0]
     gnx, gny = int(grid[3]), int(grid[4])
     counts = np.zeros(n_c, np.int64)
@@ -276,8 +278,16 @@ def _probe_kernel(occ, origin, res, cam_pos, cam_rot, cam_ids, cam_params, tpos,
                         buf[k] = j
                         k += 1
         seen[i] = k - offs[i]
-        buf[offs[i]:k].sort()
-    return _compact(buf, offs, seen)
+    return _compact(buf, offs, seen)  # ids in cell order: _sorted_rows sorts them
+
+
+def _sorted_rows(indptr: np.ndarray, indices: np.ndarray, n_cols: int) -> tuple[np.ndarray, np.ndarray]:
+    """(indptr, indices) with each row's indices ascending, sorted in place by scipy's CSR sort
+    (the kernels visit targets cell by cell, out of id order; sorting inside a kernel compiled
+    numba's quicksort, ~1 s on a new install)."""
+    m = sp.csr_matrix((np.ones(len(indices), np.uint8), indices, indptr), shape=(len(indptr) - 1, n_cols), copy=False)
+    m.sort_indices()
+    return indptr, m.indices.astype(np.int32, copy=False)
 
 
 def target_cos_limits(targets: Targets) -> np.ndarray:
@@ -363,9 +373,10 @@ def _block_arrays(occupancy: OccupancyGrid, targets: Targets, candidates: Candid
 
     def piece(a: int, b: int) -> tuple[np.ndarray, np.ndarray]:
         a, b = start + a, start + b
-        return _visibility_kernel(occ, origin, res, np.ascontiguousarray(candidates.positions[a:b], dtype=np.float64),
-                                  np.ascontiguousarray(candidates.rotations[a:b], dtype=np.float64),
-                                  np.ascontiguousarray(candidates.camera_ids[a:b], dtype=np.int64), params, *shared)
+        return _sorted_rows(*_visibility_kernel(
+            occ, origin, res, np.ascontiguousarray(candidates.positions[a:b], dtype=np.float64),
+            np.ascontiguousarray(candidates.rotations[a:b], dtype=np.float64),
+            np.ascontiguousarray(candidates.camera_ids[a:b], dtype=np.int64), params, *shared), len(pos))
 
     parts = on_threads(stop - start, piece, min_rows=4)  # refine casts ~8 poses a call: two threads
     if len(parts) == 1:
@@ -402,14 +413,14 @@ def _probe_block(occupancy: OccupancyGrid, targets: Targets, candidates: Candida
                  grid: TargetGrid, pa: ProbeArrays) -> tuple[np.ndarray, np.ndarray]:
     """(indptr, indices) of V rows [start, stop) under the any-part rule (``_probe_kernel``)."""
     params = np.stack([c.params for c in candidates.cameras])
-    return _probe_kernel(
+    return _sorted_rows(*_probe_kernel(
         occupancy.occupied.view(np.uint8), occupancy.origin.astype(np.float64), float(occupancy.resolution),
         np.ascontiguousarray(candidates.positions[start:stop], dtype=np.float64),
         np.ascontiguousarray(candidates.rotations[start:stop], dtype=np.float64),
         np.ascontiguousarray(candidates.camera_ids[start:stop], dtype=np.int64), params,
         np.ascontiguousarray(targets.positions, dtype=np.float64),
         np.ascontiguousarray(targets.normals, dtype=np.float64), target_cos_limits(targets), target_min_px(targets),
-        grid.params, grid.cell_start, grid.cell_tids, pa.half, pa.pad, pa.lattice, pa.s_start, pa.s_pts)
+        grid.params, grid.cell_start, grid.cell_tids, pa.half, pa.pad, pa.lattice, pa.s_start, pa.s_pts), len(targets))
 
 
 @dataclass(frozen=True)

@@ -67,6 +67,8 @@ def warm(solver: str) -> None:
     cands = build_candidates(sc, cameras)
     V = sp.random(len(cands), len(targets), density=0.05, format="csr", random_state=0)
     V = sp.csr_matrix((np.ones(V.nnz, np.uint8), V.indices, V.indptr), shape=V.shape)
+    V.indices.flags.writeable = V.data.flags.writeable = False  # as the visibility cache's memory maps: numba
+    # compiles a read-only array's kernels apart from a writable one's (a run without the cache compiles its own)
     vis = drop_blind_candidates(Visibility(V, cands, targets))
     tg = vis.targets
     check_feasibility(vis.V, tg.gamma, vis.candidates.location_ids, tg.region_ids, tg.region_names)
