@@ -349,3 +349,34 @@ def draw_line_plan(path: str | Path, px: float = PX) -> Sheet:
     d.text((width - 290, height - 70), "Floor plan 1:50", font=font(13), fill="black")
     im.save(path)
     return Sheet(Path(path), (ox, oy), (width, height))
+
+
+def draw_hollow_walls(path: str | Path, t: float = 0.42, px: float = PX) -> Path:
+    """A 9 x 6 m (outside) two-room plan whose walls are drawn as outlines with nothing
+    inside (many CAD exports), each wall piece between openings a closed outline: outer
+    walls ``t`` thick, the wall between the rooms 0.15 m at x = 4.5 m with a 0.9 m door,
+    a 1.2 m window in the middle of the south wall of each room."""
+    from PIL import Image, ImageDraw
+
+    margin, w, h = round(1.2 / px), 9.0, 6.0
+    size = (round(w / px) + 2 * margin, round(h / px) + 2 * margin)
+    im = Image.new("RGB", size, "white")
+    d = ImageDraw.Draw(im)
+
+    def outline(x0, y0, x1, y1):
+        d.rectangle([margin + round(x0 / px), size[1] - margin - round(y1 / px),
+                     margin + round(x1 / px) - 1, size[1] - margin - round(y0 / px) - 1], outline="black", width=2)
+
+    c0, c1 = (4.5 - 0.075 + t) / 2, (4.5 + 0.075 + w - t) / 2  # the rooms' middles along x
+    for x0, x1 in ((0, c0 - 0.6), (c0 + 0.6, c1 - 0.6), (c1 + 0.6, w)):
+        outline(x0, 0, x1, t)  # the south wall, parted by the windows
+    outline(0, h - t, w, h)
+    outline(0, t, t, h - t)
+    outline(w - t, t, w, h - t)
+    outline(4.425, t, 4.575, 2.0)
+    outline(4.425, 2.9, 4.575, h - t)
+    for x0, x1 in ((c0 - 0.6, c0 + 0.6), (c1 - 0.6, c1 + 0.6)):  # glazing across each window
+        d.line([(margin + round(x0 / px), size[1] - margin - round(t / 2 / px)),
+                (margin + round(x1 / px), size[1] - margin - round(t / 2 / px))], fill="black", width=1)
+    im.save(path)
+    return Path(path)

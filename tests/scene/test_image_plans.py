@@ -16,8 +16,8 @@ from shapely.geometry import Point, Polygon
 
 from camplace.core.errors import InputError
 from camplace.scene.importers import read_plan, read_storey_plans
-from tests.scene.image_drawings import (PX, ROOMS, D, W, draw_apartment, draw_line_plan, draw_two_blocks, draw_u_plan,
-                                       room_area)
+from tests.scene.image_drawings import (PX, ROOMS, D, W, draw_apartment, draw_hollow_walls, draw_line_plan,
+                                       draw_two_blocks, draw_u_plan, room_area)
 
 
 def need_ocr():
@@ -81,6 +81,17 @@ def test_a_fine_scan_is_read_at_a_coarser_scale(apartment, tmp_path):
     assert fine.used["scale"] == f"{PX / 2:g} m/px (given; the image's {PX / 4:g} m/px read at 1/2 of its pixels)"
     areas = sorted(p.area for p in _zones(fine).values())
     assert areas == pytest.approx(sorted(p.area for p in _zones(got).values()), rel=0.03)
+
+
+def test_walls_drawn_as_empty_outlines(tmp_path):
+    """0.42 m outer walls drawn as outlines with nothing inside: the closed strip between
+    the two lines is the wall's inside (not a room, as the strip between a wall and its
+    dimension line is not a wall: that one is open at its ends)."""
+    got = read_plan(draw_hollow_walls(tmp_path / "hollow.png", 0.42), scale=PX, ocr=False)
+    areas = sorted(p.area for p in _zones(got).values())
+    inside = (4.5 - 0.075 - 0.42) * (6.0 - 2 * 0.42)
+    assert areas == pytest.approx([inside, inside], rel=0.02), areas
+    assert Polygon(got.scene["room"]["footprint"]).area == pytest.approx(9.0 * 6.0, rel=0.02)
 
 
 def test_thick_walls_are_not_read_as_lines(apartment):

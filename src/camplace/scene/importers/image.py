@@ -38,9 +38,11 @@ from camplace.scene.importers.image_ocr import NUMBER_RE, ocr_engine, read_lines
 from camplace.scene.importers.image_read import metres_per_pixel, read_sheet
 from camplace.scene.importers.image_rooms import colour_rooms, free_regions, mask_polygons
 from camplace.scene.importers.image_scale import scale_from_dimensions
-from camplace.scene.importers.image_walls import (EIGHT, LINE_WALL_M, REACH_M, bridge_openings, brightness,
-                                                  find_plans, ink_threshold, line_walls, otsu_threshold, solid_walls)
+from camplace.scene.importers.image_walls import (EIGHT, HOLLOW_WALL_M, LINE_WALL_M, REACH_M, bridge_openings,
+                                                  brightness, find_plans, ink_threshold, line_walls, otsu_threshold,
+                                                  solid_walls)
 
+HOLLOW_GAIN = 1.25  # the walls read as empty outlines are taken when their rooms are this much larger
 WORK_M_PER_PX = 0.01  # images finer than this are read at an integer fraction of their pixels
 OPTIONS = ("scale", "ref", "threshold", "storey", "min_wall_thickness", "max_wall_thickness", "hatch_spacing",
            "max_opening", "min_room_area", "ocr", "page")
@@ -132,6 +134,13 @@ def analyse(path: Path, scale=None, ref=None, threshold=None, min_wall_thickness
     raw = solid_walls(ink, s, hatch_spacing, min_wall_thickness, max_wall_thickness, skipped)
     plans = _plans(raw, ink, rgb, s, max_opening, max_wall_thickness, min_room_area, skipped) if raw.any() else []
     walls_from = f"strokes at least {min_wall_thickness:g} m thick"
+    hollow_skipped = Counter()
+    hollow = solid_walls(ink, s, hatch_spacing, min_wall_thickness, max_wall_thickness, hollow_skipped, hollow=True)
+    if (hollow != raw).any():  # walls drawn as empty outlines: taken when they enclose clearly more room
+        hollow_plans = _plans(hollow, ink, rgb, s, max_opening, max_wall_thickness, min_room_area, hollow_skipped)
+        if _room_px(hollow_plans) > HOLLOW_GAIN * _room_px(plans):
+            raw, plans, skipped = hollow, hollow_plans, hollow_skipped
+            walls_from += f" and walls drawn as empty outlines up to {HOLLOW_WALL_M:g} m wide"
     if not any(p.rooms for p in plans):  # a plan drawn in single lines (hairlines)?
         lines, line_skipped = line_walls(ink, s, max_opening), Counter()
         line_plans = _plans(lines, lines, rgb, s, max_opening, max_wall_thickness, min_room_area, line_skipped,
@@ -149,6 +158,11 @@ def analyse(path: Path, scale=None, ref=None, threshold=None, min_wall_thickness
     if engine is not None:
         _name_rooms(engine, dark, ink, plans)
     return Sheet(s, scale_from, t, how, plans, dark.shape[0], ocr_line, skipped, max_wall_thickness, walls_from)
+
+
+def _room_px(plans: list[PlanRooms]) -> int:
+    """The pixels of all rooms of ``plans``."""
+    return sum(int(np.isin(p.labels, p.rooms).sum()) for p in plans if p.rooms)
 
 
 def _plans(raw: np.ndarray, ink: np.ndarray, rgb: np.ndarray, s: float, max_opening: float, max_wall: float,

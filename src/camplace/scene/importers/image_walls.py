@@ -19,6 +19,7 @@ DOOR_M = 1.0  # the widest door beside a corner
 MIN_JAMB_M = 0.12  # a wall beside a door runs at least this far in line with it
 REACH_M = 1.0  # a small wall piece this close to a plan belongs to it (to the nearest plan)
 LONG_STROKE_M = 0.6  # ink pieces at least this long across are strokes (wall outlines, dimension lines)
+HOLLOW_WALL_M = 0.5  # a closed strip of paper up to this wide between two lines is the inside of a wall
 LINE_RUN_M = 1.0  # a wall drawn as a single line runs straight this far somewhere along its piece of ink
 LINE_PIECE_M = 0.4  # ... or is a straight piece this long in line with such walls
 LINE_WALL_M = 0.1  # the thickness given to walls drawn as single lines (m)
@@ -94,7 +95,7 @@ def ink_threshold(dark: np.ndarray, s: float, max_wall_m: float) -> tuple[float,
 
 
 def solid_walls(ink: np.ndarray, s: float, hatch_m: float, min_wall_m: float, max_wall_m: float,
-                skipped: Counter) -> np.ndarray:
+                skipped: Counter, hollow: bool = False) -> np.ndarray:
     """Wall pixels of the ink mask. Long strokes (pieces of ink at least LONG_STROKE_M
     across: wall outlines with their hatch, dimension lines) bound the paper; paper is the
     inside of a wall where it is narrow (at most ``hatch_m`` wide: a hatch cell, the strip
@@ -102,7 +103,10 @@ def solid_walls(ink: np.ndarray, s: float, hatch_m: float, min_wall_m: float, ma
     holding marks (a hatch of dashes, ≥ 8 % ink, drawn slanted: more diagonal than
     upright neighbours, unlike text) and long (not the disc inside the circle around a
     room number). Those fill in; rooms, the strips
-    between a wall and a dimension line and the text in them do not. Broad filled
+    between a wall and a dimension line and the text in them do not. With ``hollow``, a
+    closed strip of paper up to HOLLOW_WALL_M wide fills in too (a wall drawn as an
+    empty outline; also the strip between a wall and a dimension line drawn from wall to
+    wall inside a room, hence a separate pass, see image.analyse). Broad filled
     areas that were mostly paper (stair treads) are given back, then strokes thinner
     than ``min_wall_m`` (text, dimension lines, door swings) are opened away."""
     lab, n = ndimage.label(ink, EIGHT)
@@ -120,9 +124,11 @@ def solid_walls(ink: np.ndarray, s: float, hatch_m: float, min_wall_m: float, ma
         marks = ink & free
         diagonal = (marks & (np.roll(marks, (1, 1), (0, 1)) | np.roll(marks, (1, -1), (0, 1)))).astype(np.int8)
         square = (marks & (np.roll(marks, 1, 0) | np.roll(marks, 1, 1))).astype(np.int8)
-        marked[1:] = ((label_mean(marks, blab, nb)[1:] >= 0.08)
-                      & (np.bincount(blab.ravel(), minlength=nb + 1)[1:] >= 8 * width ** 2)
+        long = np.bincount(blab.ravel(), minlength=nb + 1)[1:] >= 8 * width ** 2
+        marked[1:] = ((label_mean(marks, blab, nb)[1:] >= 0.08) & long
                       & (label_sum(diagonal, blab, nb)[1:] > label_sum(square, blab, nb)[1:]))
+        if hollow:
+            marked[1:] |= long & (width <= HOLLOW_WALL_M / s / 2) & _closed_bands(free, blab, nb)
     solid = ink | strokes | cells | marked[blab]
     broad = square_morphology(solid, max_wall_m / s, "open")
     if broad.any():
@@ -134,6 +140,16 @@ def solid_walls(ink: np.ndarray, s: float, hatch_m: float, min_wall_m: float, ma
             back = textured[blab]
             solid[back] = ink[back]
     return square_morphology(solid, max(min_wall_m / s, 2), "open")
+
+
+def _closed_bands(free: np.ndarray, blab: np.ndarray, nb: int) -> np.ndarray:
+    """(nb,) bool: the strips 1..nb of ``blab`` that are a whole piece of paper of ``free``
+    (closed all round: the inside of a wall drawn as an outline), not the narrow part of a
+    larger piece (the strip between a wall and its dimension line, open at its ends)."""
+    flab, nf = ndimage.label(free)
+    size = np.bincount(flab.ravel(), minlength=nf + 1)
+    at = label_max(flab, blab, nb)[1:].astype(np.int64)  # the piece of paper each strip lies in
+    return np.bincount(blab.ravel(), minlength=nb + 1)[1:] >= size[at]
 
 
 def _edge_paper(free: np.ndarray) -> np.ndarray:
