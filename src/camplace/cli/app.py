@@ -3,6 +3,9 @@
 
 from __future__ import annotations
 
+import atexit
+import gc
+
 import typer
 from rich.markup import escape
 
@@ -63,6 +66,10 @@ def _plugin_warnings_as_lines() -> None:
 def main() -> None:
     """Entry point: run the app, turning CamplaceError into one line + exit code."""
     _plugin_warnings_as_lines()
+    # at exit, Python then skips sweeping every object for cycles (numba, scipy, matplotlib: ~1 s after a
+    # run, once every file is written); once per process (tests call main() many times)
+    atexit.unregister(gc.freeze)
+    atexit.register(gc.freeze)
     common.run_main(app)
 
 
