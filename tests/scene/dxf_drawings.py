@@ -324,12 +324,14 @@ def draw_wc_plan(path: str | Path) -> Path:
 
 
 DOOR_LAYER_ROOM = (6.0, 4.0)  # m, the outer faces of the room drawn on the door layer
+DOOR_LAYER_TABLE = [(1.0, 1.0), (3.8, 1.0), (3.8, 2.6), (1.0, 2.6)]  # m, a table drawn as a closed polyline
 
 
 def draw_walls_on_door_layer(path: str | Path) -> Path:
     """A 6 x 4 m room in m whose 0.1 m walls are LINE pairs on A-DOOR-INTERNAL (a 0.9 m
-    door gap in the bottom wall, its leaf and swing on the same layer), and a 1 m stub on
-    A-WALL: the only linework named like walls."""
+    door gap in the bottom wall, its leaf and swing on the same layer), a 1 m stub on
+    A-WALL (the only linework named like walls) and a 2.8 x 1.6 m table drawn as a closed
+    LWPOLYLINE on 'Furniture 4' (no block), beside a 0.005 m² speck on that layer."""
     import ezdxf
 
     doc = ezdxf.new("R2010")
@@ -342,6 +344,8 @@ def draw_walls_on_door_layer(path: str | Path) -> Path:
     msp.add_line((4.5, 0.1), (4.5, 1.0), dxfattribs={"layer": "A-DOOR-INTERNAL"})
     msp.add_arc((4.5, 0.1), 0.9, 0, 90, dxfattribs={"layer": "A-DOOR-INTERNAL"})
     msp.add_line((2.0, 2.0), (3.0, 2.0), dxfattribs={"layer": "A-WALL"})
+    msp.add_lwpolyline(DOOR_LAYER_TABLE, close=True, dxfattribs={"layer": "Furniture 4"})  # no block
+    msp.add_lwpolyline([(1, 3), (1.1, 3), (1.1, 3.1)], close=True, dxfattribs={"layer": "Furniture 4"})  # a speck
     doc.saveas(path)
     return Path(path)
 

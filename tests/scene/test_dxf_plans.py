@@ -137,6 +137,16 @@ def test_walls_drawn_on_the_door_layer_are_found_by_their_geometry(files):
     assert len(got.scene["zones"]) == 1 and got.openings
 
 
+def test_closed_outline_on_a_furniture_layer_is_furniture(files):
+    """A table drawn as a closed polyline on a furniture layer (no block) is a furniture
+    prism of its outline; a speck on that layer is not."""
+    got = read_plan(files["door layer"])
+    tables = [o for o in got.scene["obstacles"] if o["source"].get("layer") == "Furniture 4"]
+    assert len(tables) == 1 and "block" not in tables[0]["source"]
+    assert Polygon(tables[0]["prism"]["polygon"]).area == pytest.approx(Polygon(dd.DOOR_LAYER_TABLE).area, rel=0.01)
+    assert "1 outline on furniture layers" in got.used["furniture"]
+
+
 def test_door_swinging_into_a_small_room_leaves_the_room(files):
     """The gap fill of a door that swings into a 1.2 m wide WC closes the doorway, not the
     WC behind it (the jambs there join the walls across the WC)."""

@@ -46,6 +46,7 @@ DOOR_MAX_M = 3.5  # a door's plan rectangle is at most this long; larger door-la
 DOOR_M = (0.6, 1.6)  # the typical (median) door rectangle's length that makes sense, m (a leaf and its swing)
 BLOCK_MAX_M = 5.0  # a block named like a door, window or furniture is one when at most this large
 FURNITURE_MAX_M = 6.0
+MIN_FURNITURE_M2 = 0.05  # a closed outline on a furniture layer smaller than this is a detail, no piece
 COLUMN_MAX_M2 = 10.0  # larger closed shapes on column layers are no column
 ROOM_BRIDGE_M = 1.05  # doorways up to this wide (a 1 m opening) are closed when rooms are found from the walls
 MAX_HANDLES = 30  # handles named in one obstacle's provenance
@@ -372,7 +373,9 @@ def _furniture(d: Drawing, role: dict, region, heights: dict, ceiling: float, sr
     """Prisms of the furniture blocks (block references on furniture layers or named
     like furniture, the outermost such one up to FURNITURE_MAX_M) inside the building:
     their plan hull, floor to the height of the first ``heights`` pattern matching the
-    reference's layer (default 0.9 m)."""
+    reference's layer (default 0.9 m); and of the closed outlines drawn on furniture
+    layers outside such blocks (a table drawn as a rectangle, an exploded block's
+    outline), each up to FURNITURE_MAX_M and at least MIN_FURNITURE_M2."""
     size = _part_sizes(d)
 
     def furniture(p: int) -> bool:
@@ -380,26 +383,35 @@ def _furniture(d: Drawing, role: dict, region, heights: dict, ceiling: float, sr
                                                or block_role(d.parts[p][1]) == "furniture")
 
     groups: dict[int, list] = defaultdict(list)
+    outlines = []
     for sh in d.shapes:
         outer = [p for p in _chain(d, sh.part) if furniture(p)]
         if outer:
             groups[outer[-1]].append(sh.geom)
+        elif sh.closed and role.get(sh.layer) == "furniture":
+            outlines.append(sh)
+    pieces = [(shapely.union_all(geoms).convex_hull, *d.parts[p][:3]) for p, geoms in groups.items()]
+    n_blocks = len(pieces)
+    for sh in outlines:
+        shape = polygons_of(Polygon(sh.geom.coords) if isinstance(sh.geom, LineString) else sh.geom)
+        if shape and span(shape[0]) <= FURNITURE_MAX_M and shape[0].area >= MIN_FURNITURE_M2:
+            pieces.append((shape[0], sh.layer, "", sh.handle))
     obstacles = []
-    for p, geoms in groups.items():
-        layer, block, handle, _ = d.parts[p]
-        hull = shapely.union_all(geoms).convex_hull
+    for k, (hull, layer, block, handle) in enumerate(pieces):
         if not hull.intersects(region):
-            out.skipped["furniture blocks outside the building"] += 1
+            out.skipped["furniture blocks outside the building" if k < n_blocks else
+                        "furniture outlines outside the building"] += 1
             continue
         hull = hull if isinstance(hull, Polygon) else hull.buffer(0.01)
         h = next((float(v) for k, v in heights.items() if matches(layer, [k])), DEFAULT_FURNITURE_M)
         label = re.sub(r"[^a-z0-9_]+", "-", block.lower()).strip("-") or "furniture"
-        for o in prism_obstacles(hull, 0.0, min(h, ceiling - 0.05), label,
-                                 {"file": src, "layer": layer, "block": block, "handle": handle},
-                                 skipped=out.skipped):
+        source = {"file": src, "layer": layer, "handle": handle, **({"block": block} if block else {})}
+        for o in prism_obstacles(hull, 0.0, min(h, ceiling - 0.05), label, source, skipped=out.skipped):
             obstacles.append(dict(o, name=f"{o['name'].rsplit('-', 1)[0]}-{len(obstacles) + 1}"))
     if obstacles:
-        out.used["furniture"] = f"{len(obstacles)} blocks"
+        n_out = sum(1 for o in obstacles if "block" not in o["source"])
+        out.used["furniture"] = f"{len(obstacles) - n_out} blocks" + (
+            f", {n_out} outline{'s' if n_out > 1 else ''} on furniture layers" if n_out else "")
     return obstacles
 
 
