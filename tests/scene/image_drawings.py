@@ -49,7 +49,8 @@ def font(size: int, bold: bool = False):
 
 def draw_apartment(path: str | Path, *, jpeg_quality: int | None = None, noise: float = 0.0, seed: int = 0,
                    labels: bool = True, hatch: bool = True, furniture: bool = False,
-                   label_px: tuple[int, int] = (18, 14), names: dict[str, str] | None = None) -> Sheet:
+                   label_px: tuple[int, int] = (18, 14), names: dict[str, str] | None = None,
+                   dimensions: bool = True) -> Sheet:
     """The apartment sheet as PNG (or JPEG with ``jpeg_quality``; ``noise``: the grey
     level std of a scan's noise on a slightly grey paper; ``hatch=False``: the outer
     walls as two lines with paper between them, as many CAD exports draw them;
@@ -154,11 +155,12 @@ def draw_apartment(path: str | Path, *, jpeg_quality: int | None = None, noise: 
         c, r = p(x, (y0 + y1) / 2)
         im.paste((0, 0, 0), (c - 18, r - 30), label)
 
-    dim_h(-t, W + t, D + t + 0.9, f"{round((W + 2 * t) * 1000)}")
-    dim_h(0, 5.44, D + t + 0.45, "5440")
-    dim_h(5.56, W, D + t + 0.45, "4440")
-    dim_v(-t - 0.9, -t, D + t, f"{round((D + 2 * t) * 1000)}")
-    dim_h(0.0, 5.44, D - 0.45, "5440")
+    if dimensions:
+        dim_h(-t, W + t, D + t + 0.9, f"{round((W + 2 * t) * 1000)}")
+        dim_h(0, 5.44, D + t + 0.45, "5440")
+        dim_h(5.56, W, D + t + 0.45, "4440")
+        dim_v(-t - 0.9, -t, D + t, f"{round((D + 2 * t) * 1000)}")
+        dim_h(0.0, 5.44, D - 0.45, "5440")
     if furniture:
         _furniture(d, p)
     # room labels: name (bold) and area in m² below it

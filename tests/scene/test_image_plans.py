@@ -206,6 +206,16 @@ def test_plans_part_at_gutters_no_room_spans(tmp_path):
     assert sorted(a for _, a in u.storeys[0]["rooms"]) == pytest.approx([27.0, 27.0, 12.0 * 4.7], rel=0.03)
 
 
+def test_scale_read_from_the_scale_bar(tmp_path):
+    """No dimension lines: the scale bar under the plan (0 1 2 3 4 5 m) gives the scale."""
+    need_ocr()
+    sheet = draw_apartment(tmp_path / "bar.png", dimensions=False)
+    got = read_plan(sheet.path)
+    s = float(got.used["scale"].split()[0])
+    assert s == pytest.approx(PX, rel=0.01) and "scale bar" in got.used["scale"], got.used["scale"]
+    assert len(got.scene["zones"]) == 5
+
+
 def test_scale_read_from_the_dimension_lines(apartment):
     need_ocr()
     got = read_plan(apartment[0].path)  # neither scale nor ref

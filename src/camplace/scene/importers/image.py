@@ -37,7 +37,7 @@ from camplace.scene.importers import (DEFAULT_CEILING_M, PlanImport, clean_polyg
 from camplace.scene.importers.image_ocr import NUMBER_RE, ocr_engine, read_lines, room_name, text_lines_mask
 from camplace.scene.importers.image_read import metres_per_pixel, read_sheet
 from camplace.scene.importers.image_rooms import colour_rooms, free_regions, mask_polygons
-from camplace.scene.importers.image_scale import scale_from_dimensions
+from camplace.scene.importers.image_scale import scale_from_bar, scale_from_dimensions
 from camplace.scene.importers.image_walls import (EIGHT, HOLLOW_WALL_M, LINE_WALL_M, REACH_M, bridge_openings,
                                                   brightness, find_plans, ink_threshold, line_walls, otsu_threshold,
                                                   solid_walls)
@@ -109,9 +109,12 @@ def analyse(path: Path, scale=None, ref=None, threshold=None, min_wall_thickness
     engine, ocr_line = ocr_engine() if ocr else (None, "off")
     read = metres_per_pixel(path, paper, scale, ref)
     if read is None:
-        read = scale_from_dimensions(engine, dark, dark < otsu_threshold(dark)) if engine is not None else None
+        if engine is not None:
+            marks = dark < otsu_threshold(dark)
+            read = scale_from_dimensions(engine, dark, marks) or scale_from_bar(engine, dark, marks)
         if read is None:
-            why = "no dimension line could be read" if engine is not None else f"OCR not available: {ocr_line}"
+            why = ("no dimension line nor scale bar could be read" if engine is not None else
+                   f"OCR not available: {ocr_line}")
             how = ("its drawing scale (scale, e.g. 1:100)" if paper.pdf else "metres per pixel or a drawing scale "
                    "1:N (scale) or two reference points and their distance (ref)")
             raise InputError(f"{path}: the plan's scale is unknown ({why}); give {how}", option="scale")

@@ -1,6 +1,8 @@
-"""Plan images: the scale read from the sheet's dimension lines when neither ``scale``
-nor ``ref`` is given (OCR of each number standing on a horizontal dimension line, and
-the line's length in pixels). Always reported, so the user can check it."""
+"""Plan images: the scale read from the sheet when neither ``scale`` nor ``ref`` is given:
+from its dimension lines (OCR of each number standing on a horizontal dimension line, and
+the line's length in pixels), else from a scale bar (a row of numbers such as 0 1 2 5 m
+along a bar, spaced in proportion to their values). Always reported, so the user can
+check it."""
 
 from __future__ import annotations
 
@@ -12,6 +14,9 @@ from scipy import ndimage
 from camplace.scene.importers.image_ocr import MIN_CONF, dimension_row, read_lines, text_lines_mask
 
 AGREE = 0.03  # dimension lines within 3 % of the median scale agree
+BAR_FIT = 0.02  # a scale bar's numbers lie within this share of its length of a straight line (value -> column)
+BAR_UNITS = {"": 1.0, "m": 1.0, "cm": 0.01, "mm": 0.001, "ft": 0.3048, "'": 0.3048}
+BAR_RE = re.compile(r"^(\d{1,3}(?:[.,]\d{1,2})?)\s*(m|cm|mm|ft|')?$", re.IGNORECASE)
 
 
 def dimension_value_m(text: str) -> float | None:
@@ -87,3 +92,65 @@ def scale_from_dimensions(engine, dark: np.ndarray, ink: np.ndarray) -> tuple[fl
     longest = max(agree.values(), key=lambda v: v[3])
     return s, (f"read from {len(agree)} of {numbers} dimension lines, e.g. '{longest[1]}' over {longest[3]} px; "
                "check it")
+
+
+def scale_from_bar(engine, dark: np.ndarray, ink: np.ndarray) -> tuple[float, str] | None:
+    """(m per pixel, how) from a scale bar: at least three short numbers (an optional unit
+    m, cm, mm, ft on one of them; metres otherwise) side by side on one text row, with
+    different values, whose columns are a straight, increasing function of their values
+    (within BAR_FIT of the bar's length), along a bar: a row of ink just above or below
+    them covering most of the way from the first to the last. None when there is none."""
+    lines, n, hc = text_lines_mask(ink)
+    if n == 0:
+        return None
+    boxes = ndimage.find_objects(lines)
+    short = [k for k, b in enumerate(boxes, 1) if b is not None and b[1].stop - b[1].start <= 4 * hc]
+    marks = []  # (row centre, column centre, value, unit, text, box)
+    for ln in read_lines(engine, dark, ink, lines, short, hc):
+        m = BAR_RE.match(ln.text.strip(" .|_-\"“”"))
+        if m and ln.conf >= MIN_CONF:
+            r, c = ln.centre
+            marks.append((r, c, float(m.group(1).replace(",", ".")), (m.group(2) or "").lower(), ln.text.strip(), ln.box))
+    best = None
+    for row in _rows(marks, 0.6 * hc):
+        got = _bar(row, ink, hc)
+        if got is not None and (best is None or got[1] > best[1]):
+            best = got
+    if best is None:
+        return None
+    s, span, row = best
+    return s, (f"read from the scale bar '{row[0][4]} ... {row[-1][4]}' ({len(row)} numbers over {span:.0f} px); "
+               "check it")
+
+
+def _rows(marks: list, tol: float) -> list[list]:
+    """The marks grouped into rows (centres within ``tol`` pixels), each sorted left to right."""
+    rows: list[list] = []
+    for mk in sorted(marks):
+        if rows and abs(mk[0] - rows[-1][-1][0]) <= tol:
+            rows[-1].append(mk)
+        else:
+            rows.append([mk])
+    return [sorted(r, key=lambda mk: mk[1]) for r in rows if len(r) >= 3]
+
+
+def _bar(row: list, ink: np.ndarray, hc: float) -> tuple[float, float, list] | None:
+    """(m per pixel, span px, the row) when ``row`` reads as a scale bar, else None."""
+    values = np.array([mk[2] for mk in row])
+    cols = np.array([mk[1] for mk in row])
+    if len(set(values)) < 3 or not np.all(np.diff(values) > 0):
+        return None
+    slope, at = np.polyfit(values, cols, 1)
+    span = cols[-1] - cols[0]
+    if slope <= 0 or span < 5 * hc or np.abs(cols - (at + slope * values)).max() > BAR_FIT * span:
+        return None
+    units = {mk[3] for mk in row if mk[3]}
+    if len(units) > 1:
+        return None
+    c0, c1 = int(round(cols[0])), int(round(cols[-1])) + 1
+    top, bottom = min(mk[5][0] for mk in row), max(mk[5][2] for mk in row)
+    reach = int(2 * hc)
+    near = np.r_[max(0, top - reach):top, bottom:min(ink.shape[0], bottom + reach)]
+    if not len(near) or ink[near, c0:c1].mean(axis=1).max() < 0.8:
+        return None
+    return float(BAR_UNITS[units.pop() if units else ""] / slope), float(span), row
