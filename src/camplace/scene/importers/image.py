@@ -115,7 +115,7 @@ def analyse(path: Path, scale=None, ref=None, threshold=None, min_wall_thickness
         if read is None:
             why = ("no dimension line nor scale bar could be read" if engine is not None else
                    f"OCR not available: {ocr_line}")
-            how = ("its drawing scale (scale, e.g. 1:100)" if paper.pdf else "metres per pixel or a drawing scale "
+            how = ("its drawing scale 1:N, e.g. 1:100 (scale)" if paper.pdf else "metres per pixel or a drawing scale "
                    "1:N (scale) or two reference points and their distance (ref)")
             raise InputError(f"{path}: the plan's scale is unknown ({why}); give {how}", option="scale")
     s, scale_from = read
