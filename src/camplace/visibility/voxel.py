@@ -114,37 +114,18 @@ def _visibility_kernel(occ, origin, res, cam_pos, cam_rot, cam_ids, cam_params,
 
     Targets are bucketed in an xy grid (``grid`` = [x0, y0, cell, nx, ny], CSR
     ``cell_start`` / ``cell_tids``, see ``target_grid``): each candidate visits only the
-    cells within its max range, so the work scales with the visible pairs, not N_g x N_p."""
+    cells within its max range, so the work scales with the visible pairs, not N_g x N_p.
+    One pass: a pair that passes the view tests is walked at once, a seen target appended
+    to a buffer that doubles when full (memory O(pairs seen))."""
     n_c = cam_pos.shape[0]
     gnx, gny = int(grid[3]), int(grid[4])
-    counts = np.zeros(n_c, np.int64)
-    for i in range(n_c):
-        params = cam_params[cam_ids[i]]
-        p = cam_pos[i]
-        ax, bx = _cell_span(grid[0], grid[2], gnx, p[0], params[7])
-        ay, by = _cell_span(grid[1], grid[2], gny, p[1], params[7])
-        k = 0
-        for cx in range(ax, bx + 1):
-            for cy in range(ay, by + 1):
-                if not _cell_near(grid, cx, cy, p[0], p[1], params[7]):
-                    continue
-                cell = cx * gny + cy
-                for q in range(cell_start[cell], cell_start[cell + 1]):
-                    j = cell_tids[q]
-                    if _passes_view(cam_pos[i], cam_rot[i], params, tpos[j, 0], tpos[j, 1], tpos[j, 2],
-                                    tnrm[j, 0], tnrm[j, 1], tnrm[j, 2], tcos[j], tpx[j]):
-                        k += 1
-        counts[i] = k
-    offs = np.zeros(n_c + 1, np.int64)
-    for i in range(n_c):
-        offs[i + 1] = offs[i] + counts[i]
-    buf = np.empty(offs[n_c], np.int32)
-    seen = np.zeros(n_c, np.int64)
+    indptr = np.zeros(n_c + 1, np.int64)
+    buf = np.empty(max(1024, 64 * n_c), np.int32)
+    k = 0
     off_len = SURFACE_OFFSET * res
     for i in range(n_c):
         params = cam_params[cam_ids[i]]
         p = cam_pos[i]
-        k = offs[i]
         ax, bx = _cell_span(grid[0], grid[2], gnx, p[0], params[7])
         ay, by = _cell_span(grid[1], grid[2], gny, p[1], params[7])
         for cx in range(ax, bx + 1):
@@ -162,10 +143,22 @@ def _visibility_kernel(occ, origin, res, cam_pos, cam_rot, cam_ids, cam_params,
                     ey = tpos[j, 1] + ny_ * off_len
                     ez = tpos[j, 2] + nz_ * off_len
                     if segment_clear(occ, origin[0], origin[1], origin[2], res, p[0], p[1], p[2], ex, ey, ez):
+                        if k == len(buf):
+                            buf = _grown(buf, k)
                         buf[k] = j
                         k += 1
-        seen[i] = k - offs[i]
-    return _compact(buf, offs, seen)  # ids in cell order: _sorted_rows sorts them
+        indptr[i + 1] = k
+    return indptr, buf[:k].copy()
+
+
+@numba.njit(cache=True, nogil=True)
+def _grown(buf, k):
+    """A buffer twice the size of ``buf`` holding its first k entries (element by element: a
+    slice assignment compiles numba's shape-mismatch message, ~2 s on a new install)."""
+    out = np.empty(2 * len(buf), buf.dtype)
+    for n in range(k):
+        out[n] = buf[n]
+    return out
 
 
 @numba.njit(cache=True, inline="always")
