@@ -36,17 +36,22 @@ def run_pipeline(scene, budget: Optional[int], solver: Optional[str], out: Optio
     into ``out`` (default camplace-out/<scene>, poses in ``frame``; a plan's ``preview``
     as preview.png / preview.svg) and prints the summary. Interrupted: exit 130 at once
     (``leave``; else typer.Exit(130))."""
-    from camplace.outputs.plan_data import check_paper
-    from camplace.outputs.write import check_frame
     from camplace.workflows import warm
-    from camplace.workflows.run import run
 
     check_options(budget, time_limit, max_memory_gb, out)
-    check_frame(frame)
-    paper = check_paper(paper)
-    repeatable = repeatable_requested(repeatable)
-    stop = StopFlag()
     warming = warm.start(solver)  # a fresh install: the later stages' kernels compile beside visibility's
+    try:  # started before the heavy imports below: it compiles the visibility kernel's callees first
+        from camplace.outputs.plan_data import check_paper
+        from camplace.outputs.write import check_frame
+        from camplace.workflows.run import run
+
+        check_frame(frame)
+        paper = check_paper(paper)
+        repeatable = repeatable_requested(repeatable)
+    except BaseException:
+        warm.stop(warming)
+        raise
+    stop = StopFlag()
     with stop.installed():  # first Ctrl-C: finish with the best placement so far; second: abort
         try:
             with progress_bars() as prog:

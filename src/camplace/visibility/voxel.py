@@ -143,22 +143,15 @@ def _visibility_kernel(occ, origin, res, cam_pos, cam_rot, cam_ids, cam_params,
                     ey = tpos[j, 1] + ny_ * off_len
                     ez = tpos[j, 2] + nz_ * off_len
                     if segment_clear(occ, origin[0], origin[1], origin[2], res, p[0], p[1], p[2], ex, ey, ez):
-                        if k == len(buf):
-                            buf = _grown(buf, k)
+                        if k == len(buf):  # full: twice the room (copied element by element: a slice
+                            big = np.empty(2 * k, np.int32)  # assignment compiles numba's shape-mismatch
+                            for n in range(k):  # message, ~2 s on a new install)
+                                big[n] = buf[n]
+                            buf = big
                         buf[k] = j
                         k += 1
         indptr[i + 1] = k
     return indptr, buf[:k].copy()
-
-
-@numba.njit(cache=True, nogil=True)
-def _grown(buf, k):
-    """A buffer twice the size of ``buf`` holding its first k entries (element by element: a
-    slice assignment compiles numba's shape-mismatch message, ~2 s on a new install)."""
-    out = np.empty(2 * len(buf), buf.dtype)
-    for n in range(k):
-        out[n] = buf[n]
-    return out
 
 
 @numba.njit(cache=True, inline="always")

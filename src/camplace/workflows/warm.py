@@ -54,8 +54,16 @@ def stop(proc: subprocess.Popen | None) -> None:
 
 
 def warm(solver: str) -> None:
-    """Every stage after visibility on the demo scene with a stand-in V: the solver (its
+    """The visibility kernel's line-of-sight walk and pixel density first (numba's cache serves
+    a kernel's callees too: the run, compiling the kernel's own code meanwhile, loads them),
+    then every stage after visibility on the demo scene with a stand-in V: the solver (its
     dry run included), the metrics and the whole report set, written to a temporary folder."""
+    from camplace.cameras.models import N_PARAMS, px_per_m_nb
+
+    px_per_m_nb(np.zeros(N_PARAMS), 0.0, 0.0, 1.0, 0.0, 0.0, 0.0)
+    from camplace.visibility.raywalk import segment_clear
+
+    segment_clear(np.zeros((1, 1, 1), np.uint8), 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.5, 0.5, 0.5)
     from camplace.cameras.candidates import build_candidates
     from camplace.outputs.write import write_outputs
     from camplace.problem.feasibility import check_feasibility
