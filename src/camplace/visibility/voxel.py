@@ -116,16 +116,25 @@ def _visibility_kernel(occ, origin, res, cam_pos, cam_rot, cam_ids, cam_params,
     ``cell_start`` / ``cell_tids``, see ``target_grid``): each candidate visits only the
     cells within its max range, so the work scales with the visible pairs, not N_g x N_p.
     One pass: a pair that passes the view tests is walked at once, a seen target appended
-    to a buffer that doubles when full (memory O(pairs seen))."""
+    to a buffer that doubles when full (memory O(pairs seen)). A sight line depends on the
+    camera's position only: consecutive candidates at one position (its orientations; the
+    refinement's turned trial poses) walk each target's line once (``los``)."""
     n_c = cam_pos.shape[0]
     gnx, gny = int(grid[3]), int(grid[4])
     indptr = np.zeros(n_c + 1, np.int64)
     buf = np.empty(max(1024, 64 * n_c), np.int32)
     k = 0
     off_len = SURFACE_OFFSET * res
+    los = np.full(tpos.shape[0], -1, np.int8)  # from the current position: -1 not walked, 0 blocked, 1 clear
+    walked = np.empty(tpos.shape[0], np.int32)
+    n_walked = 0
     for i in range(n_c):
         params = cam_params[cam_ids[i]]
         p = cam_pos[i]
+        if i > 0 and (p[0] != cam_pos[i - 1, 0] or p[1] != cam_pos[i - 1, 1] or p[2] != cam_pos[i - 1, 2]):
+            for n in range(n_walked):  # a new position: forget the lines walked from the last one
+                los[walked[n]] = -1
+            n_walked = 0
         ax, bx = _cell_span(grid[0], grid[2], gnx, p[0], params[7])
         ay, by = _cell_span(grid[1], grid[2], gny, p[1], params[7])
         for cx in range(ax, bx + 1):
@@ -139,10 +148,13 @@ def _visibility_kernel(occ, origin, res, cam_pos, cam_rot, cam_ids, cam_params,
                     if not _passes_view(p, cam_rot[i], params, tpos[j, 0], tpos[j, 1], tpos[j, 2], nx_, ny_, nz_, tcos[j],
                                         tpx[j]):
                         continue
-                    ex = tpos[j, 0] + nx_ * off_len
-                    ey = tpos[j, 1] + ny_ * off_len
-                    ez = tpos[j, 2] + nz_ * off_len
-                    if segment_clear(occ, origin[0], origin[1], origin[2], res, p[0], p[1], p[2], ex, ey, ez):
+                    if los[j] < 0:
+                        los[j] = segment_clear(occ, origin[0], origin[1], origin[2], res, p[0], p[1], p[2],
+                                               tpos[j, 0] + nx_ * off_len, tpos[j, 1] + ny_ * off_len,
+                                               tpos[j, 2] + nz_ * off_len)
+                        walked[n_walked] = j
+                        n_walked += 1
+                    if los[j] == 1:
                         if k == len(buf):  # full: twice the room (copied element by element: a slice
                             big = np.empty(2 * k, np.int32)  # assignment compiles numba's shape-mismatch
                             for n in range(k):  # message, ~2 s on a new install)
