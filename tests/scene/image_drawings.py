@@ -292,12 +292,14 @@ def draw_two_blocks(path: str | Path, gap: float, px: float = PX) -> Path:
 
 
 
-def draw_line_plan(path: str | Path, px: float = PX) -> Sheet:
+def draw_line_plan(path: str | Path, px: float = PX, pen="black") -> Sheet:
     """The apartment of ROOMS drawn in hairlines, as many CAD exports and sketches are: every
     wall one 1 px line at its centre (the outer walls 0.05 m outside the clear rectangle,
     the inner walls between the rooms), doors as gaps with a leaf line and a swing arc,
     windows as gaps with a glazing line just outside (the west one a plain gap), room
-    names, one dimension line, a sheet frame and a title block. Sheet.origin: the pixel of x = 0, y = 0."""
+    names, one dimension line, a sheet frame and a title block. Sheet.origin: the pixel of x = 0, y = 0.
+    ``pen``: the colour of the walls, doors and windows (a CAD plot's layer colour; the
+    text, dimension line and frame stay black)."""
     from PIL import Image, ImageDraw
 
     margin = 100
@@ -316,7 +318,7 @@ def draw_line_plan(path: str | Path, px: float = PX) -> Sheet:
         for s0, s1 in zip(cuts[::2], cuts[1::2]):
             f0, f1 = s0 / length, s1 / length
             d.line([p(x0 + f0 * (x1 - x0), y0 + f0 * (y1 - y0)), p(x0 + f1 * (x1 - x0), y0 + f1 * (y1 - y0))],
-                   fill="black", width=1)
+                   fill=pen, width=1)
 
     e = 0.05
     run((-e, -e), (W + e, -e), [(0.8, 2.2), (6.5, 8.2), (9.0, 9.9)])  # south: two windows, the entrance
@@ -326,7 +328,7 @@ def draw_line_plan(path: str | Path, px: float = PX) -> Sheet:
     for (x0, y0), (x1, y1) in (((0.8, -0.09), (2.2, -0.09)), ((6.5, -0.09), (8.2, -0.09)), ((1.0, D + 0.09),
                                (2.6, D + 0.09)), ((3.2, D + 0.09), (4.6, D + 0.09)), ((6.6, D + 0.09), (8.4, D + 0.09)),
                                ((W + 0.09, 1.0), (W + 0.09, 2.4)), ((W + 0.09, 4.6), (W + 0.09, 6.2))):
-        d.line([p(x0 - e, y0), p(x1 - e, y1)] if y0 == y1 else [p(x0, y0 - e), p(x1, y1 - e)], fill="black",
+        d.line([p(x0 - e, y0), p(x1 - e, y1)] if y0 == y1 else [p(x0, y0 - e), p(x1, y1 - e)], fill=pen,
                width=1)  # the other windows' glazing, just outside the wall line
     run((5.5, 0.0), (5.5, D), [(1.2, 2.1), (4.2, 5.1)])
     run((0.0, 3.0), (5.5, 3.0), [(1.4, 2.3)])
@@ -335,10 +337,10 @@ def draw_line_plan(path: str | Path, px: float = PX) -> Sheet:
     for (hx, hy), (lx, ly), start in (((5.5, 1.2), (6.4, 1.2), 270), ((5.5, 4.2), (6.4, 4.2), 270),
                                       ((1.4, 3.0), (1.4, 2.1), 0), ((7.0, 3.5), (7.0, 2.6), 0),
                                       ((3.0, 0.15), (3.8, 0.15), 270)):
-        d.line([p(hx, hy), p(lx, ly)], fill="black", width=1)  # the leaf, open
+        d.line([p(hx, hy), p(lx, ly)], fill=pen, width=1)  # the leaf, open
         r = round(math.hypot(lx - hx, ly - hy) / px)
         c, rr = p(hx, hy)
-        d.arc([c - r, rr - r, c + r, rr + r], start, start + 90, fill="black", width=1)
+        d.arc([c - r, rr - r, c + r, rr + r], start, start + 90, fill=pen, width=1)
     f = font(18, bold=True)
     for name, (x0, y0, x1, y1) in ROOMS.items():
         d.text(p((x0 + x1) / 2, (y0 + y1) / 2), name, font=f, fill="black", anchor="mm")

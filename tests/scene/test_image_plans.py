@@ -94,6 +94,19 @@ def test_walls_drawn_as_empty_outlines(tmp_path):
     assert Polygon(got.scene["room"]["footprint"]).area == pytest.approx(9.0 * 6.0, rel=0.02)
 
 
+@pytest.mark.parametrize("pen", [(220, 30, 30), (0, 200, 220)])  # a CAD plot's red and cyan pens
+def test_walls_drawn_in_colour(tmp_path, pen):
+    """The hairline plan plotted with its walls, doors and windows in a coloured pen and its
+    text, dimension line and frame in black: Otsu parts the black from the paper and the
+    bright pen is paper at first; the coloured lines are tried as ink when nothing else
+    encloses a room."""
+    black = read_plan(draw_line_plan(tmp_path / "black.png").path, scale=PX, ocr=False)
+    got = read_plan(draw_line_plan(tmp_path / "pen.png", pen=pen).path, scale=PX, ocr=False)
+    assert got.used["walls"].endswith("coloured lines read as ink"), got.used["walls"]
+    assert sorted(q.area for q in _zones(got).values()) == pytest.approx(
+        sorted(q.area for q in _zones(black).values()), rel=0.02)
+
+
 def test_thick_walls_are_not_read_as_lines(apartment):
     _, got = apartment
     assert got.used["walls"].endswith("from strokes at least 0.08 m thick")

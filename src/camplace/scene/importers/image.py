@@ -39,8 +39,8 @@ from camplace.scene.importers.image_read import metres_per_pixel, read_sheet
 from camplace.scene.importers.image_rooms import colour_rooms, free_regions, mask_polygons
 from camplace.scene.importers.image_scale import scale_from_bar, scale_from_dimensions
 from camplace.scene.importers.image_walls import (EIGHT, HOLLOW_WALL_M, LINE_WALL_M, REACH_M, bridge_openings,
-                                                  brightness, find_plans, ink_threshold, line_walls, otsu_threshold,
-                                                  solid_walls)
+                                                  brightness, colour_lines, find_plans, ink_threshold, line_walls,
+                                                  otsu_threshold, solid_walls)
 
 HOLLOW_GAIN = 1.25  # the walls read as empty outlines are taken when their rooms are this much larger
 WORK_M_PER_PX = 0.01  # images finer than this are read at an integer fraction of their pixels
@@ -133,26 +133,17 @@ def analyse(path: Path, scale=None, ref=None, threshold=None, min_wall_thickness
             raise InputError(f"threshold: expected a grey level > 0 and <= 255, got {threshold}", option="threshold")
         t, how = float(threshold), "given"
     ink = dark < t
-    skipped: Counter = Counter()
-    raw = solid_walls(ink, s, hatch_spacing, min_wall_thickness, max_wall_thickness, skipped)
-    plans = _plans(raw, ink, rgb, s, max_opening, max_wall_thickness, min_room_area, skipped) if raw.any() else []
-    walls_from = f"strokes at least {min_wall_thickness:g} m thick"
-    hollow_skipped = Counter()
-    hollow = solid_walls(ink, s, hatch_spacing, min_wall_thickness, max_wall_thickness, hollow_skipped, hollow=True)
-    if (hollow != raw).any():  # walls drawn as empty outlines: taken when they enclose clearly more room
-        hollow_plans = _plans(hollow, ink, rgb, s, max_opening, max_wall_thickness, min_room_area, hollow_skipped)
-        if _room_px(hollow_plans) > HOLLOW_GAIN * _room_px(plans):
-            raw, plans, skipped = hollow, hollow_plans, hollow_skipped
-            walls_from += f" and walls drawn as empty outlines up to {HOLLOW_WALL_M:g} m wide"
-    if not any(p.rooms for p in plans):  # a plan drawn in single lines (hairlines)?
-        lines, line_skipped = line_walls(ink, s, max_opening), Counter()
-        line_plans = _plans(lines, lines, rgb, s, max_opening, max_wall_thickness, min_room_area, line_skipped,
-                            reach=max_opening) if lines.any() else []  # wall pieces between windows join
-        if any(p.rooms for p in line_plans):
-            plans, skipped = line_plans, line_skipped
-            walls_from = (f"single lines (no stroke {min_wall_thickness:g} m thick encloses a room), "
-                          f"drawn {LINE_WALL_M:g} m thick")
-    if not raw.any() and not plans:
+    opts = (s, hatch_spacing, min_wall_thickness, max_wall_thickness, max_opening, min_room_area)
+    raw_any, plans, skipped, walls_from = _wall_passes(ink, rgb, *opts)
+    if not any(p.rooms for p in plans):  # walls drawn in colour (a CAD plot: red, cyan, blue pens)?
+        pens = colour_lines(rgb) & ~ink
+        if pens.any():
+            got = _wall_passes(ink | pens, rgb, *opts)
+            if any(p.rooms for p in got[1]):
+                raw_any, plans, skipped, walls_from = got
+                walls_from += "; coloured lines read as ink"
+                ink = ink | pens
+    if not raw_any and not plans:
         raise InputError(f"{path}: no walls found (no dark strokes at least {min_wall_thickness} m thick, "
                          "nor single lines enclosing a room)")
     if not any(p.rooms for p in plans):
@@ -161,6 +152,32 @@ def analyse(path: Path, scale=None, ref=None, threshold=None, min_wall_thickness
     if engine is not None:
         _name_rooms(engine, dark, ink, plans)
     return Sheet(s, scale_from, t, how, plans, dark.shape[0], ocr_line, skipped, max_wall_thickness, walls_from)
+
+
+def _wall_passes(ink: np.ndarray, rgb: np.ndarray, s: float, hatch_spacing: float, min_wall: float,
+                 max_wall: float, max_opening: float, min_room_area: float) -> tuple[bool, list, Counter, str]:
+    """(any wall found, plans, skipped, how the walls were read) of the ink mask: solid
+    strokes; walls drawn as empty outlines when that encloses clearly more room; single
+    lines when neither encloses a room."""
+    skipped: Counter = Counter()
+    raw = solid_walls(ink, s, hatch_spacing, min_wall, max_wall, skipped)
+    plans = _plans(raw, ink, rgb, s, max_opening, max_wall, min_room_area, skipped) if raw.any() else []
+    walls_from = f"strokes at least {min_wall:g} m thick"
+    hollow_skipped: Counter = Counter()
+    hollow = solid_walls(ink, s, hatch_spacing, min_wall, max_wall, hollow_skipped, hollow=True)
+    if (hollow != raw).any():  # walls drawn as empty outlines: taken when they enclose clearly more room
+        hollow_plans = _plans(hollow, ink, rgb, s, max_opening, max_wall, min_room_area, hollow_skipped)
+        if _room_px(hollow_plans) > HOLLOW_GAIN * _room_px(plans):
+            raw, plans, skipped = hollow, hollow_plans, hollow_skipped
+            walls_from += f" and walls drawn as empty outlines up to {HOLLOW_WALL_M:g} m wide"
+    if not any(p.rooms for p in plans):  # a plan drawn in single lines (hairlines)?
+        lines, line_skipped = line_walls(ink, s, max_opening), Counter()
+        line_plans = _plans(lines, lines, rgb, s, max_opening, max_wall, min_room_area, line_skipped,
+                            reach=max_opening) if lines.any() else []  # wall pieces between windows join
+        if any(p.rooms for p in line_plans):
+            plans, skipped = line_plans, line_skipped
+            walls_from = f"single lines (no stroke {min_wall:g} m thick encloses a room), drawn {LINE_WALL_M:g} m thick"
+    return bool(raw.any()), plans, skipped, walls_from
 
 
 def _room_px(plans: list[PlanRooms]) -> int:

@@ -15,6 +15,7 @@ from scipy import ndimage
 
 
 EIGHT = np.ones((3, 3), bool)  # 8-connectivity
+COLOUR_SPREAD = 100  # a pen this far from grey (brightest minus dimmest channel, 0..255) is a coloured line
 DOOR_M = 1.0  # the widest door beside a corner
 MIN_JAMB_M = 0.12  # a wall beside a door runs at least this far in line with it
 REACH_M = 1.0  # a small wall piece this close to a plan belongs to it (to the nearest plan)
@@ -29,6 +30,14 @@ def brightness(rgb: np.ndarray) -> np.ndarray:
     """(H, W) uint8: the brightest channel of each pixel (HSV value), so a flat colour
     fill (magenta, green: one bright channel) is light and only grey-to-black ink is dark."""
     return rgb.max(axis=2)
+
+
+def colour_lines(rgb: np.ndarray) -> np.ndarray:
+    """(H, W) bool: pixels of a saturated pen (a CAD plot's red, cyan, blue lines): at
+    least COLOUR_SPREAD between their brightest and dimmest channel. brightness() takes
+    them for paper; the importer tries them as ink only when no room is found without."""
+    a = rgb.astype(np.int16)
+    return (a.max(axis=2) - a.min(axis=2)) >= COLOUR_SPREAD
 
 
 def label_sum(values: np.ndarray, labels: np.ndarray, n: int) -> np.ndarray:
