@@ -1,4 +1,4 @@
-"""PDF floor plans and drawing scales (issue 25): a PDF page is rendered (PDFium) and read
+"""PDF floor plans and scales (issue 25): a PDF page is rendered (PDFium) and read
 as a plan image; '1:N' turns into metres per pixel through the page's size on paper, or
 through the DPI a raster file records; what cannot be used says so in one line."""
 
@@ -87,3 +87,14 @@ def test_light_lines_on_dark_paper_are_read_inverted(drawn, tmp_path, paper):
     got = read_plan(tmp_path / "dark.png", scale=PX, ocr=False)
     assert got.used["scale"].endswith("light lines on dark paper, read inverted)")
     assert _areas(got) == pytest.approx(_areas(ref), rel=0.02)
+
+
+@pytest.mark.parametrize("text, metres", [("10700", 10.7), ("3.90", 3.9), ("10,70", 10.7), ("12'-6\"", 3.81),
+                                          ("12’ 6”", 3.81), ("8'", 2.4384), ("3'-0 1/2\"", 0.9271),
+                                          ("12'-13\"", None), ("Kitchen", None), ("42", None)])
+def test_dimension_texts(text, metres):
+    """Millimetres, metres with decimals, and US feet-inches as OCR reads them."""
+    from camplace.scene.importers.image_scale import dimension_value_m
+
+    got = dimension_value_m(text)
+    assert got == (None if metres is None else pytest.approx(metres, abs=1e-4))

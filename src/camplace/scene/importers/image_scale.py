@@ -15,13 +15,20 @@ from camplace.scene.importers.image_ocr import MIN_CONF, dimension_row, read_lin
 
 AGREE = 0.03  # dimension lines within 3 % of the median scale agree
 BAR_FIT = 0.02  # a scale bar's numbers lie within this share of its length of a straight line (value -> column)
+FEET_RE = re.compile(r"(\d{1,3})\s*['’′`]\s*-?\s*(?:(\d{1,2})(?:\s+(\d)/(\d{1,2}))?\s*(?:\"|”|″|''|'’)?)?")
 BAR_UNITS = {"": 1.0, "m": 1.0, "cm": 0.01, "mm": 0.001, "ft": 0.3048, "'": 0.3048}
 BAR_RE = re.compile(r"^(\d{1,3}(?:[.,]\d{1,2})?)\s*(m|cm|mm|ft|')?$", re.IGNORECASE)
 
 
 def dimension_value_m(text: str) -> float | None:
     """The length (m) a dimension text states: whole millimetres ('10700', 3 to 6
-    digits) or metres with decimals ('3.90', '10,70'); None for anything else."""
+    digits), metres with decimals ('3.90', '10,70'), or feet and inches as US plans write
+    them ('12\'-6"', '12\' 6 1/2"', '8\'', with any of the quote marks OCR gives);
+    None for anything else."""
+    feet = FEET_RE.fullmatch(text.strip(" .,:;|_"))
+    if feet:
+        inches = float(feet.group(2) or 0) + (float(feet.group(3)) / float(feet.group(4)) if feet.group(3) else 0.0)
+        return None if inches >= 12 else float(feet.group(1)) * 0.3048 + inches * 0.0254
     text = text.strip(" .,:;|_-'\"")
     if re.fullmatch(r"\d{3,6}", text):
         return int(text) / 1000.0
