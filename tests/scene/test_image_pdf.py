@@ -98,3 +98,13 @@ def test_dimension_texts(text, metres):
 
     got = dimension_value_m(text)
     assert got == (None if metres is None else pytest.approx(metres, abs=1e-4))
+
+
+@pytest.mark.parametrize("suffix", [".webp", ".bmp", ".gif"])
+def test_other_raster_formats(drawn, tmp_path, suffix):
+    """WebP (web listings), BMP and GIF plans read as PNG does."""
+    png, _, ref = drawn
+    with Image.open(png) as im:
+        im.convert("RGB").save(tmp_path / f"plan{suffix}", **({"lossless": True} if suffix == ".webp" else {}))
+    got = read_plan(tmp_path / f"plan{suffix}", scale=PX, ocr=False)
+    assert _areas(got) == pytest.approx(_areas(ref), rel=1e-6)
