@@ -146,6 +146,22 @@ def test_two_rooms_with_one_name(tmp_path):
         sorted(room_area(n) for n in ("Bedroom", "Office")), rel=0.1)
 
 
+def test_german_labels_with_the_german_model(tmp_path):
+    """Words English reads badly ('Küche', 'Büro') are read again with the other installed
+    models (.ci/run installs tesseract-ocr-deu); numbers stay with English alone."""
+    need_ocr()
+    from camplace.scene.importers.image_ocr import ocr_engine
+
+    if "deu" not in (getattr(ocr_engine()[0], "more", None) or ""):
+        if os.environ.get("CI") == "true":
+            pytest.fail("the German model is required on CI (tesseract-ocr-deu)")
+        pytest.skip("no German model for tesseract (tesseract-ocr-deu)")
+    names = {"Kitchen": "Küche", "Office": "Büro", "Living": "Wohnzimmer", "Bedroom": "Schlafzimmer", "Bathroom": "Bad"}
+    got = read_plan(draw_apartment(tmp_path / "de.png", names=names).path, scale=PX)
+    assert sorted(_zones(got)) == sorted(names.values())
+    assert "words again with eng+deu" in got.used["ocr"]
+
+
 def test_small_word_labels(tmp_path):
     """Room names at 10 px (capitals about 7 px, regular weight) and areas at 9 px, as on
     a plan printed small: the words and 'WC' are read (Tesseract alone reads 'WC' as 'wc')."""

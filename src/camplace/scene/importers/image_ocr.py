@@ -30,6 +30,7 @@ AREA_RE = re.compile(r"^(\d{1,4})(?:[.,]\s?(\d{1,2})|\s(\d{2}))"  # '14,43', '14
 UNITS = {"m", "mm", "cm", "m2", "m²", "м", "м2", "м²", "sqm", "qm"}
 JUNK = " .,:;|_-—'\"“”‘’()[]{}«»~°*"  # around a label: the rest of a ring, a stray mark
 CASELESS = "cosvwxz"  # letters whose capital has the same shape
+LANGUAGES = ("eng", "deu", "fra", "spa", "ita", "por", "nld")  # Tesseract models used when installed
 NUMBER_RE = re.compile(r"^[A-Za-z]{0,2}\d{1,4}([.\-/]\d{1,3}){0,2}[A-Za-z]?$")
 
 
@@ -58,9 +59,32 @@ def ocr_engine() -> tuple[object | None, str]:
         return None, "pytesseract is not installed (pip install camplace[ocr])"
     try:
         version = pytesseract.get_tesseract_version()
+        installed = set(pytesseract.get_languages(config=""))
     except Exception:  # noqa: BLE001 - TesseractNotFoundError and OS errors alike
         return None, "the tesseract program is not installed (e.g. apt install tesseract-ocr)"
-    return pytesseract, f"tesseract {version}"
+    if "eng" not in installed:
+        return None, "tesseract has no English model (e.g. apt install tesseract-ocr-eng)"
+    more = [lang for lang in LANGUAGES if lang in installed]
+    return (Tesseract(pytesseract, "+".join(more) if len(more) > 1 else None),
+            f"tesseract {version}" + (f" (words again with {'+'.join(more)})" if len(more) > 1 else ""))
+
+
+@dataclass
+class Tesseract:
+    """pytesseract, reading with the English model; ``more`` ('eng+deu'): the English model
+    and those of LANGUAGES installed beside it (Debian tesseract-ocr-deu, ...), with which
+    a word English read badly is read again (read_lines), so a German plan's 'Küche'
+    reads whole while numbers stay with English alone (more models misread digits)."""
+
+    module: object
+    more: str | None = None
+
+    @property
+    def Output(self):  # noqa: N802 - pytesseract's name
+        return self.module.Output
+
+    def image_to_data(self, path: str, config: str, output_type, lang: str = "eng"):
+        return self.module.image_to_data(path, lang=lang, config=config, output_type=output_type)
 
 
 def text_lines_mask(ink: np.ndarray) -> tuple[np.ndarray, int, float]:
@@ -110,6 +134,12 @@ def read_lines(engine, dark: np.ndarray, ink: np.ndarray, lines: np.ndarray, wan
         return []
     tiles = [line_tile(dark, ink, lines, k, boxes[k - 1], hc) for k in wanted]
     first = read_pages(engine, [t.image for t in tiles])
+    more = getattr(engine, "more", None)
+    again = [i for i, (text, conf) in enumerate(first) if conf < WORD_CONF and sum(ch.isalpha() for ch in text) >= 2]
+    if more and again:  # words English read badly: once more with the other installed models
+        for i, got in zip(again, read_pages(engine, [tiles[i].image for i in again], lang=more)):
+            if got[1] > first[i][1]:
+                first[i] = got
     out = []
     for k, tile, (text, conf) in zip(wanted, tiles, first):
         b = boxes[k - 1]
@@ -120,7 +150,7 @@ def read_lines(engine, dark: np.ndarray, ink: np.ndarray, lines: np.ndarray, wan
     return out
 
 
-def read_pages(engine, tiles: list[np.ndarray]) -> list[tuple[str, float]]:
+def read_pages(engine, tiles: list[np.ndarray], lang: str | None = None) -> list[tuple[str, float]]:
     """(text, mean word confidence 0..100) of each tile, read by one Tesseract call as a
     single line of text (page segmentation mode 7) on the pages of one TIFF."""
     import tempfile
@@ -133,7 +163,8 @@ def read_pages(engine, tiles: list[np.ndarray]) -> list[tuple[str, float]]:
     with tempfile.TemporaryDirectory(prefix="camplace-ocr-") as tmp:
         path = Path(tmp) / "lines.tif"
         pages[0].save(path, save_all=True, append_images=pages[1:])
-        data = engine.image_to_data(str(path), config=config, output_type=engine.Output.DICT)
+        more = {} if lang is None else {"lang": lang}
+        data = engine.image_to_data(str(path), config=config, output_type=engine.Output.DICT, **more)
     words: dict[int, list] = {}
     for page, text, conf, left in zip(data["page_num"], data["text"], data["conf"], data["left"]):
         text = str(text).strip()
