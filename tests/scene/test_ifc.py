@@ -97,6 +97,22 @@ def test_not_ifc_is_refused(tmp_path, text, words):
         import_plan(bad)
 
 
+def test_ifczip_reads_as_its_ifc(building, tmp_path):
+    """An .ifczip (Revit's and ArchiCAD's compressed IFC) reads as the .ifc it holds; a file
+    so named that is no zip is one line."""
+    import zipfile
+
+    with zipfile.ZipFile(tmp_path / "building.ifczip", "w", zipfile.ZIP_DEFLATED) as zf:
+        zf.write(building, "model/building.ifc")
+    zipped, plain = import_plan(tmp_path / "building.ifczip"), import_plan(building)
+    assert zipped["room"] == plain["room"] and zipped["zones"] == plain["zones"]
+    assert [o.get("prism") for o in zipped["obstacles"]] == [o.get("prism") for o in plain["obstacles"]]
+    assert zipped["obstacles"][0]["source"]["file"] == "building.ifczip"
+    (tmp_path / "junk.ifczip").write_text("ISO-10303-21;\n")
+    with pytest.raises(InputError, match="junk.ifczip: not an .ifczip file"):
+        import_plan(tmp_path / "junk.ifczip")
+
+
 def test_cli_scene_import_bad_storey_exits_2_and_writes_nothing(building, tmp_path, monkeypatch, capsys):
     out = tmp_path / "site.yaml"
     code, text = run_cli(["scene", "import", building, "--storey", "Attic", "--out", out], monkeypatch, capsys)

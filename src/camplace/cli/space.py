@@ -265,7 +265,7 @@ def scene_data_from_file(path: str | Path, opts: ImportOptions, budget: int | No
     if kind is None:
         raise InputError(f"{p}: not a space file; expected a scan ({', '.join(POINT_CLOUD_SUFFIXES)}), a mesh "
                          f"({', '.join(MESH_SUFFIXES)}), an OctoMap ({', '.join(OCTOMAP_SUFFIXES)}) or a plan "
-                         "(.dxf, .png/.jpg/.tif/.webp/.bmp/.gif, .pdf, .ifc)")
+                         "(.dxf, .png/.jpg/.tif/.webp/.bmp/.gif, .pdf, .ifc/.ifczip)")
     if not p.is_file():
         raise InputError(f"{p}: file not found" if not p.exists() else f"{p}: is a folder, expected a file")
     if kind == "plan":

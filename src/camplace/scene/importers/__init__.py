@@ -24,7 +24,8 @@ from camplace.core.errors import InputError
 from camplace.scene.from_scan import DEFAULT_CAMERA
 
 PLAN_SUFFIXES = {".dxf": "dxf", ".png": "image", ".jpg": "image", ".jpeg": "image", ".tif": "image",
-                 ".tiff": "image", ".webp": "image", ".bmp": "image", ".gif": "image", ".pdf": "image", ".ifc": "ifc"}
+                 ".tiff": "image", ".webp": "image", ".bmp": "image", ".gif": "image", ".pdf": "image", ".ifc": "ifc",
+                 ".ifczip": "ifc"}
 UNITS_M = {"mm": 0.001, "cm": 0.01, "m": 1.0, "in": 0.0254, "ft": 0.3048}  # metres per unit
 COMMON_OPTIONS = ("name", "units", "wall_height", "ceiling_height", "heights", "coverage", "budget")
 DEFAULT_CEILING_M = 3.0

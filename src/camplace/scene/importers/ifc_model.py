@@ -89,15 +89,19 @@ class Structure:
 
 
 def open_model(path: Path):
-    """The ifcopenshell model of ``path``; InputError naming the file when it is not IFC."""
+    """The ifcopenshell model of ``path`` (an IFC STEP file, or an .ifczip holding one);
+    InputError naming the file when it is not IFC."""
     import ifcopenshell
 
     with open(path, "rb") as f:
         head = f.read(64)
-    if not head.lstrip().startswith(b"ISO-10303-21"):
+    zipped = path.suffix.lower() == ".ifczip"
+    if zipped and not head.startswith(b"PK"):
+        raise InputError(f"{path}: not an .ifczip file (a zip archive holding an .ifc file)")
+    if not zipped and not head.lstrip().startswith(b"ISO-10303-21"):
         raise InputError(f"{path}: not an IFC file (an IFC STEP file starts with 'ISO-10303-21;')")
     try:
-        return ifcopenshell.open(str(path))
+        return ifcopenshell.open(str(path), format=".ifcZIP" if zipped else None)
     except Exception as err:  # ifcopenshell raises its own kinds for broken files
         msg = str(err).splitlines()[0] if str(err) else type(err).__name__
         raise InputError(f"{path}: not a readable IFC file ({msg[:120]})") from None
