@@ -428,3 +428,16 @@ def test_cli_dxf_wall_layers_and_layer_height(tmp_path, monkeypatch, capsys):
     assert not (tmp_path / "none.yaml").exists()
     code, text = run_cli(["scene", "import", plan, "--out", site, "--layer-height", "A-FURN"], monkeypatch, capsys)
     assert code == 2 and "--layer-height" in text and "LAYER=M" in text, text
+
+
+@pytest.mark.parametrize("name, words", [("plan.dwg", "save it as DXF"), ("house.rvt", "export it as IFC"),
+                                         ("office.pln", "save it as IFC")])
+def test_tool_native_formats_say_how_to_export(tmp_path, name, words, monkeypatch, capsys):
+    """DWG, Revit and ArchiCAD files: one line saying what to export, from Python and the CLI."""
+    from tests.conftest import run_cli
+
+    (tmp_path / name).write_bytes(b"AC1032\x00\x00")
+    with pytest.raises(InputError, match=words):
+        read_plan(tmp_path / name)
+    code, text = run_cli(["run", tmp_path / name, "--out", tmp_path / "out"], monkeypatch, capsys)
+    assert code == 2 and words in text and len(text.strip().splitlines()) == 1 and not (tmp_path / "out").exists()

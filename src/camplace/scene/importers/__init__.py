@@ -26,6 +26,14 @@ from camplace.scene.from_scan import DEFAULT_CAMERA
 PLAN_SUFFIXES = {".dxf": "dxf", ".png": "image", ".jpg": "image", ".jpeg": "image", ".tif": "image",
                  ".tiff": "image", ".webp": "image", ".bmp": "image", ".gif": "image", ".pdf": "image", ".ifc": "ifc",
                  ".ifczip": "ifc"}
+NATIVE_FORMATS = {  # closed or tool-native formats no open library reads: how to get a plan camplace reads
+    ".dwg": "a DWG drawing (AutoCAD's own format); save it as DXF (AutoCAD, BricsCAD, DraftSight: Save As DXF; "
+            "or the free ODA File Converter), then give the .dxf",
+    ".rvt": "a Revit model; export it as IFC (Revit: File > Export > IFC), then give the .ifc",
+    ".pln": "an ArchiCAD project; save it as IFC (File > Save As > IFC), then give the .ifc",
+    ".skp": "a SketchUp model; export it as IFC or as a mesh (.obj, .glb), then give that file",
+    ".3dm": "a Rhino model; export it as a mesh (.obj, .stl, .glb) or as DXF, then give that file",
+}
 UNITS_M = {"mm": 0.001, "cm": 0.01, "m": 1.0, "in": 0.0254, "ft": 0.3048}  # metres per unit
 COMMON_OPTIONS = ("name", "units", "wall_height", "ceiling_height", "heights", "coverage", "budget")
 DEFAULT_CEILING_M = 3.0
@@ -59,8 +67,12 @@ class PlanImport:
 
 
 def plan_kind(path: str | Path) -> str | None:
-    """'dxf', 'image' or 'ifc' by the file's suffix; None for anything else."""
-    return PLAN_SUFFIXES.get(Path(path).suffix.lower())
+    """'dxf', 'image' or 'ifc' by the file's suffix; None for anything else (InputError
+    saying how to export it for a tool-native format, NATIVE_FORMATS)."""
+    suffix = Path(path).suffix.lower()
+    if suffix in NATIVE_FORMATS:
+        raise InputError(f"{path}: {NATIVE_FORMATS[suffix]}")
+    return PLAN_SUFFIXES.get(suffix)
 
 
 def unit_scale(units: str) -> float:
