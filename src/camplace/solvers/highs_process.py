@@ -37,6 +37,7 @@ KILL_AFTER_S = 0.5  # a child asked to stop that has not answered by then is kil
 POLL_S = 0.05
 FINISH_S_PER_NNZ = 0.5e-6  # seconds per nonzero from an interrupt to the solution read back (2 s measured)
 CHILD = Path(__file__).with_name("highs_child.py")
+_SCHEDULER_THREADS: list[int | None] = [None]  # the 'threads' option of this process's first HiGHS run
 INFO_FIELDS = ("objective_function_value", "mip_dual_bound", "mip_gap", "mip_node_count", "primal_solution_status")
 
 
@@ -121,7 +122,21 @@ def run_model(h: highspy.Highs, *, should_stop: ShouldStop | None = None, end: f
     return _run_here(h, should_stop, end, on_improving, duals)
 
 
+def same_threads(h: highspy.Highs) -> None:
+    """HiGHS starts one global task scheduler at its first run in a process, with that run's
+    'threads' option, and refuses a later run that asks for another count (status 'Not
+    Set', nothing solved: a certify run after a zhao run lost its proof and waited out its
+    limit). So every run in this process uses the first run's count (0: HiGHS' own)."""
+    got = h.getOptionValue("threads")
+    asked = int(got[1] if isinstance(got, tuple) else got)
+    if _SCHEDULER_THREADS[0] is None:
+        _SCHEDULER_THREADS[0] = asked
+    elif asked != _SCHEDULER_THREADS[0]:
+        h.setOptionValue("threads", _SCHEDULER_THREADS[0])
+
+
 def _run_here(h, should_stop, end, on_improving, duals) -> HighsRun:
+    same_threads(h)
     flag = subscribe_stop(h, should_stop, end)
     if on_improving is not None:
         h.cbMipImprovingSolution.subscribe(
