@@ -110,11 +110,11 @@ def test_zones_run_resumes_from_its_checkpoint_under_the_cache(tmp_path):
     from camplace.workflows.run import run
 
     opts = {"solver": "zones", "cache_dir": tmp_path, "tile_time_s": 20.0, "bound_time_s": 1.0,
-            "tile_m": 6.0}  # 12 small tiles: each MIP well inside its limit, ~3x faster than one floor-wide tile
-    first = run("warehouse:300", max_sweeps=1, **opts)
+            "tile_m": 6.0}  # small tiles: each MIP well inside its limit; 200 m², the smallest warehouse: several tiles
+    first = run("warehouse:200", max_sweeps=1, **opts)
     assert list((tmp_path / "zones").glob("*.json"))
     assert first.placement.info.get("resumed_from_sweep") is None
-    second = run("warehouse:300", max_sweeps=2, **opts)
+    second = run("warehouse:200", max_sweeps=2, **opts)
     assert second.visibility.info["cached_chunks"] == second.visibility.info["chunks"]
     assert second.placement.info["resumed_from_sweep"] == 1
     assert second.placement.objective <= first.placement.objective
