@@ -110,7 +110,7 @@ def test_zones_run_resumes_from_its_checkpoint_under_the_cache(tmp_path):
     from camplace.workflows.run import run
 
     opts = {"solver": "zones", "cache_dir": tmp_path, "tile_time_s": 20.0, "bound_time_s": 1.0,
-            "tile_m": 6.0}  # small tiles: each MIP well inside its limit; 200 m², the smallest warehouse: several tiles
+            "tile_m": 6.0}  # small tiles, each MIP well inside its limit; the smallest warehouse: several tiles
     first = run("warehouse:200", max_sweeps=1, **opts)
     assert list((tmp_path / "zones").glob("*.json"))
     assert first.placement.info.get("resumed_from_sweep") is None
