@@ -13,7 +13,6 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy import ndimage
 
-
 EIGHT = np.ones((3, 3), bool)  # 8-connectivity
 COLOUR_SPREAD = 100  # a pen this far from grey (brightest minus dimmest channel, 0..255) is a coloured line
 DOOR_M = 1.0  # the widest door beside a corner
