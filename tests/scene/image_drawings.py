@@ -50,7 +50,7 @@ def font(size: int, bold: bool = False):
 def draw_apartment(path: str | Path, *, jpeg_quality: int | None = None, noise: float = 0.0, seed: int = 0,
                    labels: bool = True, hatch: bool = True, furniture: bool = False,
                    label_px: tuple[int, int] = (18, 14), names: dict[str, str] | None = None,
-                   dimensions: bool = True) -> Sheet:
+                   dimensions: bool = True, numbers: dict[str, str] | None = None) -> Sheet:
     """The apartment sheet as PNG (or JPEG with ``jpeg_quality``; ``noise``: the grey
     level std of a scan's noise on a slightly grey paper; ``hatch=False``: the outer
     walls as two lines with paper between them, as many CAD exports draw them;
@@ -170,6 +170,8 @@ def draw_apartment(path: str | Path, *, jpeg_quality: int | None = None, noise: 
             c, r = p((x0 + x1) / 2, (y0 + y1) / 2)
             d.text((c, r - 2), (names or {}).get(name, name), font=f_name, fill="black", anchor="mb")
             d.text((c, r + 4), f"{room_area(name):.2f} m²".replace(".", ","), font=f_area, fill="black", anchor="mt")
+            if name in (numbers or {}):
+                d.text((c, r + 8 + label_px[1]), numbers[name], font=f_area, fill="black", anchor="mt")
     # scale bar: 0-1-2-3-4-5 m, alternating blocks, under the plan
     c0, r0 = p(0, -t - 1.6)
     step = round(1.0 / PX)

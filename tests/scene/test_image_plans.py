@@ -137,13 +137,20 @@ def test_rooms_named_by_their_labels(apartment):
 
 
 def test_two_rooms_with_one_name(tmp_path):
-    """Two rooms labelled alike (two bedrooms, two flats' kitchens) are both named."""
+    """Two rooms labelled alike (two bedrooms, two flats' kitchens) are both named; with
+    their room numbers printed, by name and number (as the IFC import names them)."""
     need_ocr()
     sheet = draw_apartment(tmp_path / "twice.png", names={"Office": "Bedroom"})
     zones = _zones(read_plan(sheet.path, scale=PX))
     assert {"Bedroom", "Bedroom-2"} <= set(zones), sorted(zones)
     assert sorted(zones[n].area for n in ("Bedroom", "Bedroom-2")) == pytest.approx(
         sorted(room_area(n) for n in ("Bedroom", "Office")), rel=0.1)
+    sheet = draw_apartment(tmp_path / "numbered.png", names={"Office": "Bedroom"},
+                           numbers={"Bedroom": "B12", "Office": "B14", "Kitchen": "B11"})
+    zones = _zones(read_plan(sheet.path, scale=PX))
+    assert zones["Bedroom B12"].area == pytest.approx(room_area("Bedroom"), rel=0.1), sorted(zones)
+    assert zones["Bedroom B14"].area == pytest.approx(room_area("Office"), rel=0.1)
+    assert "Kitchen" in zones  # a name of its own keeps it
 
 
 def test_german_labels_with_the_german_model(tmp_path):

@@ -34,7 +34,8 @@ from scipy import ndimage
 from camplace.core.errors import InputError
 from camplace.scene.importers import (DEFAULT_CEILING_M, PlanImport, clean_polygons, plan_scene, polygons_of,
                                       prism_obstacles, room_zones, rooms_footprint)
-from camplace.scene.importers.image_ocr import NUMBER_RE, ocr_engine, read_lines, room_name, text_lines_mask
+from camplace.scene.importers.image_ocr import (NUMBER_RE, ocr_engine, read_lines, room_name, room_number,
+                                                text_lines_mask)
 from camplace.scene.importers.image_read import metres_per_pixel, read_sheet
 from camplace.scene.importers.image_rooms import colour_rooms, free_regions, mask_polygons
 from camplace.scene.importers.image_scale import scale_from_bar, scale_from_dimensions
@@ -251,8 +252,9 @@ def _name_rooms(engine, dark: np.ndarray, ink: np.ndarray, plans: list[PlanRooms
     whose middle falls on no room, e.g. inside the ring around a room number, goes to
     the nearest room within 1.5 character heights; none on a wall); one OCR call. A room
     number read for two rooms of a plan stays with the more confident reading (the other is
-    misread); a word may name several rooms (two flats' 'Living Room'; the zones become
-    'Living Room', 'Living Room-2')."""
+    misread); a word may name several rooms (two flats' 'Living Room'), each with its room
+    number where it has one ('Living Room B102', as the IFC import names them), else the
+    zones become 'Living Room', 'Living Room-2'."""
     lines, n, hc = text_lines_mask(ink)
     if n == 0:
         return
@@ -273,6 +275,7 @@ def _name_rooms(engine, dark: np.ndarray, ink: np.ndarray, plans: list[PlanRooms
         k = int(np.max(lines[ln.box[0]:ln.box[2], ln.box[1]:ln.box[3]]))
         found.setdefault(where[k], []).append(ln)
     best: dict[tuple, tuple[float, int]] = {}
+    numbers: dict[tuple[int, int], str] = {}
     for (i, room), got in found.items():
         name, conf, area = room_name(got, hc)
         key = (i, name) if name and NUMBER_RE.match(name) else (i, name, room)  # words repeat: 'Bedroom', 'WC'
@@ -280,8 +283,15 @@ def _name_rooms(engine, dark: np.ndarray, ink: np.ndarray, plans: list[PlanRooms
             best[key] = (conf, room)
         if area is not None:
             plans[i].printed[room] = area
+        if (number := room_number(got, hc)) is not None and number != name:
+            numbers[(i, room)] = number
     for (i, name, *_), (_, room) in best.items():
         plans[i].names[room] = name
+    for i, plan in enumerate(plans):  # a word naming several rooms: with each one's number, as IFC's 'Foyer A101'
+        seen = Counter(plan.names.values())
+        for room, name in plan.names.items():
+            if seen[name] > 1 and (i, room) in numbers:
+                plan.names[room] = f"{name} {numbers[(i, room)]}"
 
 
 def _polygons(plan: PlanRooms, sheet: Sheet, min_area: float):

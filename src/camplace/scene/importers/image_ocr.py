@@ -211,6 +211,20 @@ def room_name(lines: list[TextLine], hc: float) -> tuple[str | None, float, floa
     '14,43 m²' is not a name, nor a dimension (a lone number on a dimension line, or four
     digits and more). The tallest, most confident line wins; lines shorter than 0.6
     ``hc`` (the typical character height) are fragments."""
+    words, numbers, area = _label_parts(lines, hc)
+    pick = sorted(words) or sorted(numbers)
+    return (pick[0][-1], -pick[0][-2], area) if pick else (None, 0.0, area)
+
+
+def room_number(lines: list[TextLine], hc: float) -> str | None:
+    """The room number among a room's text lines ('B102', '1.4'; see room_name), or None."""
+    numbers = sorted(_label_parts(lines, hc)[1])
+    return numbers[0][-1] if numbers else None
+
+
+def _label_parts(lines: list[TextLine], hc: float) -> tuple[list, list, float | None]:
+    """(words, numbers, printed area) of a room's text lines, each word and number with
+    its sort key (see room_name)."""
     words, numbers, area = [], [], None
     for ln in lines:
         text = ln.text.strip(JUNK)
@@ -227,5 +241,4 @@ def room_name(lines: list[TextLine], hc: float) -> tuple[str | None, float, floa
         elif ln.conf >= WORD_CONF and re.fullmatch(r"[A-Za-z]{2}", text) and all(c.isupper() or c in CASELESS
                                                                                  for c in text):
             words.append((-ln.height, -ln.conf, text.upper()))  # 'wc': Tesseract cannot tell the case
-    pick = sorted(words) or sorted(numbers)
-    return (pick[0][-1], -pick[0][-2], area) if pick else (None, 0.0, area)
+    return words, numbers, area

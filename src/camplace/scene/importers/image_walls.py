@@ -263,9 +263,11 @@ def find_plans(raw: np.ndarray, ink: np.ndarray, s: float, max_opening_m: float,
     """The separate plans of a sheet in the wall mask ``raw``. A wall piece (8-connected)
     is drawn (its edge is ink: an outline, a solid stroke, ≥ 60 %, and at least 0.05 m²)
     or a blot of symbols; a thin ring around most of the sheet is its frame. Drawn pieces
-    of some size (a twentieth of the largest) joined across the openings between walls in
+    (also the short wall pieces between windows, once only those of a twentieth of the
+    largest piece: walls broken by many windows fell apart into several plans) joined
+    across the openings between walls in
     line (bridge_openings: ``max_opening_m``, ``max_wall_m``), but not across a gutter no
-    room spans (gutter_bridges), are one plan; smaller drawn pieces within ``reach_m`` of
+    room spans (gutter_bridges), are one plan; the other pieces within ``reach_m`` of
     one belong to the nearest. Plans under a quarter of the largest plan's wall area (key
     plans, title blocks, legends, scale bars) and frames around other plans are not the
     building; each plan keeps its drawn pieces and any piece at least a quarter of its
@@ -281,8 +283,7 @@ def find_plans(raw: np.ndarray, ink: np.ndarray, s: float, max_opening_m: float,
     if frame.any():
         skipped["sheet frames"] += int(frame.sum())
         drawn &= ~frame
-    big = drawn & (area >= 0.05 * area[drawn].max(initial=0))  # the pieces that say where the plans are
-    bones = big[lab - 1] & raw
+    bones = drawn[lab - 1] & raw  # every drawn piece: the wall pieces between windows bridge too
     bridges = bridge_openings(bones, s, max_opening_m, max_wall_m)
     bones |= bridges & ~gutter_bridges(bones, bridges)  # one plan across its windows and doors, not across gutters
     glab, ng = ndimage.label(ndimage.maximum_filter(bones, size=3), EIGHT)
