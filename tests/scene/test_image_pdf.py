@@ -51,6 +51,8 @@ def test_a_raster_file_at_its_recorded_dpi(drawn):
 @pytest.mark.parametrize("name, options, option, words", [
     ("plan.pdf", {"scale": 0.02}, "scale", "is a PDF, whose pixels are rendered here"),
     ("plan.pdf", {"scale": "1:100", "page": 2}, "page", "has 1 page; expected 1..1, got 2"),
+    ("plan.pdf", {"scale": "1:100", "page": 0}, "page", "has 1 page; expected 1..1, got 0"),
+    ("plan.png", {"scale": 0.02, "ref": (0, 0, 10, 0, 1.0)}, "ref", "not both"),
     ("plan.png", {"scale": "1:100"}, "scale", "does not record its resolution (dpi)"),
     ("plan.png", {"scale": 0.02, "page": 1}, "page", "is an image, not a PDF"),
     ("plan.png", {"scale": "1:x"}, "scale", "expected metres per pixel (e.g. 0.02) or a drawing scale 1:N"),

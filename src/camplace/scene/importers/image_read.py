@@ -64,7 +64,7 @@ def read_sheet(path: Path, page: int | None = None, scale=None) -> SheetImage:
     rendered at PDF_DPI, or, given a drawing scale 1:N, at about PDF_TARGET_M_PER_PX;
     inverted when the paper is dark (dark_paper)."""
     if path.suffix.lower() == ".pdf":
-        sheet = _pdf_page(path, page or 1, drawing_ratio(scale))
+        sheet = _pdf_page(path, 1 if page is None else page, drawing_ratio(scale))
     elif page is not None:
         raise InputError(f"page: {path.name} is an image, not a PDF; it has no pages to choose", option="page")
     else:
@@ -149,6 +149,8 @@ def metres_per_pixel(path: Path, sheet: SheetImage, scale, ref) -> tuple[float, 
     """(m per pixel, where it came from) of ``scale`` (m per pixel, or a drawing scale
     '1:N' with the sheet's DPI) or ``ref``; None when neither is given (the caller reads
     the dimension lines); InputError when they cannot be used."""
+    if scale is not None and ref is not None:
+        raise InputError("ref: give the scale (scale) or two reference points (ref), not both", option="ref")
     ratio = drawing_ratio(scale)
     if ratio is not None:
         if sheet.dpi is None:
