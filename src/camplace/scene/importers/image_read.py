@@ -150,7 +150,7 @@ def metres_per_pixel(path: Path, sheet: SheetImage, scale, ref) -> tuple[float, 
     '1:N' with the sheet's DPI) or ``ref``; None when neither is given (the caller reads
     the dimension lines); InputError when they cannot be used."""
     if scale is not None and ref is not None:
-        raise InputError("ref: give the scale (scale) or two reference points (ref), not both", option="ref")
+        raise InputError("ref: a scale is given too; give the scale or the reference points, not both", option="ref")
     ratio = drawing_ratio(scale)
     if ratio is not None:
         if sheet.dpi is None:
