@@ -60,22 +60,6 @@ PLAN_FLAGS = {"units": "--units", "wall_height": "--wall-height", "ceiling_heigh
               "max_opening": "--max-opening", "min_room_area": "--min-room-area", "no_ocr": "--no-ocr",
               "page": "--page"}
 
-def drawing_scale(text: str | None) -> bool:
-    """True when ``text`` (--scale) is a drawing scale such as 1:100."""
-    return text is not None and ":" in text
-
-
-def plan_scale(text: str | None) -> float | None:
-    """--scale as metres per pixel (None: not given or a drawing scale 1:N, which the importer reads)."""
-    if text is None or drawing_scale(text):
-        return None
-    try:
-        return float(text)
-    except ValueError:
-        raise InputError(f"--scale: expected metres per pixel (e.g. 0.02) or a drawing scale 1:N (e.g. 1:100), "
-                         f"got '{text}'") from None
-
-
 @dataclass(frozen=True)
 class ImportOptions:
     """The options of building a scene from a space file (CLI text, parsed by kwargs())."""
@@ -107,12 +91,11 @@ class ImportOptions:
 
     def plan_kwargs(self, budget: int | None) -> dict:
         """camplace.scene.importers.import_plan keyword arguments (None: the importer's default)."""
-        for flag, v in (("--wall-height", self.wall_height), ("--ceiling-height", self.ceiling_height),
-                        ("--scale", plan_scale(self.scale))):
+        for flag, v in (("--wall-height", self.wall_height), ("--ceiling-height", self.ceiling_height)):
             if v is not None and not v > 0:
                 raise InputError(f"{flag}: expected a positive number, got {v}")
         return dict(units=self.units, wall_height=self.wall_height, ceiling_height=self.ceiling_height,
-                    scale=self.scale if drawing_scale(self.scale) else plan_scale(self.scale),
+                    scale=self.scale,  # metres per pixel or 1:N, read by the image importer (image_read)
                     ref=floats(self.ref, "--ref", 5) if self.ref else None, storey=self.storey, page=self.page,
                     heights=floats(self.heights, "--heights"), coverage=self.coverage, budget=budget,
                     wall_layers=tuple(p.strip() for p in self.wall_layers.split(",") if p.strip())

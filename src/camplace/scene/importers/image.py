@@ -38,7 +38,7 @@ from camplace.scene.importers.image_ocr import (NUMBER_RE, ocr_engine, read_line
                                                 text_lines_mask)
 from camplace.scene.importers.image_read import metres_per_pixel, read_sheet
 from camplace.scene.importers.image_rooms import colour_rooms, free_regions, mask_polygons
-from camplace.scene.importers.image_scale import scale_from_bar, scale_from_dimensions
+from camplace.scene.importers.image_scale import scale_from_sheet
 from camplace.scene.importers.image_walls import (EIGHT, HOLLOW_WALL_M, LINE_WALL_M, REACH_M, bridge_openings,
                                                   brightness, colour_lines, find_plans, ink_threshold, line_walls,
                                                   otsu_threshold, solid_walls)
@@ -111,8 +111,7 @@ def analyse(path: Path, scale=None, ref=None, threshold=None, min_wall_thickness
     read = metres_per_pixel(path, paper, scale, ref)
     if read is None:
         if engine is not None:
-            marks = dark < otsu_threshold(dark)
-            read = scale_from_dimensions(engine, dark, marks) or scale_from_bar(engine, dark, marks)
+            read = scale_from_sheet(engine, dark, dark < otsu_threshold(dark))
         if read is None:
             why = ("no dimension line nor scale bar could be read" if engine is not None else
                    f"OCR not available: {ocr_line}")
@@ -161,12 +160,11 @@ def _wall_passes(ink: np.ndarray, rgb: np.ndarray, s: float, hatch_spacing: floa
     strokes; walls drawn as empty outlines when that encloses clearly more room; single
     lines when neither encloses a room."""
     skipped: Counter = Counter()
-    raw = solid_walls(ink, s, hatch_spacing, min_wall, max_wall, skipped)
+    hollow_skipped: Counter = Counter()
+    raw, hollow = solid_walls(ink, s, hatch_spacing, min_wall, max_wall, skipped, hollow_skipped)
     plans = _plans(raw, ink, rgb, s, max_opening, max_wall, min_room_area, skipped) if raw.any() else []
     walls_from = f"strokes at least {min_wall:g} m thick"
-    hollow_skipped: Counter = Counter()
-    hollow = solid_walls(ink, s, hatch_spacing, min_wall, max_wall, hollow_skipped, hollow=True)
-    if (hollow != raw).any():  # walls drawn as empty outlines: taken when they enclose clearly more room
+    if hollow is not None and (hollow != raw).any():  # walls drawn as empty outlines: when they enclose clearly more
         hollow_plans = _plans(hollow, ink, rgb, s, max_opening, max_wall, min_room_area, hollow_skipped)
         if _room_px(hollow_plans) > HOLLOW_GAIN * _room_px(plans):
             raw, plans, skipped = hollow, hollow_plans, hollow_skipped

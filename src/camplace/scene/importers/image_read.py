@@ -164,7 +164,7 @@ def metres_per_pixel(path: Path, sheet: SheetImage, scale, ref) -> tuple[float, 
         raise InputError(f"{key}: {path.name} is a PDF, whose pixels are rendered here; give its drawing scale "
                          "as scale 1:N (e.g. 1:100), or nothing to read it from the dimension lines", option=key)
     if scale is not None:
-        value = float(scale)
+        value = float(scale)  # a number, or its text (drawing_ratio checked it reads as one)
         if not value > 0:
             raise InputError(f"scale: expected metres per pixel > 0, got {scale}", option="scale")
         return value, "given"

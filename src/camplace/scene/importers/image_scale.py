@@ -64,12 +64,21 @@ def _run_centres(cols: np.ndarray) -> list[float]:
     return [(run[0] + run[-1]) / 2 for run in runs]
 
 
-def scale_from_dimensions(engine, dark: np.ndarray, ink: np.ndarray) -> tuple[float, str] | None:
+def scale_from_sheet(engine, dark: np.ndarray, ink: np.ndarray) -> tuple[float, str] | None:
+    """(m per pixel, how) from the dimension lines, else from a scale bar (the sheet's text
+    lines found once for both); None when neither gives it."""
+    text = text_lines_mask(ink)
+    if text[1] == 0:
+        return None
+    return scale_from_dimensions(engine, dark, ink, text) or scale_from_bar(engine, dark, ink, text)
+
+
+def scale_from_dimensions(engine, dark: np.ndarray, ink: np.ndarray, text=None) -> tuple[float, str] | None:
     """(m per pixel, how) from the numbers on horizontal dimension lines: each number's
     length over the length between the marks around it; the scale most numbers agree on
     (within AGREE: each number votes for its candidate spans), when at least two do;
-    None otherwise."""
-    lines, n, hc = text_lines_mask(ink)
+    None otherwise. ``text``: text_lines_mask(ink) when already found."""
+    lines, n, hc = text if text is not None else text_lines_mask(ink)
     if n == 0:
         return None
     boxes = ndimage.find_objects(lines)
@@ -101,13 +110,14 @@ def scale_from_dimensions(engine, dark: np.ndarray, ink: np.ndarray) -> tuple[fl
                "check it")
 
 
-def scale_from_bar(engine, dark: np.ndarray, ink: np.ndarray) -> tuple[float, str] | None:
+def scale_from_bar(engine, dark: np.ndarray, ink: np.ndarray, text=None) -> tuple[float, str] | None:
     """(m per pixel, how) from a scale bar: at least three short numbers (an optional unit
     m, cm, mm, ft on one of them; metres otherwise) side by side on one text row, with
     different values, whose columns are a straight, increasing function of their values
     (within BAR_FIT of the bar's length), along a bar: a row of ink just above or below
-    them covering most of the way from the first to the last. None when there is none."""
-    lines, n, hc = text_lines_mask(ink)
+    them covering most of the way from the first to the last. None when there is none.
+    ``text``: text_lines_mask(ink) when already found."""
+    lines, n, hc = text if text is not None else text_lines_mask(ink)
     if n == 0:
         return None
     boxes = ndimage.find_objects(lines)
@@ -117,7 +127,8 @@ def scale_from_bar(engine, dark: np.ndarray, ink: np.ndarray) -> tuple[float, st
         m = BAR_RE.match(ln.text.strip(" .|_-\"“”"))
         if m and ln.conf >= MIN_CONF:
             r, c = ln.centre
-            marks.append((r, c, float(m.group(1).replace(",", ".")), (m.group(2) or "").lower(), ln.text.strip(), ln.box))
+            value = float(m.group(1).replace(",", "."))
+            marks.append((r, c, value, (m.group(2) or "").lower(), ln.text.strip(), ln.box))
     best = None
     for row in _rows(marks, 0.6 * hc):
         got = _bar(row, ink, hc)

@@ -103,23 +103,24 @@ def ink_threshold(dark: np.ndarray, s: float, max_wall_m: float) -> tuple[float,
 
 
 def solid_walls(ink: np.ndarray, s: float, hatch_m: float, min_wall_m: float, max_wall_m: float,
-                skipped: Counter, hollow: bool = False) -> np.ndarray:
-    """Wall pixels of the ink mask. Long strokes (pieces of ink at least LONG_STROKE_M
-    across: wall outlines with their hatch, dimension lines) bound the paper; paper is the
-    inside of a wall where it is narrow (at most ``hatch_m`` wide: a hatch cell, the strip
-    between the two lines of a thin wall) or in a strip no wider than ``max_wall_m``
-    holding marks (a hatch of dashes, ≥ 8 % ink, drawn slanted: more diagonal than
-    upright neighbours, unlike text) and long (not the disc inside the circle around a
-    room number). Those fill in; rooms, the strips
-    between a wall and a dimension line and the text in them do not. With ``hollow``, a
-    closed strip of paper up to HOLLOW_WALL_M wide fills in too (a wall drawn as an
-    empty outline; also the strip between a wall and a dimension line drawn from wall to
-    wall inside a room, hence a separate pass, see image.analyse). Broad filled
-    areas that were mostly paper (stair treads) are given back, then strokes thinner
-    than ``min_wall_m`` (text, dimension lines, door swings) are opened away."""
+                skipped: Counter, hollow_skipped: Counter | None = None) -> tuple[np.ndarray, np.ndarray | None]:
+    """(walls, hollow walls or None): wall pixels of the ink mask. Long strokes (pieces of
+    ink at least LONG_STROKE_M across: wall outlines with their hatch, dimension lines)
+    bound the paper; paper is the inside of a wall where it is narrow (at most ``hatch_m``
+    wide: a hatch cell, the strip between the two lines of a thin wall) or in a strip no
+    wider than ``max_wall_m`` holding marks (a hatch of dashes, ≥ 8 % ink, drawn slanted:
+    more diagonal than upright neighbours, unlike text) and long (not the disc inside the
+    circle around a room number). Those fill in; rooms, the strips between a wall and a
+    dimension line and the text in them do not. The hollow walls (None when they would be
+    the same) fill in also every closed strip of paper up to HOLLOW_WALL_M wide (a wall
+    drawn as an empty outline; also the strip between a wall and a dimension line drawn
+    from wall to wall inside a room, hence a second result, see image.analyse; what it
+    skips goes to ``hollow_skipped``). Broad filled areas that were mostly paper (stair
+    treads) are given back, then strokes thinner than ``min_wall_m`` (text, dimension
+    lines, door swings) are opened away."""
     lab, n = ndimage.label(ink, EIGHT)
     if n == 0:
-        return ink
+        return ink, None
     extent = np.r_[0, [max(b[0].stop - b[0].start, b[1].stop - b[1].start) for b in ndimage.find_objects(lab)]]
     strokes = square_morphology(extent[lab] * s >= LONG_STROKE_M, 3, "close")  # small breaks sealed
     free = ~strokes & ~_edge_paper(~strokes)  # the paper between a sheet's frame and its edge is no wall
@@ -127,6 +128,7 @@ def solid_walls(ink: np.ndarray, s: float, hatch_m: float, min_wall_m: float, ma
     bands = free & ~square_morphology(free, max_wall_m / s, "open")  # strips no wider than a wall
     blab, nb = ndimage.label(bands)
     marked = np.zeros(nb + 1, bool)
+    closed = np.zeros(nb + 1, bool)
     if nb:  # a strip along a wall, not a disc (the circle around a room number)
         width = label_max(ndimage.distance_transform_edt(bands), blab, nb)[1:]
         marks = ink & free
@@ -135,16 +137,27 @@ def solid_walls(ink: np.ndarray, s: float, hatch_m: float, min_wall_m: float, ma
         long = np.bincount(blab.ravel(), minlength=nb + 1)[1:] >= 8 * width ** 2
         marked[1:] = ((label_mean(marks, blab, nb)[1:] >= 0.08) & long
                       & (label_sum(diagonal, blab, nb)[1:] > label_sum(square, blab, nb)[1:]))
-        if hollow:
-            marked[1:] |= long & (width <= HOLLOW_WALL_M / s / 2) & _closed_bands(free, blab, nb)
+        closed[1:] = long & (width <= HOLLOW_WALL_M / s / 2) & _closed_bands(free, blab, nb) & ~marked[1:]
     solid = ink | strokes | cells | marked[blab]
+    walls = _finished(solid, ink, s, min_wall_m, max_wall_m, skipped)
+    if not closed.any():
+        return walls, None
+    return walls, _finished(solid | closed[blab], ink, s, min_wall_m, max_wall_m,
+                            hollow_skipped if hollow_skipped is not None else Counter())
+
+
+def _finished(solid: np.ndarray, ink: np.ndarray, s: float, min_wall_m: float, max_wall_m: float,
+              skipped: Counter) -> np.ndarray:
+    """The filled wall mask ``solid`` with its broad areas that were mostly paper given
+    back to ``ink`` (stair treads, text blocks: counted in ``skipped``) and strokes thinner
+    than ``min_wall_m`` opened away."""
+    solid = solid.copy()
     broad = square_morphology(solid, max_wall_m / s, "open")
     if broad.any():
         blab, nb = ndimage.label(broad, EIGHT)
-        density = label_mean(ink, blab, nb)[1:]
-        textured = np.r_[False, density < 0.5]
+        textured = np.r_[False, label_mean(ink, blab, nb)[1:] < 0.5]
         if textured.any():
-            skipped["textured areas (stairs, text blocks)"] += int(textured.sum() - 0)
+            skipped["textured areas (stairs, text blocks)"] += int(textured.sum())
             back = textured[blab]
             solid[back] = ink[back]
     return square_morphology(solid, max(min_wall_m / s, 2), "open")
