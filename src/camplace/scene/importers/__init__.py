@@ -55,7 +55,11 @@ class PlanImport:
     ``openings``: plan polygons (m, [[x, y], ...]) of the doors and windows it found,
     for the preview. ``storeys``: IFC, every storey of the file as {"name",
     "elevation_m", "rooms": [[name, area m²], ...], "chosen": bool}. ``notes``: lines
-    the user should read (a guessed scale, the default storey and why)."""
+    the user should read (a guessed scale, the default storey and why).
+    ``floor_openings``: plan polygons (m, [[x, y], ...]) where this storey's floor is
+    open to the storey below (slab openings, stair voids, atria, shafts, the upper part
+    of a space below that is taller than its storey); a building carves them out of the
+    slab between the two storeys (camplace.scene.building)."""
 
     scene: dict
     kind: str
@@ -64,6 +68,7 @@ class PlanImport:
     openings: list[list[list[float]]] = field(default_factory=list)
     storeys: list[dict] = field(default_factory=list)
     notes: list[str] = field(default_factory=list)
+    floor_openings: list[list[list[float]]] = field(default_factory=list)
 
 
 def plan_kind(path: str | Path) -> str | None:
