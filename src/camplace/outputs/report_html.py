@@ -23,6 +23,7 @@ import numpy as np
 
 from camplace.core.files import atomic_write_text
 from camplace.outputs.figures import COVERAGE_CLASSES, CoverageSlice, SceneView, coverage_class, coverage_slices
+from camplace.outputs.writers import file_list
 from camplace.outputs.report_figures import (MAX_POINTS, frustum_depth, histogram_figure, shown_frusta, slice_figure,
                                              view3d_figure)
 
@@ -313,10 +314,7 @@ def write_report(out_dir: str | Path, targets, coverage: np.ndarray, placement: 
         paths.update(write_figures(out, view, targets.positions, is_surface, coverage, cameras,
                                    hists or {"all targets": metrics.get("coverage_histogram", {})}, gammas, slices))
     if html_report:
-        names = [*written, *paths]
-        files = ["placement.csv", "placement.json", "metrics.json", "visibility.npz",
-                 *sorted({p for p in names if p.endswith(".png")}),
-                 *(["opencv/", "colmap/"] if exports or "colmap/images.txt" in names else [])]
+        files = file_list([*written, *paths])  # every file written before the page, as returned
         views, skipped = rendered_views or (None, 0)
         if rendered_views is None and scene is not None and vis is not None and selected is not None:
             views, skipped = camera_views(scene, vis, selected,
