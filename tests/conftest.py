@@ -154,6 +154,21 @@ def run_cli(args, monkeypatch, capsys) -> tuple[int, str]:
 
 
 
+def plugin_dist(root: Path, name: str, groups: dict[str, dict[str, str]], modules: dict[str, str]) -> None:
+    """A distribution ``name`` installed in ``root`` (a dist-info with entry_points.txt:
+    group -> {entry point: 'module:attr'}) with ``modules`` (module name -> source text);
+    put ``root`` on sys.path and reload the registries to see it."""
+    import textwrap
+
+    info = root / f"{name.replace('-', '_')}-0.1.dist-info"
+    info.mkdir(parents=True)
+    (info / "METADATA").write_text(f"Metadata-Version: 2.1\nName: {name}\nVersion: 0.1\n")
+    text = "".join(f"[{g}]\n" + "".join(f"{k} = {v}\n" for k, v in eps.items()) for g, eps in groups.items())
+    (info / "entry_points.txt").write_text(text)
+    for mod, src in modules.items():
+        (root / f"{mod}.py").write_text(textwrap.dedent(src))
+
+
 def read_or_one_line(read, path):
     """``read(path)``'s result, or None when it raised InputError with one line naming the
     file (the bad-file contract); any other exception propagates and fails the test."""

@@ -73,7 +73,7 @@ def word_error(err: CamplaceError) -> str:
     if opt is None or opt not in FLAGS:
         return f"--option {msg}" if opt and msg.startswith(f"{opt}:") and _solver_option(opt, msg) else msg
     flag = FLAGS[opt]
-    msg = _PARAM_VALUE.sub(_flag_for, msg)
+    msg = _TAKES.sub(_flags_taken, _PARAM_VALUE.sub(_flag_for, msg))
     if flag:
         msg = msg.replace(f"'{opt}'", f"'{flag}'")  # "takes no option 'coverage_gap'"
     if msg.startswith(f"{opt}:"):
@@ -81,6 +81,16 @@ def word_error(err: CamplaceError) -> str:
     if f"({opt})" in msg:
         return msg.replace(f"({opt})", f"({flag})") if flag else msg
     return f"{flag}: {msg}" if flag else msg
+
+
+_TAKES = re.compile(r"\(it takes ([a-z][a-z_]*(?:, [a-z][a-z_]*)*)\)")
+
+
+def _flags_taken(match: re.Match) -> str:
+    """'(it takes name, units, heights)' -> '(it takes --units, --heights)': the parameters
+    listed as the flags that give them (one without a flag cannot be given on the command line)."""
+    flags = [FLAGS[x] for x in match.group(1).split(", ") if FLAGS.get(x)]
+    return f"(it takes {', '.join(flags)})" if flags else "(it takes none of the command's options)"
 
 
 _PAREN_OPTION = re.compile(r"\(([a-z][a-z_]*)\)")

@@ -17,7 +17,7 @@ from camplace.cli.common import (CACHE_OPT, FRAME_OPT, MAX_MEMORY_OPT, NO_CACHE_
                                  PAPER_OPT, REPEATABLE_OPT, SCHEDULER_OPT, SEED_OPT, solver_option_values,
                                  TIME_LIMIT_OPT, WORKERS_OPT, RichProgress, StopFlag, certify_solver, check_options,
                                  console, memory_bytes, progress_bars, repeatable_requested, scale_options, state)
-from camplace.cli.space import (CEILING_OPT, REF_OPT, SCALE_OPT, STOREY_OPT, UNITS_OPT, WALL_HEIGHT_OPT,
+from camplace.cli.space import (PLAN_FORMATS, CEILING_OPT, REF_OPT, SCALE_OPT, STOREY_OPT, UNITS_OPT, WALL_HEIGHT_OPT,
                                  DOORS_OPT, GLASS_OPT, LAYER_HEIGHT_OPT, MAX_OPENING_OPT, MIN_ROOM_OPT, NO_OCR_OPT,
                                  PAGE_OPT,
                                  THRESHOLD_OPT, WALL_LAYERS_OPT,
@@ -139,7 +139,7 @@ def beyond_grid_options(refine: bool, refine_time: float, adaptive: int, robust:
 def run_cmd(scene: Optional[str] = typer.Argument(None, help="Scene YAML file, built-in name (demo, standard-store, "
                                                   "store-a, warehouse[:AREA_M2]) or a space file: a scan (PLY, PCD, "
                                                   "XYZ/CSV, LAS/LAZ), a mesh (OBJ, PLY with faces, STL, GLB), an "
-                                                  "OctoMap (.bt/.ot) or a plan (DXF, PNG/JPG/TIFF image, IFC)."),
+                                                  "OctoMap (.bt/.ot) or a plan: " + PLAN_FORMATS + "."),
             budget: Optional[int] = typer.Option(None, "--budget", help="Number of cameras N_s (default: the scene's)."),
             solver: Optional[str] = typer.Option(None, "--solver", help="Solver (default: the scene's); "
                                                  "camplace solvers lists them with their options."),
@@ -206,8 +206,9 @@ def run_cmd(scene: Optional[str] = typer.Argument(None, help="Scene YAML file, b
     camplace scene import: floor levelled to z = 0, ceiling and footprint detected,
     walkable volume targets, a 1 m ceiling grid, the default camera
     (docs/scan-to-mount-list.md). To adjust those, write the scene with
-    camplace scene import FILE --out scene.yaml, edit it and run that. A plan (DXF,
-    plan image, IFC) gives walls as obstacles and rooms as zones (docs/plans.md)."""
+    camplace scene import FILE --out scene.yaml, edit it and run that. A plan (IFC,
+    DXF, plan image or a plugin's format) gives walls as obstacles and rooms as zones
+    (docs/plans.md)."""
     if cloud is not None:
         if scene is not None:
             raise InputError("run: give either a scene or --cloud, not both")

@@ -12,7 +12,7 @@ from rich.markup import escape
 
 from camplace.cli.common import console, state
 from camplace.cli.plan_preview import json_part, preview_of, show_summary, write_files
-from camplace.cli.space import (CEILING_OPT, REF_OPT, SCALE_OPT, STOREY_OPT, UNITS_OPT, WALL_HEIGHT_OPT,
+from camplace.cli.space import (PLAN_FORMATS, CEILING_OPT, REF_OPT, SCALE_OPT, STOREY_OPT, UNITS_OPT, WALL_HEIGHT_OPT,
                                  DOORS_OPT, GLASS_OPT, LAYER_HEIGHT_OPT, MAX_OPENING_OPT, MIN_ROOM_OPT, NO_OCR_OPT,
                                  PAGE_OPT,
                                  THRESHOLD_OPT, WALL_LAYERS_OPT,
@@ -24,8 +24,7 @@ scene_app = typer.Typer(add_completion=False, no_args_is_help=True, help="Scenes
 
 @scene_app.command("import")
 def import_cmd(file: Path = typer.Argument(..., help="A scan (PLY, PCD, XYZ/CSV, LAS/LAZ), a mesh (OBJ, PLY with faces, "
-                                           "STL, GLB), an OctoMap (.bt/.ot) or a plan (DXF, PNG/JPG/TIFF image, "
-                                           "IFC)."),
+                                           "STL, GLB), an OctoMap (.bt/.ot) or a plan: " + PLAN_FORMATS + "."),
                out: Path = typer.Option(..., "--out", help="Scene YAML to write (atomically)."),
                up: str = typer.Option("+z", "--up", help="The file's up axis (+z; phone scans are often +y)."),
                no_level_floor: bool = typer.Option(False, "--no-level-floor",
@@ -96,13 +95,13 @@ def storey_scenes(path: Path, opts: ImportOptions, budget: Optional[int]) -> lis
     """(storey, slug, scene mapping, floor elevation m, preview) of every storey of an IFC
     plan (--storey all), each checked by the scene schema, each with its preview picture
     (camplace.outputs.plan_preview.Preview); nothing is written or printed."""
-    from camplace.cli.space import space_kind
+    from camplace.cli.space import plan_names, space_kind
     from camplace.outputs.plan_preview import render_preview
     from camplace.scene.importers import read_storey_plans, validated
     from camplace.workflows.storeys import storey_slugs
 
     if space_kind(path) != "plan":
-        raise InputError(f"--storey: 'all' belongs to IFC files and plan images, not to {path}")
+        raise InputError(f"--storey: 'all' belongs to plans ({plan_names()}), not to {path}")
     if not path.is_file():
         raise InputError(f"{path}: file not found" if not path.exists() else f"{path}: is a folder, expected a file")
     found = read_storey_plans(path, **opts.plan_kwargs(budget))

@@ -24,6 +24,35 @@ MESH_SAMPLES = (20_000, 3_000_000)  # at least / at most
 OCTOMAP_LATTICE = 8  # at most this many points per axis in one occupied leaf
 
 
+PLAN_FORMATS = "{plan formats}"  # in a help text: replaced by the registered plan formats (with_plan_formats)
+
+
+def with_plan_formats(*commands) -> None:
+    """Put the registered plan formats (camplace.scene.formats.formats_text: every
+    ``camplace.importers`` entry point) into the help of the commands' arguments whose help
+    holds PLAN_FORMATS; called by camplace.cli.app.main, once plugin warnings are lines."""
+    import inspect
+
+    from camplace.scene.formats import formats_text
+
+    text = None
+    for fn in commands:
+        for param in inspect.signature(fn).parameters.values():
+            info = param.default
+            template = getattr(info, "camplace_help", None) or getattr(info, "help", None)
+            if isinstance(template, str) and PLAN_FORMATS in template:
+                text = formats_text() if text is None else text
+                info.camplace_help = template
+                info.help = template.replace(PLAN_FORMATS, text)
+
+
+def plan_names() -> str:
+    """The registered plan formats' names for a message: 'ifc, dxf, image, geojson'."""
+    from camplace.scene.formats import IMPORTERS
+
+    return ", ".join(IMPORTERS)
+
+
 # the options of plans (DXF, plan images, IFC), shared by camplace run and camplace scene import
 UNITS_OPT = typer.Option(None, "--units", help="Plan units mm|cm|m|in|ft (default: the file's - DXF $INSUNITS, IFC "
                          "length unit; a DXF that says none is read in the unit its geometry suggests, with a note).")
@@ -136,7 +165,7 @@ def plan_import_options(kind: str | None, **given) -> ImportOptions:
     for anything but a plan."""
     for k, v in given.items():
         if v and kind != "plan":
-            raise InputError(f"{PLAN_FLAGS[k]}: belongs to plans (DXF, plan image, IFC)")
+            raise InputError(f"{PLAN_FLAGS[k]}: belongs to plans ({plan_names()})")
     return ImportOptions(**given)
 
 
@@ -154,10 +183,10 @@ def _ply_has_faces(path: Path) -> bool:
 
 
 def space_kind(path: str | Path) -> str | None:
-    """'point_cloud', 'mesh', 'octomap' or 'plan' (DXF, plan image, IFC) by the file's
+    """'point_cloud', 'mesh', 'octomap' or 'plan' (a registered plan format) by the file's
     suffix (a .ply with faces is a mesh); None for anything else (a scene file or a
     built-in name)."""
-    from camplace.scene.importers import plan_kind
+    from camplace.scene.formats import plan_kind
 
     p = Path(path)
     suf = p.suffix.lower()
@@ -246,9 +275,11 @@ def scene_data_from_file(path: str | Path, opts: ImportOptions, budget: int | No
     p = Path(path)
     kind = space_kind(p)
     if kind is None:
+        from camplace.scene.formats import formats_text
+
         raise InputError(f"{p}: not a space file; expected a scan ({', '.join(POINT_CLOUD_SUFFIXES)}), a mesh "
-                         f"({', '.join(MESH_SUFFIXES)}), an OctoMap ({', '.join(OCTOMAP_SUFFIXES)}) or a plan "
-                         "(.dxf, .png/.jpg/.tif/.webp/.bmp/.gif, .pdf, .ifc/.ifczip)")
+                         f"({', '.join(MESH_SUFFIXES)}), an OctoMap ({', '.join(OCTOMAP_SUFFIXES)}) or a plan: "
+                         f"{formats_text()}")
     if not p.is_file():
         raise InputError(f"{p}: file not found" if not p.exists() else f"{p}: is a folder, expected a file")
     if kind == "plan":

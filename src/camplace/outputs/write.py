@@ -324,7 +324,7 @@ def solver_info(info: dict) -> dict:
     """placement.json ``solver_info``: the solver's Placement.info, JSON-safe (json_safe),
     without wall-clock entries (_timeless) and without the keys placement.json writes on
     its own (OWN_INFO_KEYS)."""
-    return json_safe(_timeless({k: v for k, v in info.items() if k not in OWN_INFO_KEYS}))
+    return _timeless(json_safe({k: v for k, v in info.items() if k not in OWN_INFO_KEYS}))
 
 
 def _timeless(value):
