@@ -154,6 +154,17 @@ def run_cli(args, monkeypatch, capsys) -> tuple[int, str]:
 
 
 
+def import_and_evaluate(plan: Path, placement: Path, folder: Path, monkeypatch, capsys) -> Path:
+    """camplace scene import PLAN, then camplace evaluate of ``placement`` on that scene (no
+    plan set) into ``folder``/ev; both must succeed -> the evaluation's folder."""
+    scene = folder / f"{plan.stem}.yaml"
+    for args in (["scene", "import", plan, "--out", scene],
+                 ["evaluate", scene, placement, "--out", folder / "ev", "--no-plan"]):
+        code, text = run_cli(args, monkeypatch, capsys)
+        assert code == 0, text
+    return folder / "ev"
+
+
 def plugin_dist(root: Path, name: str, groups: dict[str, dict[str, str]], modules: dict[str, str]) -> None:
     """A distribution ``name`` installed in ``root`` (a dist-info with entry_points.txt:
     group -> {entry point: 'module:attr'}) with ``modules`` (module name -> source text);

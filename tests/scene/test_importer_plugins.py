@@ -75,3 +75,13 @@ def test_storey_all_needs_an_importer_that_reads_storeys(plugin, tmp_path):
     with pytest.raises(InputError, match=r"^storey: 'all' belongs to formats with several storeys \(ifc, image\); "
                                          r"two.rooms is a rooms plan with one storey$"):
         read_storey_plans(write_rooms(tmp_path / "two.rooms"))
+
+
+def test_the_docs_formats_table_is_the_registry():
+    import re
+    from pathlib import Path
+
+    text = (Path(__file__).resolve().parents[2] / "docs" / "plans.md").read_text()
+    rows = re.findall(r"^\| `(\w+)` \| ([^|]+) \| ([^|]+) \|", text, flags=re.M)
+    table = {name: (label.strip(), re.findall(r"`(\.\w+)`", sx)) for name, label, sx in rows}
+    assert table == {name: (IMPORTERS[name].label, list(IMPORTERS[name].suffixes)) for name in ("ifc", "dxf", "image")}

@@ -30,5 +30,6 @@ def write_camera_coverage(out_dir: Path, result) -> list[Path]:
     w.writerow(["id", "camera", "targets_seen", "seen_only_by_it"])
     for c, i in zip(cameras, rows):
         seen = V.indices[V.indptr[i]:V.indptr[i + 1]]
-        w.writerow([c.get("id", c["candidate_id"]), c.get("camera") or "", len(seen), int((seen_by[seen] == 1).sum())])
+        ident = c.get("id", c.get("source_id", c["candidate_id"]))  # an evaluated camera: the id its file gave
+        w.writerow([ident, c.get("camera") or "", len(seen), int((seen_by[seen] == 1).sum())])
     return [atomic_write_text(Path(out_dir) / "camera_coverage.csv", buf.getvalue())]

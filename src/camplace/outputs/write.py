@@ -203,6 +203,9 @@ def write_outputs(out_dir: str | Path, scene_name: str, vis: Visibility, placeme
     T = getattr(scene, "input_from_scene", None)
     days = getattr(getattr(getattr(scene, "spec", None), "recording", None), "retention_days", None)
     pdict = placement_dict(scene_name, placement, budget, vis.candidates, T, frame, days)
+    builtin = (getattr(scene, "info", None) or {}).get("builtin")
+    if builtin:  # the built-in scene as named ('warehouse:1000'): camplace serve reopens the run with it
+        pdict = {**dict(list(pdict.items())[:1]), "builtin_scene": str(builtin), **pdict}
     timings = dict(timings)
     # shown in report.html (no "report"); repeatable: 0.0 as in metrics.json, so the page is byte-identical
     report_timings = {k: 0.0 if repeatable else round(float(v), 4) for k, v in timings.items()}

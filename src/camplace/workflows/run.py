@@ -153,6 +153,8 @@ def scene_inputs(scene: str | Path | SceneSpec, progress: Progress | None = None
     t = time.perf_counter()
     _stage(progress, "scene")
     sc = build_scene(spec, base_dir, source, progress=progress)
+    if source.startswith("<built-in "):  # as given ('warehouse:1000'): placement.json's builtin_scene
+        sc.info["builtin"] = source[len("<built-in "):-1]
     timings["scene"] = time.perf_counter() - t
     t = time.perf_counter()
     _stage(progress, "targets")
