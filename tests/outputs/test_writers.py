@@ -8,6 +8,7 @@ from __future__ import annotations
 import json
 import math
 from dataclasses import replace
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -44,6 +45,18 @@ def test_file_list_puts_the_contract_first_and_folders_once():
              "placement.csv", "bom.csv", "visibility.npz", "placement.json", "colmap/images.txt"]
     assert file_list(names) == ["placement.csv", "placement.json", "metrics.json", "visibility.npz", "bom.csv",
                                 "colmap/", "opencv/", "scene.glb"]
+
+
+def test_returned_paths_are_named_relative_to_the_output_folder(tmp_path, monkeypatch):
+    from camplace.outputs.writers import OutputResult, write_registered
+
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "rel" / "sub").mkdir(parents=True)
+    monkeypatch.setitem(OUTPUTS, "pair", lambda out, result: [(out / "a.txt").write_text("a") and out / "a.txt",
+                                                               "sub/b.txt", (tmp_path / "rel" / "sub" / "b.txt")])
+    (tmp_path / "rel" / "sub" / "b.txt").write_text("b")
+    got = write_registered("rel", OutputResult({"cameras": []}, {}, "x"))
+    assert set(got) == {"a.txt", "sub/b.txt"} and got["a.txt"] == Path("rel/a.txt")
 
 
 def test_camplaces_own_writer_is_registered():

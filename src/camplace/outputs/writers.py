@@ -85,8 +85,8 @@ def _names(out: Path, name: str, got: Any) -> dict[str, Path]:
         raise TypeError(f"expected a list of the paths it wrote, got {type(got).__name__}")
     paths = {}
     for p in got:
-        p = Path(p)
-        p = p if p.is_absolute() else out / p
+        p = Path(p)  # as the writer made it (out_dir / name: relative to the working folder), else in out_dir
+        p = p if p.is_absolute() or p.exists() or not (out / p).exists() else out / p
         try:
             key = p.resolve().relative_to(out.resolve()).as_posix()
         except ValueError:
