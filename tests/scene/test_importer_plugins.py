@@ -58,6 +58,14 @@ def test_a_bad_mapping_is_one_line_naming_the_file_and_key(plugin, tmp_path):
     assert str(path) in str(err.value) and "room.footprint" in str(err.value) and "\n" not in str(err.value)
 
 
+def test_an_importer_that_breaks_is_one_line_naming_it(plugin, tmp_path):
+    path = tmp_path / "broken.rooms"
+    path.write_text("{}")  # no 'outline': the plugin's read raises KeyError
+    with pytest.raises(InputError, match=r"broken.rooms: the rooms importer \(from rooms-plugin\) failed: "
+                                         r"KeyError: 'outline'$"):
+        read_plan(path)
+
+
 def test_an_option_the_format_does_not_take_is_refused_in_one_vocabulary(plugin, tmp_path):
     from camplace.cli.common import word_error
 
@@ -72,7 +80,8 @@ def test_an_option_the_format_does_not_take_is_refused_in_one_vocabulary(plugin,
 
 
 def test_storey_all_needs_an_importer_that_reads_storeys(plugin, tmp_path):
-    with pytest.raises(InputError, match=r"^storey: 'all' belongs to formats with several storeys \(ifc, image\); "
+    with pytest.raises(InputError, match=r"^storey: 'all' belongs to formats with several storeys \(IFC \(BIM\) models; plan "
+                                         r"images and PDF pages\); "
                                          r"two.rooms is a rooms plan with one storey$"):
         read_storey_plans(write_rooms(tmp_path / "two.rooms"))
 

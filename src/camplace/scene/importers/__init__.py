@@ -49,8 +49,8 @@ class PlanImport:
     """What an importer understood of a plan, beside the scene mapping it made.
 
     ``scene``: the scene-file mapping (room, obstacles, zones, ...; lengths in m).
-    ``kind``: 'ifc', 'dxf' or 'image'. ``used``: what the importer took and how, one
-    short line per item for the summary table (e.g. {"wall layers": "Walls (60 LINE)",
+    ``kind``: the importer's name ('ifc', 'dxf', 'image' or a plugin's). ``used``: what
+    the importer took and how, one short line per item for the summary table (e.g. {"wall layers": "Walls (60 LINE)",
     "units": "cm ($INSUNITS 5)", "scale": "0.0313 m/px (scale bar)"}). ``skipped``:
     reason -> count of what it left out (never a failed import for one bad element).
     ``openings``: plan polygons (m, [[x, y], ...]) of the doors and windows it found,
@@ -85,7 +85,7 @@ def read_plan(path: str | Path, **options: Any) -> PlanImport:
     does not take is an InputError). A plugin's plain mapping is completed (scene_defaults)
     and checked by the scene schema here."""
     kind, importer, p, given, filled = _importer(path, options)
-    return as_plan_import(importer.read(p, **given), kind, p, filled)
+    return as_plan_import(_call(kind, importer.read, p, given), kind, p, filled)
 
 
 def import_plan(path: str | Path, **options: Any) -> dict:
@@ -99,15 +99,16 @@ def read_storey_plans(path: str | Path, **options: Any) -> list[tuple[str, PlanI
     ``read_storeys``), storey 'all'; options as read_plan. Each scene has its floor at z = 0."""
     kind = plan_kind(path)
     if kind is not None and not callable(getattr(IMPORTERS[kind], "read_storeys", None)):
-        storeyed = [n for n in IMPORTERS if callable(getattr(IMPORTERS[n], "read_storeys", None))]
-        raise InputError(f"storey: 'all' belongs to formats with several storeys ({', '.join(storeyed)}); "
+        storeyed = [getattr(IMPORTERS[n], "label", None) or n for n in IMPORTERS
+                    if callable(getattr(IMPORTERS[n], "read_storeys", None))]
+        raise InputError(f"storey: 'all' belongs to formats with several storeys ({'; '.join(storeyed)}); "
                          f"{Path(path).name} is a {kind} plan with one storey", option="storey")
     own = kind is not None and isinstance(IMPORTERS[kind], PlanFormat)  # a plugin's read_storeys reads them all
     kind, importer, p, given, filled = _importer(path, dict(options, storey="all") if own else options)
     elevations = getattr(importer, "storey_elevations", None)
     levels = elevations(p, units=given.get("units")) if callable(elevations) else {}
     return [(name, as_plan_import(got, kind, p, filled), levels.get(name, 0.0))
-            for name, got in importer.read_storeys(p, **given)]
+            for name, got in _call(kind, importer.read_storeys, p, given)]
 
 
 def import_storey_plans(path: str | Path, **options: Any) -> list[tuple[str, dict, float]]:
@@ -147,6 +148,20 @@ def _importer(path: str | Path, options: dict):
             known = tuple(dict.fromkeys(takes + (() if isinstance(importer, PlanFormat) else FILLED_OPTIONS)))
             raise InputError(f"{key}: not an option of {kind} plans (it takes {', '.join(known)})", option=key)
     return kind, importer, p, {k: v for k, v in given.items() if k not in filled}, filled
+
+
+def _call(kind: str, read, path: Path, options: dict):
+    """``read(path, **options)``; a plugin importer's failure other than an InputError is one
+    line naming the importer and its distribution (camplace's own raise as they are)."""
+    try:
+        return read(path, **options)
+    except InputError:
+        raise
+    except Exception as err:  # noqa: BLE001 - a plugin's bug is reported as one line naming it
+        if isinstance(IMPORTERS[kind], PlanFormat):
+            raise
+        raise InputError(f"{path}: the {kind} importer (from {IMPORTERS.distribution(kind)}) failed: "
+                         f"{type(err).__name__}: {err}") from err
 
 
 def as_plan_import(got, kind: str, path: Path, filled: dict) -> PlanImport:
