@@ -18,8 +18,8 @@ class Rooms:
 
     def read(self, path, *, wall_height=None):
         d = json.loads(Path(path).read_text())
-        return {"room": {"footprint": d["outline"], "height": d.get("height", 3.0)}, "obstacles": [],
-                "zones": [{"name": n, "polygon": p} for n, p in d["rooms"].items()]}
+        room = {"footprint": d["outline"], **({"height": d["height"]} if "height" in d else {})}
+        return {"room": room, "zones": [{"name": n, "polygon": p} for n, p in d["rooms"].items()]}
 
 
 class NoSuffix:

@@ -179,3 +179,7 @@ def test_the_plugin_plan_format_and_output_file_through_the_cli(plugin, tmp_path
     assert "<a href='camera_coverage.csv'>camera_coverage.csv</a>" in (run / "report.html").read_text()
     ev = import_and_evaluate(plan, run / "placement.json", tmp_path, monkeypatch, capsys)
     assert (ev / "camera_coverage.csv").read_text() == (run / "camera_coverage.csv").read_text()
+    code, text = run_cli(["evaluate", plan, run / "placement.json", "--out", tmp_path / "ev2", "--no-plan"],
+                         monkeypatch, capsys)  # the plan itself as the scene, as camplace run reads it
+    assert code == 0, text
+    assert (tmp_path / "ev2" / "camera_coverage.csv").read_text() == (run / "camera_coverage.csv").read_text()

@@ -49,6 +49,7 @@ def test_a_plain_mapping_gets_the_defaults_of_every_plan_import(plugin, tmp_path
     assert s["placement"] == {"budget": 5, "solver": "greedy"} and s["cameras"][0]["name"] == "wide"
     assert s["mounts"][0]["kind"] == "ceiling_grid" and s["voxel_size"] == 0.25
     assert read_plan(tmp_path / "two.rooms", name="site").scene["name"] == "site"
+    assert s["room"]["height"] == 3.0 and s["obstacles"] == []
 
 
 def test_a_bad_mapping_is_one_line_naming_the_file_and_key(plugin, tmp_path):

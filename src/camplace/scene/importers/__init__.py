@@ -176,9 +176,12 @@ def as_plan_import(got, kind: str, path: Path, filled: dict) -> PlanImport:
                          f"or a scene mapping")
     room = got.get("room") if isinstance(got.get("room"), dict) else {}
     height = float(room.get("height", DEFAULT_CEILING_M))
-    scene = dict(scene_defaults(height, **{k: v for k, v in filled.items() if k != "name"}),
-                 name=filled.get("name") or path.stem, zones=[])
+    d = scene_defaults(height, **{k: v for k, v in filled.items() if k != "name"})
+    scene = {"name": path.stem, "voxel_size": d.pop("voxel_size"), "occupancy_resolution": d.pop("occupancy_resolution"),
+             "room": None, "obstacles": [], **d, "zones": []}  # the key order of every plan import (plan_scene)
     scene.update(got)
+    if isinstance(got.get("room"), dict) and "height" not in room:  # a footprint alone: the default ceiling
+        scene["room"] = dict(room, height=height)
     if filled.get("name"):
         scene["name"] = filled["name"]
     if "budget" in filled and isinstance(scene.get("placement"), dict):
