@@ -22,6 +22,7 @@ from camplace.spec.schema import SceneSpec
 from camplace.core.errors import InputError, Interrupted
 from camplace.metrics.coverage import Metrics, compute_metrics
 from camplace.problem.model import PlacementProblem, with_type_limits
+from camplace.workflows.building import with_storey_limits
 from camplace.scene.build import Scene, build_scene
 from camplace.solvers import Placement, solve
 from camplace.targets.build import Targets, build_targets
@@ -415,6 +416,7 @@ def run(scene: str | Path | SceneSpec, budget: int | None = None, solver: str | 
     problem = problem_from_visibility(vis, budget, money)
     problem = with_type_limits(problem, vis.candidates.camera_ids, [c.name for c in vis.candidates.cameras],
                                sc.spec.mount_rules.max_per_type)  # new cameras per type (mount_rules)
+    problem = with_storey_limits(problem, sc, vis.candidates.positions)  # a building's per-storey budgets
     cp = crowd_stage(sc, vis, problem, crowd_spec, site, workers=workers, scheduler=scheduler, progress=progress,
                      log=log, timings=timings, should_stop=should_stop)  # crowd-aware: the sample-average problem
     if site is not None:  # Γ' = max(Γ - existing coverage, 0): the solvers see what remains

@@ -1,0 +1,124 @@
+"""Whole buildings (issue 33): every storey in one scene, one budget, one V.
+
+A building is a scene with ``storeys:`` (camplace.spec.schema.Storey); camplace.scene.build
+stacks the storeys at their elevations in one occupancy grid, and targets and candidates
+are every storey's, raised to building z. Solvers, refinement and bounds see one
+PlacementProblem; this module adds what is the building's own: the per-storey camera
+limits (as limit groups of the problem), the storey of each camera and target, the
+per-storey metrics, and the building scene mapping assembled from imported storeys.
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+
+from camplace.core.errors import InputError
+from camplace.problem.gains import shortfall_cost
+from camplace.problem.model import PlacementProblem
+from camplace.scene.build import Scene, storey_index
+
+SLAB_M = 0.2  # the slab kept between a storey's ceiling and the next floor when a plan gives no ceiling below it
+
+
+def storey_names(sc: Scene) -> list[str]:
+    """The storeys of a building scene, lowest first ([] for one room)."""
+    return [st.name for st in sc.storeys]
+
+
+def storey_of(sc: Scene, positions: np.ndarray) -> np.ndarray:
+    """(N,) int64 storey index (into sc.storeys) of points (N, 3) in building z; zeros for one room."""
+    p = np.asarray(positions, np.float64).reshape(-1, 3)
+    if not sc.storeys:
+        return np.zeros(len(p), np.int64)
+    return storey_index(sc.storeys, p[:, 2])
+
+
+def with_storey_limits(problem: PlacementProblem, sc: Scene, positions: np.ndarray) -> PlacementProblem:
+    """``problem`` with at most ``storeys.NAME.budget`` cameras on each storey that has one
+    (limit groups: type_ids = the candidate's storey, type_limits = the budgets); unchanged
+    without per-storey budgets. Camera-type limits (mount_rules.max_per_type) and storey
+    budgets together are refused: the problem holds one partition of limits."""
+    limits = {k: int(st.budget) for k, st in enumerate(sc.storeys) if st.budget is not None}
+    if not limits:
+        return problem
+    if problem.has_type_limits:
+        raise InputError("storeys: per-storey budgets and mount_rules.max_per_type cannot be combined yet; "
+                         "expected one of them")
+    return replace(problem, type_ids=storey_of(sc, positions), type_limits=limits)
+
+
+def storey_metrics(sc: Scene, problem: PlacementProblem, selected: np.ndarray, camera_positions: np.ndarray,
+                   target_positions: np.ndarray) -> list[dict]:
+    """Per storey: {storey, elevation_m, top_m, budget, cameras, targets, cost, coverage_gap,
+    covered_share} of a selection (targets (N_p, 3) and selected cameras (k, 3) in building z;
+    coverage from every camera of the building, so a view across an open floor counts)."""
+    cov = problem.coverage(np.asarray(selected, np.int64))
+    t_st = storey_of(sc, target_positions)
+    c_st = storey_of(sc, camera_positions)
+    out = []
+    for k, st in enumerate(sc.storeys):
+        m = t_st == k
+        g, w = problem.gamma[m], problem.weights[m]
+        norm = float(np.dot(w, g.astype(np.float64) ** 2))
+        cost = shortfall_cost(g, w, cov[m])
+        out.append({"storey": st.name, "elevation_m": round(st.elevation, 4), "top_m": round(st.top, 4),
+                    "budget": st.budget, "cameras": int(np.sum(c_st == k)), "targets": int(m.sum()),
+                    "cost": float(cost), "coverage_gap": float(cost / norm) if norm > 0 else 0.0,
+                    "covered_share": float(np.mean(cov[m] >= g)) if m.any() else 1.0})
+    return out
+
+
+def building_scene(name: str, storeys: list[tuple[str, dict, float, list]], budget: int | None = None) -> dict:
+    """The scene mapping of a building from imported storeys [(storey name, scene mapping
+    (floor at z = 0, as a plan import makes it), floor elevation m, floor openings)], lowest
+    first or not: the shared keys (cameras, targets, mounts, grids, placement) from the first
+    storey, each storey's room, obstacles and zones under ``storeys:``. A storey whose
+    ceiling would reach the next floor is lowered to SLAB_M below it."""
+    if not storeys:
+        raise InputError(f"{name}: no storey to plan")
+    order = sorted(storeys, key=lambda s: s[2])
+    first = order[0][1]
+    data = {k: first[k] for k in ("voxel_size", "occupancy_resolution", "cameras", "targets", "mounts",
+                                  "placement", "mount_rules", "free_space") if k in first}
+    data["name"] = name
+    if budget is not None:
+        data["placement"] = {**data.get("placement", {}), "budget": int(budget)}
+    out: dict = {}
+    for k, (st_name, scene, elev, openings) in enumerate(order):
+        room = dict(scene["room"])
+        if k + 1 < len(order):
+            gap = order[k + 1][2] - elev
+            if room["height"] > gap - SLAB_M:
+                room["height"] = round(max(gap - SLAB_M, 0.5 * gap), 4)
+        entry = {"elevation": float(elev), "room": room, "obstacles": _clip_obstacles(scene.get("obstacles", []),
+                                                                                       room["height"]),
+                 "zones": scene.get("zones", [])}
+        for key in ("targets", "mounts"):
+            if scene.get(key) is not None and scene[key] != first.get(key):
+                entry[key] = scene[key]
+        if openings:
+            entry["floor_openings"] = [list(map(list, o)) for o in openings]
+        out[st_name] = entry
+    data["storeys"] = out
+    return data
+
+
+def _clip_obstacles(obstacles: list[dict], height: float) -> list[dict]:
+    """Obstacles cut at a storey's (lowered) ceiling; those entirely above it dropped."""
+    out = []
+    for ob in obstacles:
+        ob = dict(ob)
+        if "prism" in ob:
+            z0, z1 = ob["prism"]["z"]
+            if z0 >= height:
+                continue
+            ob["prism"] = {**ob["prism"], "z": [z0, min(z1, height)]}
+        elif "box" in ob:
+            lo, hi = ob["box"]["min"], ob["box"]["max"]
+            if lo[2] >= height:
+                continue
+            ob["box"] = {"min": lo, "max": [hi[0], hi[1], min(hi[2], height)]}
+        out.append(ob)
+    return out
