@@ -18,6 +18,7 @@ from camplace.cameras.candidates import Candidates, ypr_from_rotation
 from camplace.core.errors import InputError, Interrupted
 from camplace.core.files import AtomicBatch, atomic_savez, atomic_write_json, atomic_write_text
 from camplace.metrics.coverage import Metrics
+from camplace.outputs.storeys import mark_storeys
 from camplace.outputs.bom import recording_load, selected_models, write_bom
 from camplace.scene.frames import map_poses
 from camplace.solvers.base import Placement
@@ -193,6 +194,7 @@ def write_outputs(out_dir: str | Path, scene_name: str, vis: Visibility, placeme
     T = getattr(scene, "input_from_scene", None)
     days = getattr(getattr(getattr(scene, "spec", None), "recording", None), "retention_days", None)
     pdict = placement_dict(scene_name, placement, budget, vis.candidates, T, frame, days)
+    mark_storeys(pdict, scene)  # a building: each camera's storey (issue 33)
     timings = dict(timings)
     # shown in report.html (no "report"); repeatable: 0.0 as in metrics.json, so the page is byte-identical
     report_timings = {k: 0.0 if repeatable else round(float(v), 4) for k, v in timings.items()}
@@ -221,6 +223,7 @@ def write_outputs(out_dir: str | Path, scene_name: str, vis: Visibility, placeme
         # the report's pictures and mount table are drawn in the scene frame; exports follow ``frame``
         shown = pdict if frame == "scene" else placement_dict(scene_name, placement, budget, vis.candidates, T,
                                                               retention_days=days)
+        mark_storeys(shown, scene)
         _write_report_set(out, vis, placement, shown, metrics, report_timings, scene, repeatable,
                           paper if plan else None, T if frame == "input" else None, parts)
         paths.update(parts.paths)

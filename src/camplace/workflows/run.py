@@ -22,7 +22,7 @@ from camplace.spec.schema import SceneSpec
 from camplace.core.errors import InputError, Interrupted
 from camplace.metrics.coverage import Metrics, compute_metrics
 from camplace.problem.model import PlacementProblem, with_type_limits
-from camplace.workflows.building import with_storey_limits
+from camplace.workflows.building import storey_metrics, with_storey_limits
 from camplace.scene.build import Scene, build_scene
 from camplace.solvers import Placement, solve
 from camplace.targets.build import Targets, build_targets
@@ -451,7 +451,7 @@ def run(scene: str | Path | SceneSpec, budget: int | None = None, solver: str | 
     _stage(progress, "metrics")
     if site is not None:  # existing cameras join V and the selection, with the full Γ
         vis, problem, placement = site.fold(vis, problem, placement)
-    metrics = placement_metrics(vis, problem, placement.selected, triangulation_deg)
+    metrics = placement_metrics(vis, problem, placement.selected, triangulation_deg, sc)
     if site is not None:
         metrics = site.report(vis, placement, metrics)
     metrics = replace(metrics, grid_cost=grid_cost(placement),
@@ -485,12 +485,18 @@ def grid_cost(placement: Placement) -> float | None:
 
 
 def placement_metrics(vis: Visibility, problem: PlacementProblem, selected: np.ndarray,
-                      triangulation_deg: tuple[float, float] = (20.0, 160.0)) -> Metrics:
-    """Every metric of a selection (rows of vis.V), per region too; shared by ``run`` and
-    camplace.workflows.evaluate so both score a placement the same way."""
+                      triangulation_deg: tuple[float, float] = (20.0, 160.0), scene: Scene | None = None) -> Metrics:
+    """Every metric of a selection (rows of vis.V), per region too (and per storey of a
+    building ``scene``); shared by ``run`` and camplace.workflows.evaluate so both score a
+    placement the same way."""
     from camplace.metrics.triangulation import well_triangulated_of_selection
 
     well = well_triangulated_of_selection(vis.V, vis.candidates.positions, vis.targets.positions,
                                           selected, *triangulation_deg)
-    return compute_metrics(problem, selected, vis.targets.region_ids, vis.targets.region_names,
-                           well_triangulated=well)
+    m = compute_metrics(problem, selected, vis.targets.region_ids, vis.targets.region_names,
+                        well_triangulated=well)
+    if scene is not None and scene.storeys:
+        sel = np.asarray(selected, np.int64)
+        m = replace(m, storeys=storey_metrics(scene, problem, sel, vis.candidates.positions[sel],
+                                              vis.targets.positions))
+    return m
