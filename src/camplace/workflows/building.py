@@ -122,3 +122,56 @@ def _clip_obstacles(obstacles: list[dict], height: float) -> list[dict]:
             ob["box"] = {"min": lo, "max": [hi[0], hi[1], min(hi[2], height)]}
         out.append(ob)
     return out
+
+
+def align_plans(found: list[tuple[str, object, float]]) -> list[tuple[str, object, float]]:
+    """Plans drawn side by side on one sheet [(storey, PlanImport, elevation)]: each plan's
+    scene mapping (and floor openings) moved in plan so the lower-left corner of its
+    footprint's bounding box meets the first plan's (a note says so)."""
+    def corner(got) -> np.ndarray:
+        return np.asarray(got.scene["room"]["footprint"], float).min(0)
+
+    ref = corner(found[0][1])
+    out = []
+    for name, got, elev in found:
+        d = ref - corner(got)
+        if np.any(np.abs(d) > 1e-9):
+            got.scene = _moved(got.scene, d)
+            got.floor_openings = _moved(got.floor_openings, d, "polygons")
+            got.notes.append(f"storey '{name}' moved by ({d[0]:.2f}, {d[1]:.2f}) m to stand on the first plan "
+                             f"(plans side by side on one sheet are aligned on their lower-left corner)")
+        out.append((name, got, elev))
+    return out
+
+
+_POINT_LISTS = ("footprint", "polygon")
+_POLYGON_LISTS = ("holes", "floor_openings", "forbid", "allow", "polygons")
+
+
+def _moved(obj, d: np.ndarray, kind: str | None = None):
+    """A scene mapping (or part of one) moved by d (2,) m in plan: footprints, polygons,
+    holes, boxes (x, y of min / max), wall segments; everything else as is."""
+    def pts(ps):
+        return [[round(float(p[0]) + d[0], 4), round(float(p[1]) + d[1], 4), *p[2:]] for p in ps]
+
+    if kind == "points":
+        return pts(obj)
+    if kind == "polygons":
+        return [pts(p) for p in obj]
+    if isinstance(obj, dict):
+        out = {}
+        for k, v in obj.items():
+            if k in _POINT_LISTS and isinstance(v, list):
+                out[k] = pts(v)
+            elif k in _POLYGON_LISTS and isinstance(v, list):
+                out[k] = [pts(p) for p in v]
+            elif k == "walls" and isinstance(v, list):
+                out[k] = [pts(seg) for seg in v]
+            elif k == "box" and isinstance(v, dict) and "min" in v:
+                out[k] = {"min": pts([v["min"]])[0], "max": pts([v["max"]])[0]}
+            else:
+                out[k] = _moved(v, d)
+        return out
+    if isinstance(obj, list):
+        return [_moved(v, d) for v in obj]
+    return obj
