@@ -77,7 +77,8 @@ def building_storeys(files: list[str], opts: ImportOptions, budget: Optional[int
         if elev is None:
             raise InputError(f"--elevations: {len(paths)} plan files need one floor elevation each in m, "
                              f"e.g. --elevations {','.join(str(round(k * STOREY_HEIGHT_M, 1)) for k in range(len(paths)))}")
-        got = [(p.stem, read_plan(p, **opts.plan_kwargs(budget)), e) for p, e in zip(paths, elev)]
+        names = _unique([p.stem for p in paths])
+        got = [(n, read_plan(p, **opts.plan_kwargs(budget)), e) for n, p, e in zip(names, paths, elev)]
         name = "-".join(p.stem for p in paths[:2]) + ("-etc" if len(paths) > 2 else "")
     else:
         if elevations is not None:
@@ -117,3 +118,15 @@ def building_spec(files: list[str], opts: ImportOptions, budget: Optional[int], 
                              f"names from {name_list(list(data['storeys']))}")
         data["storeys"][st]["budget"] = k
     return parse_scene(data, name), imports, data
+
+
+def _unique(names: list[str]) -> list[str]:
+    """Storey names from file names, made unique ('plan', 'plan-2', ...)."""
+    out: list[str] = []
+    for n in names:
+        m, k = n, 1
+        while m in out:
+            k += 1
+            m = f"{n}-{k}"
+        out.append(m)
+    return out
