@@ -70,6 +70,7 @@ def building_storeys(files: list[str], opts: ImportOptions, budget: Optional[int
     (--elevations). Plans side by side on one sheet are aligned on their lower-left corner."""
     from camplace.scene.importers import read_plan, read_storey_plans, validated
     from camplace.workflows.building import align_plans
+    from camplace.workflows.storeys import unique_names
 
     paths = [_checked(Path(f)) for f in files]
     if len(paths) > 1:
@@ -77,7 +78,7 @@ def building_storeys(files: list[str], opts: ImportOptions, budget: Optional[int
         if elev is None:
             raise InputError(f"--elevations: {len(paths)} plan files need one floor elevation each in m, "
                              f"e.g. --elevations {','.join(str(round(k * STOREY_HEIGHT_M, 1)) for k in range(len(paths)))}")
-        names = _unique([p.stem for p in paths])
+        names = unique_names([p.stem for p in paths])
         got = [(n, read_plan(p, **opts.plan_kwargs(budget)), e) for n, p, e in zip(names, paths, elev)]
         name = "-".join(p.stem for p in paths[:2]) + ("-etc" if len(paths) > 2 else "")
     else:
@@ -119,14 +120,3 @@ def building_spec(files: list[str], opts: ImportOptions, budget: Optional[int], 
         data["storeys"][st]["budget"] = k
     return parse_scene(data, name), imports, data
 
-
-def _unique(names: list[str]) -> list[str]:
-    """Storey names from file names, made unique ('plan', 'plan-2', ...)."""
-    out: list[str] = []
-    for n in names:
-        m, k = n, 1
-        while m in out:
-            k += 1
-            m = f"{n}-{k}"
-        out.append(m)
-    return out
