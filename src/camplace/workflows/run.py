@@ -384,6 +384,9 @@ def run(scene: str | Path | SceneSpec, budget: int | None = None, solver: str | 
     log: list[str] = []
     spec, _, source = resolve_scene(scene)
     crowd_spec = crowd_with(spec.crowd, crowd)
+    if spec.storeys and crowd_spec is not None and crowd_spec.density:  # crowds are sampled on one floor
+        raise InputError(f"{source}: crowd: not available for a building yet; plan one storey at a time for crowds",
+                         option="crowd_density")
     if solver is None:
         check_solver_name(spec.placement.solver, f"{source}: placement.solver")
     else:
