@@ -143,6 +143,24 @@ def test_mm_model_gets_mm_coordinates(tmp_path):
     assert np.allclose(rel, [5000.0, -1000.0, 2500.0])  # relative to Level 2's placement at z = 4000 mm
 
 
+def test_site_moved_and_turned(tmp_path):
+    """Poses are world (the model's own x, y, z) whatever the site's placement: here moved by
+    (100, 50, 2) m and turned 30° about z, so the storeys' world placements turn too."""
+    model = ifcopenshell.open(str(DUPLEX))
+    site = model.by_type("IfcSite")[0].ObjectPlacement.RelativePlacement
+    a = np.radians(30.0)
+    site.Location = model.createIfcCartesianPoint((100.0, 50.0, 2.0))
+    site.RefDirection = model.createIfcDirection((float(np.cos(a)), float(np.sin(a)), 0.0))
+    site.Axis = model.createIfcDirection((0.0, 0.0, 1.0))
+    moved = tmp_path / "moved.ifc"
+    model.write(str(moved))
+    cams = [camera(0, "Level 1", [101.0, 52.0, 4.6]), camera(1, "Level 2", [98.0, 57.0, 7.7])]
+    out = ifcopenshell.open(str(write_cameras_ifc(tmp_path / "c.ifc", cams, [], moved)))
+    level_2 = placement.get_local_placement(element.get_container(cameras_of(out)[1]).ObjectPlacement)
+    assert np.allclose(level_2[:3, 3], [100.0, 50.0, 5.1]) and np.isclose(level_2[1, 0], np.sin(a))
+    assert_round_trip(out, cams)
+
+
 def test_ifc4_copy_and_ifczip(tmp_path):
     """An IFC4 model without storeys (its building stands in, as in the importer), read zipped."""
     zipped = tmp_path / "pavilion.ifczip"
