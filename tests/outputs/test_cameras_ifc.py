@@ -173,6 +173,7 @@ def test_ifc4_copy_and_ifczip(tmp_path):
     assert all(element.get_container(e).is_a("IfcBuilding") for e in cameras_of(model))
     typ = element.get_type(cameras_of(model)[0])
     assert typ.is_a("IfcAudioVisualApplianceType") and typ.PredefinedType == "CAMERA"
+    assert typ.HasContext[0].RelatingContext == model.by_type("IfcProject")[0]  # declared in the project
     src = ifcopenshell.open(str(PAVILION))
     assert {e.GlobalId for e in src.by_type("IfcRoot")} <= {e.GlobalId for e in model.by_type("IfcRoot")}
 

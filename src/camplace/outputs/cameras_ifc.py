@@ -159,6 +159,7 @@ def _body_context(model):
 
 def _camera_type(model, name: str, types: dict):
     """The element type of camera type ``name`` (made once per name)."""
+    import ifcopenshell.api.project
     import ifcopenshell.api.root
 
     if name not in types:
@@ -166,9 +167,11 @@ def _camera_type(model, name: str, types: dict):
             t = ifcopenshell.api.root.create_entity(model, ifc_class="IfcElectricApplianceType",
                                                     predefined_type="USERDEFINED", name=name)
             t.ElementType = "CAMERA"
-        else:
+        else:  # declared in the project (IfcRelDeclares, IFC4), as authoring tools keep their types
             t = ifcopenshell.api.root.create_entity(model, ifc_class="IfcAudioVisualApplianceType",
                                                     predefined_type="CAMERA", name=name)
+            ifcopenshell.api.project.assign_declaration(model, definitions=[t],
+                                                        relating_context=model.by_type("IfcProject")[0])
         types[name] = t
     return types[name]
 
