@@ -204,12 +204,15 @@ def test_bad_storey_is_one_line_naming_it(tmp_path):
     assert not out.exists()
 
 
-def test_bad_pose_is_refused(tmp_path):
+def test_bad_poses_and_storeys_are_refused(tmp_path):
     with pytest.raises(InputError, match=r"cameras\[0\]: expected a finite position and a rotation"):
         write_cameras_ifc(tmp_path / "c.ifc", [camera(0, "a", [0, 0, 1], rotation=2 * np.eye(3))],
                           [{"name": "a", "elevation_m": 0.0}])
     with pytest.raises(InputError, match=r"storeys\[0\]: expected"):
         write_cameras_ifc(tmp_path / "c.ifc", [camera(0, "a", [0, 0, 1])], [{"name": "a"}])
+    with pytest.raises(InputError, match=r"storeys: expected unique names, got 'a', 'a'"):
+        write_cameras_ifc(tmp_path / "c.ifc", [camera(0, "a", [0, 0, 1])], [{"name": "a", "elevation_m": 0.0}] * 2)
+    assert not (tmp_path / "c.ifc").exists()
 
 
 def test_frustum_of_a_hand_made_pinhole():

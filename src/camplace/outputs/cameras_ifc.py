@@ -52,7 +52,7 @@ def write_cameras_ifc(path: Path, cameras: list[dict], storeys: list[dict], sour
         label = str(source_ifc)
     else:
         model, where = _new_model(storeys, project)
-        label = "the storeys"
+        label = "the storeys given"
     containers = [_container(model, where, label, i, c) for i, c in enumerate(cameras)]
     body = _body_context(model)
     scale = length_scale(model)
@@ -126,6 +126,9 @@ def _new_model(storeys: list[dict], project: str):
     api.aggregate.assign_object(model, products=[building], relating_object=site)
     api.geometry.edit_object_placement(model, product=site)
     api.geometry.edit_object_placement(model, product=building)
+    names = [str(st.get("name")) if isinstance(st, dict) else "" for st in storeys]
+    if len(set(names)) < len(names):
+        raise InputError(f"storeys: expected unique names, got {', '.join(repr(n) for n in names)}")
     out = []
     for k, st in enumerate(storeys):
         try:
