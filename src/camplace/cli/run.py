@@ -65,7 +65,13 @@ def run_pipeline(scene, budget: Optional[int], solver: Optional[str], out: Optio
             warm.stop(warming)
         out_dir = out or Path("camplace-out") / result.scene.name
         if source:  # an IFC input: cameras.ifc is a copy of it with the cameras (camplace.outputs.cameras_ifc)
-            result.scene.info["source"] = source
+            result.scene.info["source"] = {k: v for k, v in source.items() if k != "building"}
+        if source and source.get("building"):  # the building as a scene file: edit it, run it, reopen the run
+            from camplace.core.files import atomic_write_text
+
+            out_dir.mkdir(parents=True, exist_ok=True)
+            atomic_write_text(out_dir / "building.yaml", scene_yaml(source["building"], "camplace run: the building "
+                                                                                       "this run planned"))
         write_and_summarise(result, out_dir, repeatable, frame, plan, paper, extra=run_extra(preview, out_dir),
                             stop=stop)
     if stop():
@@ -240,10 +246,10 @@ def run_cmd(scene: Optional[list[str]] = typer.Argument(None, help="Scene YAML f
     if building:  # every storey (or those named) of a plan, or one storey per file: one building scene
         from camplace.cli.building import building_spec
 
-        scene, imports, _ = building_spec(files, plan, budget, elevations, budgets)
+        scene, imports, building_data = building_spec(files, plan, budget, elevations, budgets)
         for name, got in imports:
             preview_of({"plan": got}, f"{Path(files[0]).name if len(files) == 1 else name}, storey '{name}'")
-        source = _ifc_source(files)
+        source = dict(_ifc_source(files) or {}, building=building_data)
     else:
         if budgets or elevations is not None:
             raise InputError(f"{'--storey-budget' if budgets else '--elevations'}: belongs to buildings "
