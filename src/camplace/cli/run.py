@@ -24,7 +24,7 @@ from camplace.cli.space import (CEILING_OPT, REF_OPT, SCALE_OPT, STOREY_OPT, UNI
                                  THRESHOLD_OPT, WALL_LAYERS_OPT,
                                  ImportOptions, describe_import, plan_import_options, scene_data_from_file, scene_yaml,
                                  space_kind)
-from camplace.cli.plan_preview import preview_of, run_extra, show_summary
+from camplace.cli.plan_preview import preview_of, run_extra
 from camplace.cli.summary import write_and_summarise
 from camplace.core.errors import InputError
 

@@ -12,7 +12,7 @@ from rich.markup import escape
 
 from camplace.cli.building import ELEVATIONS_OPT, STOREY_BUDGET_OPT, is_building, storey_budgets
 from camplace.cli.common import console, state
-from camplace.cli.plan_preview import json_part, preview_of, show_summary, write_files
+from camplace.cli.plan_preview import json_part, preview_of, write_files
 from camplace.cli.space import (CEILING_OPT, REF_OPT, SCALE_OPT, STOREY_OPT, UNITS_OPT, WALL_HEIGHT_OPT,
                                  DOORS_OPT, GLASS_OPT, LAYER_HEIGHT_OPT, MAX_OPENING_OPT, MIN_ROOM_OPT, NO_OCR_OPT,
                                  PAGE_OPT,
