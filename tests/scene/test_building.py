@@ -119,3 +119,22 @@ def test_a_storey_of_a_building_is_the_single_room_scene():
     one = spec.storey_spec("Ground")
     assert one.storeys is None and one.room.height == 3.0 and one.name == "b/Ground"
     assert spec.room.height == pytest.approx(6.5)  # the envelope: lowest floor to highest ceiling
+
+
+def test_visibility_by_storey_groups_is_the_whole_buildings_v():
+    from camplace.cameras.candidates import build_candidates
+    from camplace.cameras.models import cameras_from_spec
+    from camplace.targets.build import build_targets
+    from camplace.visibility.engine import compute_visibility
+    from camplace.visibility.voxel import VoxelEngine
+    from camplace.workflows.building import building_visibility, storey_groups
+
+    data = two_storeys()
+    data["storeys"]["Top"] = {"elevation": 7.0, "room": {"footprint": SQUARE, "height": 3.0}}  # a solid slab below
+    spec = parse_scene(data, "three")
+    sc = build_scene(spec)
+    assert storey_groups(sc) == [[0, 1], [2]]
+    targets, cands = build_targets(sc), build_candidates(sc, cameras_from_spec(spec))
+    whole = compute_visibility(VoxelEngine(), sc.occupancy, targets, cands).V
+    split = building_visibility(VoxelEngine(), sc, targets, cands).V
+    assert split.shape == whole.shape and (split != whole).nnz == 0 and whole.nnz > 0

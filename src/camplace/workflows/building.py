@@ -175,3 +175,56 @@ def _moved(obj, d: np.ndarray, kind: str | None = None):
     if isinstance(obj, list):
         return [_moved(v, d) for v in obj]
     return obj
+
+
+def storey_groups(sc: Scene) -> list[list[int]]:
+    """The storeys (indices, lowest first) that can see each other, grouped: a storey with
+    floor openings joins the storey below; storeys with a solid slab between them are apart."""
+    groups: list[list[int]] = []
+    for k, st in enumerate(sc.storeys):
+        if groups and st.openings:
+            groups[-1].append(k)
+        else:
+            groups.append([k])
+    return groups
+
+
+def building_visibility(engine, sc: Scene, targets, candidates, **options):
+    """V of a building, one storey group at a time (storey_groups): a camera never sees
+    through a solid slab, so the blocks between groups are zero and are not raycast
+    (camplace.visibility.engine.compute_visibility on each group's candidates and targets;
+    ``options``: its executor, cache_dir, progress). The same V as one call on the whole
+    building, in a fraction of the sight-line tests when floors are closed."""
+    import scipy.sparse as sp
+
+    from camplace.visibility.engine import Visibility, compute_visibility
+
+    groups = storey_groups(sc)
+    if len(groups) == 1:
+        return compute_visibility(engine, sc.occupancy, targets, candidates, **options)
+    t_st, c_st = storey_of(sc, targets.positions), storey_of(sc, candidates.positions)
+    rows, cols, info = [], [], {"storey_groups": [[sc.storeys[k].name for k in g] for g in groups]}
+    for g in groups:
+        r, c = np.flatnonzero(np.isin(c_st, g)), np.flatnonzero(np.isin(t_st, g))
+        if not len(r) or not len(c):
+            continue
+        part = compute_visibility(engine, sc.occupancy, _take_targets(targets, c), candidates.subset(r), **options)
+        coo = part.V.tocoo()
+        rows.append(r[coo.row])
+        cols.append(c[coo.col])
+        for key, v in part.info.items():
+            if isinstance(v, (int, float)) and not isinstance(v, bool):
+                info[key] = info.get(key, 0) + v
+            else:
+                info.setdefault(key, v)
+    r, c = (np.concatenate(a) if a else np.zeros(0, np.int64) for a in (rows, cols))
+    V = sp.csr_matrix((np.ones(len(r), np.uint8), (r, c)), shape=(len(candidates), len(targets)))
+    V.sort_indices()
+    info["nnz"] = int(V.nnz)
+    return Visibility(V, candidates, targets, engine.mode, info, engine)
+
+
+def _take_targets(targets, cols: np.ndarray):
+    """The targets ``cols`` (indices) only; regions kept whole."""
+    return replace(targets, positions=targets.positions[cols], normals=targets.normals[cols],
+                   gamma=targets.gamma[cols], weights=targets.weights[cols], region_ids=targets.region_ids[cols])

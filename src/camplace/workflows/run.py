@@ -22,13 +22,13 @@ from camplace.spec.schema import SceneSpec
 from camplace.core.errors import InputError, Interrupted
 from camplace.metrics.coverage import Metrics, compute_metrics
 from camplace.problem.model import PlacementProblem, with_type_limits
-from camplace.workflows.building import storey_metrics, with_storey_limits
+from camplace.workflows.building import building_visibility, storey_metrics, with_storey_limits
 from camplace.workflows.solver_options import check_solver_name, check_solver_options, scene_solver_options
 from camplace.scene.build import Scene, build_scene
 from camplace.solvers import Placement, solve
 from camplace.targets.build import Targets, build_targets
 from camplace.core.executors import make_executor
-from camplace.visibility.engine import Visibility, compute_visibility, drop_blind_candidates
+from camplace.visibility.engine import Visibility, drop_blind_candidates
 from camplace.visibility.registry import get_engine
 from camplace.spec.crowd import crowd_with
 from camplace.workflows.crowd import crowd_scores, crowd_stage
@@ -102,8 +102,8 @@ def prepare_site(scene: str | Path | SceneSpec, progress: Progress | None = None
     with make_executor(workers, scheduler) as executor:
         if site is not None:  # privacy zones, existing cameras (camplace.workflows.sites)
             cands = site.admit(cands, executor, cache_dir)
-        vis = compute_visibility(engine, sc.occupancy, targets, cands, executor=executor, cache_dir=cache_dir,
-                                 progress=progress)
+        vis = building_visibility(engine, sc, targets, cands, executor=executor, cache_dir=cache_dir,
+                                  progress=progress)  # one call for a single room (camplace.workflows.building)
         if site is not None:
             site.raycast(engine, sc, targets, executor, cache_dir)
     vis = drop_blind_candidates(vis)
