@@ -200,7 +200,7 @@ def building_visibility(engine, sc: Scene, targets, candidates, **options):
     from camplace.visibility.engine import Visibility, compute_visibility
 
     groups = storey_groups(sc)
-    if len(groups) == 1:
+    if len(groups) <= 1:  # one room, or storeys all open to each other
         return compute_visibility(engine, sc.occupancy, targets, candidates, **options)
     t_st, c_st = storey_of(sc, targets.positions), storey_of(sc, candidates.positions)
     rows, cols, info = [], [], {"storey_groups": [[sc.storeys[k].name for k in g] for g in groups]}
