@@ -138,3 +138,25 @@ def test_visibility_by_storey_groups_is_the_whole_buildings_v():
     whole = compute_visibility(VoxelEngine(), sc.occupancy, targets, cands).V
     split = building_visibility(VoxelEngine(), sc, targets, cands).V
     assert split.shape == whole.shape and (split != whole).nnz == 0 and whole.nnz > 0
+
+
+def test_building_scene_from_imported_storeys_keeps_levels_apart():
+    from camplace.workflows.building import building_scene
+
+    def plan(rooms: int, height: float = 3.0) -> dict:
+        return {"room": {"footprint": SQUARE, "height": height}, "obstacles": [
+            {"name": "wall", "prism": {"polygon": [[0, 0], [1, 0], [1, 0.2], [0, 0.2]], "z": [0.0, height]}}],
+            "zones": [{"name": f"r{k}", "polygon": SQUARE} for k in range(rooms)],
+            **{k: v for k, v in building({}).items() if k not in ("name", "storeys")}}
+
+    notes: list[str] = []
+    data = building_scene("b", [("Upper", plan(2, 3.4), 3.2, [VOID]), ("Ground", plan(3, 3.4), 0.0, []),
+                                ("Ground copy", plan(1), 0.5, [])], budget=6, notes=notes)
+    assert list(data["storeys"]) == ["Ground", "Upper"] and data["placement"]["budget"] == 6
+    assert "Ground copy" in notes[0] and "planned as 'Ground' alone" in notes[0]
+    ground = data["storeys"]["Ground"]
+    assert ground["room"]["height"] == pytest.approx(3.0)  # lowered to 0.2 m below the next floor (3.2 m)
+    assert ground["obstacles"][0]["prism"]["z"] == [0.0, 3.0]
+    assert data["storeys"]["Upper"]["floor_openings"] == [VOID]
+    spec = parse_scene(data, "imported")
+    assert spec.storey_names == ["Ground", "Upper"]

@@ -10,6 +10,9 @@ from typing import Optional
 
 import typer
 
+from rich.markup import escape
+
+from camplace.cli.common import console
 from camplace.cli.space import ImportOptions, space_kind
 from camplace.core.errors import InputError
 from camplace.spec.wording import did_you_mean, name_list
@@ -112,7 +115,11 @@ def building_spec(files: list[str], opts: ImportOptions, budget: Optional[int], 
     from camplace.workflows.building import building_scene
 
     name, storeys, imports = building_storeys(files, opts, budget, elevations)
-    data = building_scene(name, storeys, budget)
+    notes: list[str] = []
+    data = building_scene(name, storeys, budget, notes)
+    imports = [(n, got) for n, got in imports if n in data["storeys"]]
+    for line in notes:
+        console.print(f"[yellow]note: {escape(line)}[/yellow]")
     for st, k in budgets.items():
         if st not in data["storeys"]:
             raise InputError(f"--storey-budget: no storey '{st}'{did_you_mean(st, list(data['storeys']))}; expected "

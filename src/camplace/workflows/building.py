@@ -70,15 +70,18 @@ def storey_metrics(sc: Scene, problem: PlacementProblem, selected: np.ndarray, c
     return out
 
 
-def building_scene(name: str, storeys: list[tuple[str, dict, float, list]], budget: int | None = None) -> dict:
+def building_scene(name: str, storeys: list[tuple[str, dict, float, list]], budget: int | None = None,
+                   notes: list[str] | None = None) -> dict:
     """The scene mapping of a building from imported storeys [(storey name, scene mapping
     (floor at z = 0, as a plan import makes it), floor elevation m, floor openings)], lowest
     first or not: the shared keys (cameras, targets, mounts, grids, placement) from the first
     storey, each storey's room, obstacles and zones under ``storeys:``. A storey whose
-    ceiling would reach the next floor is lowered to SLAB_M below it."""
+    ceiling would reach the next floor is lowered to SLAB_M below it; of two storeys less
+    than MIN_STOREY_M apart (a split level, a storey drawn twice) the one with fewer rooms is
+    left out, with a line in ``notes``."""
     if not storeys:
         raise InputError(f"{name}: no storey to plan")
-    order = sorted(storeys, key=lambda s: s[2])
+    order = _distinct_levels(sorted(storeys, key=lambda s: s[2]), notes)
     first = order[0][1]
     data = {k: first[k] for k in ("voxel_size", "occupancy_resolution", "cameras", "targets", "mounts",
                                   "placement", "mount_rules", "free_space") if k in first}
@@ -103,6 +106,26 @@ def building_scene(name: str, storeys: list[tuple[str, dict, float, list]], budg
         out[st_name] = entry
     data["storeys"] = out
     return data
+
+
+MIN_STOREY_M = 2.0  # storeys closer than this cannot both hold people under their own ceiling
+
+
+def _distinct_levels(order: list, notes: list[str] | None) -> list:
+    """``order`` (by elevation) without the storeys that stand less than MIN_STOREY_M above
+    the one kept below them (the one with more zones stays)."""
+    out: list = []
+    for st in order:
+        if out and st[2] - out[-1][2] < MIN_STOREY_M:
+            keep, drop = (st, out[-1]) if len(st[1].get("zones", [])) > len(out[-1][1].get("zones", [])) else (
+                out[-1], st)
+            out[-1] = keep
+            if notes is not None:
+                notes.append(f"storey '{drop[0]}' (floor at {drop[2]:g} m) is less than {MIN_STOREY_M:g} m from "
+                             f"'{keep[0]}' ({keep[2]:g} m): planned as '{keep[0]}' alone")
+            continue
+        out.append(st)
+    return out
 
 
 def _clip_obstacles(obstacles: list[dict], height: float) -> list[dict]:
