@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 from hypothesis import given, settings, strategies as st
 
-from camplace.spec.loading import parse_scene
+from conftest import two_storeys
 
 pypdf = pytest.importorskip("pypdf")
 ezdxf = pytest.importorskip("ezdxf")
@@ -18,28 +18,12 @@ trimesh = pytest.importorskip("trimesh")
 E1 = 3.5  # the upper storey's floor (m)
 
 
-def _building():
-    cam = [{"name": "cam", "resolution": [640, 480], "fov_deg": [90, 70], "max_range": 10.0}]
-    return parse_scene({
-        "name": "two-storeys", "voxel_size": 0.5, "occupancy_resolution": 0.1, "cameras": cam,
-        "targets": [{"name": "floor", "kind": "volume", "heights": [1.0], "coverage": 1}],
-        "mounts": [{"kind": "ceiling_grid", "camera": "cam", "spacing": 2.0, "yaw_deg": [0, 180], "pitch_deg": [45]}],
-        "storeys": {
-            "Ground": {"elevation": 0.0, "room": {"footprint": [[0, 0], [8, 0], [8, 6], [0, 6]], "height": 3.0},
-                       "budget": 2},
-            "Level 1": {"elevation": E1, "room": {"footprint": [[0, 0], [6, 0], [6, 6], [0, 6]], "height": 3.0},
-                        "floor_openings": [[[2, 2], [3, 2], [3, 3], [2, 3]]], "budget": 2,
-                        "obstacles": [{"name": "desk", "box": {"min": [4, 4, 0], "max": [5, 5, 1.0]}}]},
-        },
-    })
-
-
 @pytest.fixture(scope="module")
 def building_dir(tmp_path_factory):
     from camplace.outputs.write import write_outputs
     from camplace.workflows.run import run
 
-    r = run(_building(), budget=4, solver="greedy")
+    r = run(two_storeys(E1), budget=4, solver="greedy")
     out = tmp_path_factory.mktemp("building")
     paths = write_outputs(out, r.scene.name, r.visibility, r.placement, r.problem.budget, r.metrics, r.timings_s,
                           scene=r.scene, repeatable=True)
