@@ -42,6 +42,7 @@ def test_pdf_one_plan_and_coverage_sheet_per_storey_then_the_building(building_d
     for k, name in enumerate(("Ground", "Level 1")):
         assert f"storey {name}: floor plan" in pages[2 * k] and f"sheet {2 * k + 1}: floor plan, {name}" in pages[2 * k]
         assert f"sheet {2 * k + 2}: coverage, {name}" in pages[2 * k + 1]
+    assert "open to below" in pages[2] and "open to below" not in pages[0]  # Level 1's floor opening
     assert "sheet 5: camera schedule" in pages[4] and "storey" in pages[4]
     assert "sheet 7: bill of materials" in pages[6]
     n_ground = sum(c["storey"] == "Ground" for c in p["cameras"])

@@ -60,6 +60,7 @@ class PlanData:
     models: list = field(default_factory=list)  # camplace.cameras.models.CameraModel per camera (issue 27: BOM sheet)
     storey: str | None = None  # a building's storey (issue 33): its sheets carry the name; None: the whole scene
     sheet_offset: int = 0  # added to the sheet numbers (a building: the storey sheets come first)
+    openings: tuple = ()  # a storey's floor openings (shapely polygons, m): drawn as open to the storey below
 
     def sheet(self, n: int, what: str) -> str:
         """The title block's sheet label: 'sheet n: what' (numbers moved by sheet_offset; a

@@ -36,9 +36,10 @@ OUTLINE = "#1f4fd1"  # viewshed outlines and new cameras
 EXISTING = "#7b3294"  # existing cameras
 # zones (outline + name), privacy zones (hatched), forbidden / allowed mount areas (dashed / dash-dot)
 PLAN_AREAS = {"zone": {"edgecolor": "#1b7837", "linewidth": 1.0}, **AREA_STYLES,
-              "allow": {"edgecolor": "#1b7837", "linestyle": "-.", "linewidth": 1.2}}
+              "allow": {"edgecolor": "#1b7837", "linestyle": "-.", "linewidth": 1.2},
+              "opening": {"edgecolor": "#444444", "linestyle": "--", "linewidth": 0.9}}
 AREA_LABELS = {"zone": "zone (name)", "privacy": "privacy zone (never seen)", "forbid": "no camera mounted here",
-               "allow": "cameras mounted only here"}
+               "allow": "cameras mounted only here", "opening": "floor open to the storey below"}
 # text stays text; fixed SVG ids (hash salt) so repeatable runs give identical files
 RC = {"pdf.fonttype": 3, "svg.fonttype": "none", "svg.hashsalt": "camplace", "font.size": 7.0, "hatch.linewidth": 0.4}
 
@@ -236,6 +237,20 @@ def _draw_areas(ax, data: PlanData) -> list[str]:
     return kinds
 
 
+def _draw_openings(ax, data: PlanData) -> list[str]:
+    """A storey's floor openings (open to the storey below): dashed, crossed, labelled."""
+    from matplotlib.patches import PathPatch
+
+    for geom in data.openings:
+        ax.add_patch(PathPatch(mpl_path(geom), fill=False, zorder=3, **PLAN_AREAS["opening"]))
+        (x0, y0, x1, y1), (cx, cy) = geom.bounds, geom.representative_point().coords[0]
+        ax.plot([x0, x1], [y0, y1], [x0, x1], [y1, y0], color=PLAN_AREAS["opening"]["edgecolor"], linewidth=0.5,
+                zorder=3)
+        ax.text(cx, cy, "open to below", fontsize=5.5, ha="center", va="center", zorder=6,
+                bbox={"facecolor": "white", "edgecolor": "none", "alpha": 0.7, "pad": 0.4})
+    return ["opening"] if data.openings else []
+
+
 def _legend(fig, data: PlanData, kinds: list[str], walls: dict[str, str] | None = None) -> None:
     from matplotlib.patches import Patch
 
@@ -273,6 +288,7 @@ def _plan_figure(data: PlanData):
     walls = _draw_walls(ax, data)
     _draw_viewsheds(ax, data)
     kinds = _draw_areas(ax, data)
+    kinds += _draw_openings(ax, data)
     _draw_cameras(ax, data, n)
     _scale_bar(ax, n, lo)
     _north_arrow(fig, data)

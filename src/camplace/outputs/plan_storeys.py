@@ -89,7 +89,7 @@ def building_plans(scene, vis, placement: dict, metrics: dict, selected: np.ndar
                            marks=pick(whole.marks), shed=pick(whole.shed), dori=pick(whole.dori),
                            price=pick(whole.price), served=pick(whole.served), models=pick(whole.models),
                            views=[], targets=storey_targets(t, mask, st.elevation), coverage=whole.coverage[mask],
-                           storey=st.name, sheet_offset=SHEETS_PER_STOREY * k))
+                           storey=st.name, sheet_offset=SHEETS_PER_STOREY * k, openings=tuple(st.openings)))
     return whole, out
 
 
