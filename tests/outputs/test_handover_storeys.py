@@ -132,6 +132,7 @@ def test_report_has_a_storey_selector_and_slices_per_storey(building_dir):
     assert titles == ["Ground: coverage 1.00 m above its floor (z = 1.00 m)",
                       "Level 1: coverage 1.00 m above its floor (z = 4.50 m)"]
     assert "Plan, storey by storey" in page
+    assert "<th>storey</th>" in page.split("<h2>Mount list</h2>", 1)[1]
 
 
 def test_storey_layer_names():

@@ -177,11 +177,14 @@ def _region_table(metrics: dict, region_kinds: dict, gammas: dict) -> str:
 
 def _mount_table(cameras: list[dict]) -> str:
     src = any("source_id" in c for c in cameras)  # an evaluated file: its own camera ids too
-    head = ("<tr><th>id</th>" + ("<th>id in file</th>" if src else "") + "<th>x (m)</th><th>y (m)</th><th>z (m)</th>"
+    floor = any("storey" in c for c in cameras)  # a building (issue 33): each camera's storey
+    head = ("<tr><th>id</th>" + ("<th>id in file</th>" if src else "") + ("<th>storey</th>" if floor else "")
+            + "<th>x (m)</th><th>y (m)</th><th>z (m)</th>"
             "<th>yaw (\u00b0)</th><th>pitch (\u00b0)</th><th>roll (\u00b0)</th><th>lens</th></tr>")
     body = "".join(
         f"<tr><td>{c.get('candidate_id')}</td>"
         + (f"<td>{html.escape(str(c.get('source_id', '')))}</td>" if src else "")
+        + (f"<td>{html.escape(str(c.get('storey', '')))}</td>" if floor else "")
         + "".join(f"<td class=num>{v:.3f}</td>" for v in c["position"])
         + "".join(f"<td class=num>{c[k]:.2f}</td>" for k in ("yaw_deg", "pitch_deg", "roll_deg"))
         + f"<td>{html.escape(str(c.get('camera', '')))}</td></tr>" for c in cameras)
