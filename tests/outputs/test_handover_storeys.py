@@ -47,6 +47,7 @@ def test_pdf_one_plan_and_coverage_sheet_per_storey_then_the_building(building_d
     assert "sheet 7: bill of materials" in pages[6]
     n_ground = sum(c["storey"] == "Ground" for c in p["cameras"])
     assert f"floor plan, {n_ground} cameras" in pages[0]
+    assert f"{n_ground} here, {len(p['cameras'])} in all (budget 4)" in pages[0]
 
 
 def test_schedule_heights_are_above_the_storey_floor(building_dir):

@@ -90,7 +90,8 @@ class PlanData:
         p, m = self.placement, self.metrics
         bound = p.get("bound")
         out = [("scene", str(p.get("scene", self.scene.name))), ("solver", f"{p.get('solver')} ({p.get('status')})"),
-               ("cameras", f"{len(self.cameras)} (budget {p.get('budget')})"),
+               ("cameras", f"{len(self.cameras)}" + (f" here, {len(p.get('cameras', []))} in all" if self.storey else "")
+                + f" (budget {p.get('budget')})"),
                ("cost", f"{float(m.get('cost', p.get('objective', 0.0))):.6g}"),
                ("coverage gap", f"{float(m.get('coverage_gap', 0.0)):.4f}"),
                ("bound", "\u2013" if bound is None else f"{float(bound):.6g}"),
