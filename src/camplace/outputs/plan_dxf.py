@@ -199,8 +199,8 @@ def _zones(msp, f: PlanFrame, data: PlanData) -> None:
     half = float(data.scene.spec.voxel_size) / 2
     for r, name in enumerate(t.region_names):
         m = vol & (t.region_ids == r)
-        if not m.any() or str(name) in drawn:
-            continue
+        if not m.any() or str(name) in drawn or (data.storey and str(name).removeprefix(f"{data.storey}/") in drawn):
+            continue  # a storey's region 'Level 1/Kitchen' is its zone 'Kitchen', drawn above
         zs = np.unique(np.round(t.positions[m, 2], 6))
         z = zs[np.argmin(np.abs(zs - data.height))]
         p = t.positions[m & (np.abs(t.positions[:, 2] - z) < 1e-6)]
