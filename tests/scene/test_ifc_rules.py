@@ -60,6 +60,15 @@ def test_nothing_wall_shaped_names_wall_classes_not_the_storey_nobody_gave(files
     assert "wall_classes=IfcBeam" in msg and "(storey)" not in msg
 
 
+def test_no_free_floor_ends_in_one_line_naming_what_covers_it(tmp_path):
+    with pytest.raises(InputError) as err:
+        read_plan(write_beam_walls(tmp_path / "mass.ifc", cls="IfcWall", block=True))
+    msg = str(err.value)  # the block fills the 5.8 x 3.8 m inside, the walls the rest of 6.2 x 4.2 m
+    assert msg.startswith(f"{tmp_path / 'mass.ifc'}: storey 'Undefined': no free floor: obstacles standing on it "
+                          "cover 26.0 of its 26.0 m² footprint (IfcBuildingElementProxy 22.0 m², IfcWall 4.2 m²)")
+    assert "\n" not in msg and "export its walls, slabs and spaces" in msg and err.value.option is None
+
+
 def test_wall_classes_names_them_by_hand(files):
     got = read_plan(files["lying"], wall_classes="IfcBeam")
     assert Polygon(got.scene["room"]["footprint"]).area == pytest.approx(OUTLINE_M2, abs=0.05)
