@@ -121,12 +121,13 @@ def _box(cls: str, lo, hi, eid: int) -> Element:
 
 
 def test_wall_shape_by_hand():
-    """Four 0.2 m proxies closing a 6 x 4 m room are walls; a tall cabinet 0.6 x 2 m standing
-    alone, a 0.3 x 0.3 m pillar, a proxy hanging from 1 m up and a sloping stringer are not."""
+    """Five 0.2 m proxies closing a 6 x 4 m room (two panels with a 1 m door gap between them)
+    are walls; a tall cabinet 0.6 x 2 m standing alone, a 0.3 x 0.3 m pillar, a proxy hanging
+    from 1 m up and a sloping stringer are not."""
     ring = [_box("IfcBuildingElementProxy", lo, hi, k + 1) for k, (lo, hi) in enumerate([
-        ((-0.1, -0.1, 0), (6.1, 0.1, 2.8)), ((-0.1, 3.9, 0), (6.1, 4.1, 2.8)), ((-0.1, -0.1, 0), (0.1, 4.1, 2.8)),
-        ((5.9, -0.1, 0), (6.1, 4.1, 2.8))])]
-    others = [_box("IfcBuildingElementProxy", (10, 0, 0), (12, 0.6, 2.1), 5),
+        ((-0.1, -0.1, 0), (2.5, 0.1, 2.8)), ((3.5, -0.1, 0), (6.1, 0.1, 2.8)), ((-0.1, 3.9, 0), (6.1, 4.1, 2.8)),
+        ((-0.1, -0.1, 0), (0.1, 4.1, 2.8)), ((5.9, -0.1, 0), (6.1, 4.1, 2.8))])]
+    others = [_box("IfcBuildingElementProxy", (10, 0, 0), (12, 0.6, 2.1), 9),
               _box("IfcBuildingElementProxy", (2, 2, 0), (2.3, 2.3, 2.8), 6),
               _box("IfcBuildingElementProxy", (1, 1, 1.0), (4, 1.2, 2.8), 7)]
     v = np.array([[0, 5, 0], [3, 5, 2.8], [3, 5.1, 2.8], [0, 5.1, 0], [0, 5, 0.3], [3, 5, 3.1], [3, 5.1, 3.1],
@@ -137,7 +138,7 @@ def test_wall_shape_by_hand():
     els = ring + others + [stringer]
     kinds = {e.eid: (e.ifc_class, "", ()) for e in els}
     walls, hand, shaped = storey_walls(els, kinds, 0.0, 0.6, (), [], {e.eid for e in els})
-    assert [e.eid for e in walls] == [1, 2, 3, 4] and shaped == {"IfcBuildingElementProxy": 4} and not hand
+    assert [e.eid for e in walls] == [1, 2, 3, 4, 5] and shaped == {"IfcBuildingElementProxy": 5} and not hand
     walls, hand, _ = storey_walls(els, {**kinds, 6: ("IfcBuildingElementProxy", "", ("IfcBuildingElementProxy",))},
                                   0.0, 0.6, ("IfcBuildingElementProxy",), [], {e.eid for e in els})
     assert 6 in [e.eid for e in walls] and hand == {"IfcBuildingElementProxy": 1}

@@ -27,7 +27,7 @@ from camplace.scene.importers.ifc_storey import FLOOR_TOL_M
 HEADROOM_M = 2.0  # a stair's void spans where it rises within this of the floor above
 ATRIUM_M = 1.0  # a space of a lower storey reaching this far above the floor is open through it
 MIN_OPENING_M2 = 0.25
-MIN_WIDTH_M = 0.2
+MIN_WIDTH_M = 0.4  # narrower: a gap between slabs or finish floors, not a way through
 STAIRS = ("IfcStair", "IfcStairFlight", "IfcRamp", "IfcRampFlight")
 
 

@@ -6,29 +6,33 @@ Wall-shaped: tall (at least MIN_WALL_HEIGHT_M), standing on the storey's floor (
 bottom within FLOOR_TOL_M above, SINK_M below), thin and long in plan (mean width
 2·area/perimeter at most the thickest wall, length at least MIN_WALL_LENGTH_M and
 ELONGATION times its width), and closing rooms with the other walls (its connected group
-of walls, joined within JOIN_M, encloses a room of at least MIN_ROOM_M2 once gaps up to
-the thickest wall are closed, or it comes within that of an IfcSpace).
+of walls: it lies within JOIN_M of the outline of a room of at least MIN_ROOM_M2 that
+all the walls enclose once gaps up to DOOR_GAP_M are closed, as precast panels leave a
+door's width between them; or it comes within the thickest wall of an IfcSpace).
 """
 
 from __future__ import annotations
 
 from collections import Counter
 
+import numpy as np
 import shapely
 from shapely.geometry import Polygon
 
 from camplace.core.errors import InputError
 from camplace.scene.importers import polygons_of
-from camplace.scene.importers.ifc_geometry import Element, plan_shape, section
+from camplace.scene.importers.ifc_geometry import Element, plan_hull, plan_shape, section
 from camplace.scene.importers.ifc_storey import FLOOR_TOL_M, WALLS
 
 MIN_WALL_HEIGHT_M = 1.5  # a wall reaches at least this far above the floor
 SINK_M = 0.5  # a wall may start this far below the floor level (on the foundation, in the slab)
 MIN_WALL_LENGTH_M = 0.8
 ELONGATION = 3.0  # length / width of a wall at least
-JOIN_M = 0.05  # walls this close are one group (precast joints)
+JOIN_M = 0.05  # a wall this close to the outline of a room bounds it
 UPRIGHT = 0.6  # at one of a quarter, half, three quarters of its height a wall's section covers this much of its plan
 MIN_ROOM_M2 = 1.0
+DOOR_GAP_M = 1.5  # gaps up to this between walls (doors between panels) are closed when looking for rooms
+MAX_FACES = 5000  # a body with more triangles and a fat convex hull is no wall (a tree): its plan is not drawn
 NEVER_WALLS = ("IfcDoor", "IfcWindow", "IfcFurnishingElement", "IfcCovering", "IfcDistributionElement",
                "IfcStair", "IfcStairFlight", "IfcRamp", "IfcRampFlight", "IfcRailing", "IfcTransportElement",
                "IfcGeographicElement", "IfcSpace", "IfcColumn", "IfcFooting", "IfcPile")
@@ -65,6 +69,11 @@ def _shape_ok(el: Element, floor: float, gap: float) -> bool:
     lo, hi = el.z_range
     if not (floor - SINK_M <= lo <= floor + FLOOR_TOL_M and hi - floor >= MIN_WALL_HEIGHT_M):
         return False
+    if len(el.faces) > MAX_FACES:  # cheap first: a wall's hull is thin unless the wall turns a corner
+        rect = shapely.minimum_rotated_rectangle(plan_hull(el))
+        sides = np.diff(np.asarray(rect.exterior.coords)[:3], axis=0) if isinstance(rect, Polygon) else np.zeros((2, 2))
+        if min(np.hypot(*sides.T)) > max(gap, 0.05):
+            return False
     plan = plan_shape(el)
     if plan.is_empty or plan.area <= 0:
         return False
@@ -75,30 +84,13 @@ def _shape_ok(el: Element, floor: float, gap: float) -> bool:
     return any(section(el, lo + f * (hi - lo)).area >= UPRIGHT * plan.area for f in (0.5, 0.25, 0.75))
 
 
-def _groups(plans: list) -> list[list[int]]:
-    """Indices of ``plans`` (shapely) in connected groups (within JOIN_M)."""
-    arr = shapely.buffer(shapely.make_valid(plans), JOIN_M / 2) if plans else []
-    tree = shapely.STRtree(arr)
-    left, out = set(range(len(plans))), []
-    while left:
-        todo, group = [left.pop()], []
-        while todo:
-            i = todo.pop()
-            group.append(i)
-            for j in tree.query(arr[i], predicate="intersects"):
-                if int(j) in left:
-                    left.discard(int(j))
-                    todo.append(int(j))
-        out.append(group)
-    return out
-
-
-def _closes_room(group, gap: float) -> bool:
-    """True when the union of ``group`` (shapely) encloses a room of MIN_ROOM_M2 once gaps up
-    to ``gap`` m are closed."""
-    d = max(gap, JOIN_M) / 2
-    closed = shapely.make_valid(shapely.union_all(group).buffer(d, join_style="mitre").buffer(-d, join_style="mitre"))
-    return any(Polygon(h).area >= MIN_ROOM_M2 for q in polygons_of(closed) for h in q.interiors)
+def _room_edges(plans: list):
+    """The outlines (shapely lines) of the rooms the union of ``plans`` (shapely) encloses
+    once gaps up to DOOR_GAP_M are closed (rooms of MIN_ROOM_M2 at least)."""
+    d = DOOR_GAP_M / 2
+    closed = shapely.make_valid(shapely.union_all(plans).buffer(d, join_style="mitre").buffer(-d, join_style="mitre"))
+    rings = [h for q in polygons_of(closed) for h in q.interiors if Polygon(h).area >= MIN_ROOM_M2]
+    return shapely.union_all([shapely.LineString(h.coords) for h in rings]) if rings else None
 
 
 def storey_walls(elements: list[Element], kinds: dict, floor: float, gap: float, named: tuple[str, ...],
@@ -115,18 +107,11 @@ def storey_walls(elements: list[Element], kinds: dict, floor: float, gap: float,
     cands = [e for e in elements if e.eid in may_be and e.eid not in taken and _shape_ok(e, floor, gap)]
     if not cands:
         return by_class + by_hand, Counter(e.ifc_class for e in by_hand), Counter()
-    known = [plan_shape(e) for e in by_class + by_hand]
-    plans = known + [plan_shape(e) for e in cands]
+    plans = [plan_shape(e) for e in cands]
+    edges = _room_edges([plan_shape(e) for e in by_class + by_hand] + plans)
     rooms = shapely.union_all([plan_shape(e) for e in spaces]) if spaces else Polygon()
-    near = rooms.buffer(max(gap, JOIN_M)) if not rooms.is_empty else rooms
-    kept = []
-    for group in _groups(plans):
-        mine = [i - len(known) for i in group if i >= len(known)]
-        if not mine:
-            continue
-        if _closes_room([plans[i] for i in group], gap):
-            kept += mine
-        elif not near.is_empty:
-            kept += [i for i in mine if plans[len(known) + i].intersects(near)]
+    near = rooms.buffer(max(gap, JOIN_M)) if not rooms.is_empty else None
+    kept = [i for i, q in enumerate(plans) if edges is not None and q.buffer(JOIN_M).intersects(edges)
+            or near is not None and q.intersects(near)]
     walls = [cands[i] for i in sorted(kept)]
     return by_class + by_hand + walls, Counter(e.ifc_class for e in by_hand), Counter(e.ifc_class for e in walls)
