@@ -148,6 +148,7 @@ def test_wall_shape_by_hand():
     ({}, 2.2, "IfcCovering underside"),  # the suspended ceiling, not the roof's 1.74 m eave
     ({"covering": None, "space_height": 2.4}, 2.4, "top of the spaces, not the roof"),
     ({"covering": 2.2, "space_height": 2.4}, 2.2, "IfcCovering underside over the rooms"),
+    ({"covering": 2.2, "space_height": 2.4, "covering_type": "ROOFING"}, 2.4, "top of the spaces, not the roof"),
     ({"covering": None}, 1.74, "IfcRoof underside: a roof, as no ceiling covering or space says the height"),
 ])
 def test_ceiling_from_the_covering_or_the_space_the_roof_only_where_neither_says(tmp_path, kw, height, words):

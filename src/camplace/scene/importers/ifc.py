@@ -41,6 +41,7 @@ OPTIONS = ("storey", "doors", "glass", "max_wall_gap", "wall_classes")
 OCCLUDERS = ("IfcElement",)  # walls, slabs, columns, stairs, furniture, proxies, equipment... (IFC2X3 to IFC4X3)
 NOT_ELEMENTS = ("IfcFeatureElement", "IfcVirtualElement", "IfcElementComponent")  # openings, virtual, fasteners
 NOT_FLOORS = ("ROOF", "LANDING")  # slab types that are never a storey's floor
+CEILING_COVERINGS = ("CEILING", "NOTDEFINED", "USERDEFINED", "", "ROOFING")  # coverings that may be a ceiling or roof
 STAY_DOWN = ("IfcFurnishingElement", "IfcDoor", "IfcWindow", "IfcCovering", "IfcDistributionElement")  # never reach up
 
 
@@ -165,7 +166,8 @@ def _roles(model, s: Structure, ents: list, named: tuple[str, ...]) -> tuple[dic
     their shape (not WALLS, not NEVER_WALLS, not a part of one: a stair's stringers))."""
     kinds = {e.id(): (e.is_a(), str(getattr(e, "PredefinedType", "") or ""), tuple(c for c in named if e.is_a(c)))
              for e in ents}
-    roofs = {e.id() for e in ents if e.is_a("IfcRoof") or kinds[e.id()][:2] == ("IfcSlab", "ROOF")
+    roofs = {e.id() for e in ents if e.is_a("IfcRoof") or kinds[e.id()][:2] in (("IfcSlab", "ROOF"),
+                                                                              ("IfcCovering", "ROOFING"))
              or s.parent.get(e.id()) and model.by_id(s.parent[e.id()]).is_a("IfcRoof")}
     never = WALLS + NEVER_WALLS
     may_be = {e.id() for e in ents if not any(e.is_a(c) for c in never)
@@ -282,7 +284,8 @@ def _storey(m: _Model, st: Storey, spaces: list[Element], elements: list[Element
     keys = {st.key, 0} | ({below.key} if below else set())
     mine = [e for e in elements if s.synthetic or s.storey_key(e.eid) in keys]
     floor = st.elevation
-    ceilings = [e for e in elements if e.ifc_class in CEILINGS and kinds[e.eid][1] != "FLOORING"
+    ceilings = [e for e in elements if e.ifc_class in CEILINGS and (e.ifc_class != "IfcCovering" or kinds[e.eid][1]
+                                                                   in CEILING_COVERINGS)
                 and (s.synthetic or s.storey_key(e.eid) in keys | ({up.key} if up else set()))]
     walls, by_hand, by_shape = storey_walls(mine, kinds, floor, opts["gap"], opts["named"], spaces, opts["may_be"])
     height, h_from = ((opts["ceiling"], "ceiling_height option") if opts["ceiling"] is not None else

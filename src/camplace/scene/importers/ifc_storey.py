@@ -132,14 +132,15 @@ def ceiling_of(floor: float, nxt: float | None, ceilings: list[Element], spaces:
     the ceiling coverings (IfcCovering) over the rooms; the slabs above (the lowest level,
     5 cm, of undersides at least MIN_CEILING_M up that together lie over a quarter of its
     spaces), unless its spaces' tops are lower; the top of its spaces; only then the roof
-    (``roofs``: entity ids of IfcRoof, ROOF slabs and a roof's parts): a mono-pitch roof's
+    (``roofs``: entity ids of IfcRoof, ROOF slabs, ROOFING coverings, a roof's parts): a mono-pitch roof's
     eave says nothing where a covering or a space says the height; the next storey's
     elevation ``nxt``; the height most of its walls reach; DEFAULT_CEILING_M."""
     area = shapely.union_all([plan_shape(e) for e in spaces]) if spaces else Polygon()
     tops = [e.z_range[1] - floor for e in spaces]
     top = min(max(tops), nxt - floor) if tops and nxt is not None else max(tops) if tops else 0.0
     space_top = top if top >= MIN_CEILING_M else None
-    covers = _lowest_level(floor, nxt, [e for e in ceilings if e.ifc_class == "IfcCovering"], area)
+    covers = _lowest_level(floor, nxt, [e for e in ceilings if e.ifc_class == "IfcCovering" and e.eid not in roofs],
+                           area)
     if covers:
         return covers[0], f"IfcCovering underside over {'the rooms' if spaces else 'the storey'}"
     slabs = _lowest_level(floor, nxt, [e for e in ceilings if e.ifc_class != "IfcCovering" and e.eid not in roofs],
