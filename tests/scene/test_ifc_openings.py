@@ -64,3 +64,26 @@ def test_openings_in_a_file_in_mm_are_in_metres(tmp_path):
     got = _openings(path)
     assert got["First Floor"][1] == pytest.approx(UP)
     assert _one(got["First Floor"][0]).bounds == pytest.approx((1.0, 1.0, 2.0, 3.0))
+
+
+def test_a_site_placed_away_from_the_origin_moves_plans_and_elevations_with_it(tmp_path):
+    """Every placement made relative to an IfcSite at (100, 50, 10) m: the storeys stand at
+    world z 10 and 13.2 m, the footprint and the floor opening lie at world x + 100, y + 50
+    (the IFC's own coordinates, the same frame for every storey), the heights unchanged."""
+    import ifcopenshell
+
+    path = write_open_floors(tmp_path / "b.ifc", B, opening=(1.0, 1.0, 2.0, 3.0))
+    m = ifcopenshell.open(str(path))
+    site = m.createIfcLocalPlacement(None, m.createIfcAxis2Placement3D(m.createIfcCartesianPoint((100.0, 50.0, 10.0)),
+                                                                       None, None))
+    for lp in m.by_type("IfcLocalPlacement"):
+        if lp.PlacementRelTo is None and lp != site:
+            lp.PlacementRelTo = site
+    m.by_type("IfcSite")[0].ObjectPlacement = site
+    m.write(str(path))
+    assert storey_elevations(path) == {"Ground Floor": pytest.approx(10.0), "First Floor": pytest.approx(10.0 + UP)}
+    got = _openings(path)
+    for name, (g, _) in got.items():
+        assert Polygon(g.scene["room"]["footprint"]).bounds == pytest.approx((99.9, 49.9, 110.1, 54.1)), name
+        assert g.scene["room"]["height"] == pytest.approx(B.height), name
+    assert _one(got["First Floor"][0]).bounds == pytest.approx((101.0, 51.0, 102.0, 53.0))
