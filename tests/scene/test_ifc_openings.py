@@ -87,3 +87,25 @@ def test_a_site_placed_away_from_the_origin_moves_plans_and_elevations_with_it(t
         assert Polygon(g.scene["room"]["footprint"]).bounds == pytest.approx((99.9, 49.9, 110.1, 54.1)), name
         assert g.scene["room"]["height"] == pytest.approx(B.height), name
     assert _one(got["First Floor"][0]).bounds == pytest.approx((101.0, 51.0, 102.0, 53.0))
+
+
+def test_storeys_placed_alike_take_their_elevation_above_the_building(tmp_path):
+    """Both storeys placed at the building's origin, 10 m up, their Elevation 0 and 3.2 m:
+    the floors stand at world z 10 and 13.2 m, where the geometry is."""
+    import ifcopenshell
+
+    path = write_open_floors(tmp_path / "b.ifc", B)
+    m = ifcopenshell.open(str(path))
+    at = m.createIfcLocalPlacement(None, m.createIfcAxis2Placement3D(m.createIfcCartesianPoint((0.0, 0.0, 10.0)),
+                                                                     None, None))
+    for lp in m.by_type("IfcLocalPlacement"):
+        if lp.PlacementRelTo is None and lp != at:
+            lp.PlacementRelTo = at
+    m.by_type("IfcBuilding")[0].ObjectPlacement = at
+    for st in m.by_type("IfcBuildingStorey"):
+        st.ObjectPlacement = at
+    m.write(str(path))
+    assert storey_elevations(path) == {"Ground Floor": pytest.approx(10.0), "First Floor": pytest.approx(10.0 + UP)}
+    got = _openings(path)
+    assert got["First Floor"][0].used["storey"].startswith("First Floor (floor at +13.20 m, from its Elevation")
+    assert got["First Floor"][0].scene["room"]["height"] == pytest.approx(B.height)

@@ -184,8 +184,9 @@ def unique_names(names: list[str], suffixes: list[str]) -> list[str]:
 
 def structure(model, scale: float) -> Structure:
     """The model's storeys and element -> storey map (elevations in m: the storey's placement z,
-    world, like the geometry; its Elevation attribute where placements are missing or all
-    equal while the attributes differ; neither: nan, left to the geometry). A file without
+    world, like the geometry; its Elevation attribute, above its building's placement, where
+    placements are missing or all equal while the attributes differ; neither: nan, left to
+    the geometry). A file without
     IfcBuildingStorey: one storey per IfcBuilding (one for the file without one), its
     elevation left to the geometry."""
     parent = _parents(model)
@@ -197,7 +198,10 @@ def structure(model, scale: float) -> Structure:
                zip(unique_names([name for _, name in stand], [str(k) for k, _ in stand]), stand)]
         return Structure(sts, parent, True, buildings)
     placed = [_placement_z(s, scale) for s in ents]
-    attrs = [None if s.Elevation is None else float(s.Elevation) * scale for s in ents]
+    # Elevation is above the building's own 0.00 (its placement): world z = the building's z + Elevation
+    base = {b.id(): _placement_z(b, scale) or 0.0 for b in model.by_type("IfcBuilding")}
+    attrs = [None if s.Elevation is None else float(s.Elevation) * scale
+             + base.get(_building_of(s.id(), parent, set(buildings)), 0.0) for s in ents]
     use_attr = (any(z is None for z in placed) or (len(set(round(z, 4) for z in placed)) < len(placed)
                                                     and len(set(a for a in attrs if a is not None)) > 1))
     sts = []
