@@ -66,6 +66,16 @@ def test_openings_in_a_file_in_mm_are_in_metres(tmp_path):
     assert _one(got["First Floor"][0]).bounds == pytest.approx((1.0, 1.0, 2.0, 3.0))
 
 
+def _everything_on(m, xyz):
+    """A new IfcLocalPlacement at ``xyz`` (m) that every placement of model ``m`` without a
+    parent is made relative to (the whole model moves by ``xyz``)."""
+    at = m.createIfcLocalPlacement(None, m.createIfcAxis2Placement3D(m.createIfcCartesianPoint(xyz), None, None))
+    for lp in m.by_type("IfcLocalPlacement"):
+        if lp.PlacementRelTo is None and lp != at:
+            lp.PlacementRelTo = at
+    return at
+
+
 def test_a_site_placed_away_from_the_origin_moves_plans_and_elevations_with_it(tmp_path):
     """Every placement made relative to an IfcSite at (100, 50, 10) m: the storeys stand at
     world z 10 and 13.2 m, the footprint and the floor opening lie at world x + 100, y + 50
@@ -74,12 +84,7 @@ def test_a_site_placed_away_from_the_origin_moves_plans_and_elevations_with_it(t
 
     path = write_open_floors(tmp_path / "b.ifc", B, opening=(1.0, 1.0, 2.0, 3.0))
     m = ifcopenshell.open(str(path))
-    site = m.createIfcLocalPlacement(None, m.createIfcAxis2Placement3D(m.createIfcCartesianPoint((100.0, 50.0, 10.0)),
-                                                                       None, None))
-    for lp in m.by_type("IfcLocalPlacement"):
-        if lp.PlacementRelTo is None and lp != site:
-            lp.PlacementRelTo = site
-    m.by_type("IfcSite")[0].ObjectPlacement = site
+    m.by_type("IfcSite")[0].ObjectPlacement = _everything_on(m, (100.0, 50.0, 10.0))
     m.write(str(path))
     assert storey_elevations(path) == {"Ground Floor": pytest.approx(10.0), "First Floor": pytest.approx(10.0 + UP)}
     got = _openings(path)
@@ -96,11 +101,7 @@ def test_storeys_placed_alike_take_their_elevation_above_the_building(tmp_path):
 
     path = write_open_floors(tmp_path / "b.ifc", B)
     m = ifcopenshell.open(str(path))
-    at = m.createIfcLocalPlacement(None, m.createIfcAxis2Placement3D(m.createIfcCartesianPoint((0.0, 0.0, 10.0)),
-                                                                     None, None))
-    for lp in m.by_type("IfcLocalPlacement"):
-        if lp.PlacementRelTo is None and lp != at:
-            lp.PlacementRelTo = at
+    at = _everything_on(m, (0.0, 0.0, 10.0))
     m.by_type("IfcBuilding")[0].ObjectPlacement = at
     for st in m.by_type("IfcBuildingStorey"):
         st.ObjectPlacement = at
