@@ -34,6 +34,7 @@ def _one(got) -> Polygon:
     ({"stair": (6.0, 1.0, 7.0, 3.5)}, box(6.0, 1.0, 7.0, 3.5), "stair voids 1"),
     # the atrium: room 2's clear inside (x 5.1-9.9, y 0.1-3.9), where the first floor has no slab
     ({"atrium": True}, box(5.1, 0.1, 9.9, 3.9), "atria 1"),
+    ({"void": "Luftraum"}, box(5.1, 0.1, 9.9, 3.9), "void spaces 1"),  # a space of the first floor named so
 ])
 def test_the_first_floor_is_open_where_the_model_opens_it(tmp_path, kw, expect, kind):
     got = _openings(write_open_floors(tmp_path / "b.ifc", B, **kw))

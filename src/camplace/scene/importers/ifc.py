@@ -34,7 +34,7 @@ from camplace.scene.importers.ifc_model import (Storey, Structure, length_scale,
                                                 structure, unit_words)
 from camplace.scene.importers.ifc_storey import (CEILINGS, FLOOR_MAKERS, FLOOR_TOL_M, WALLS, StoreyRooms,
                                                  ceiling_of, choose_storeys, floor_level, storey_footprint)
-from camplace.scene.importers.ifc_openings import STAIRS, floor_openings
+from camplace.scene.importers.ifc_openings import STAIRS, VOID, floor_openings
 from camplace.scene.importers.ifc_walls import NEVER_WALLS, storey_walls, wall_class_names
 
 OPTIONS = ("storey", "doors", "glass", "max_wall_gap", "wall_classes")
@@ -327,7 +327,8 @@ def _storey(m: _Model, st: Storey, spaces: list[Element], elements: list[Element
     if below is not None:
         lower = [e for e, z in opts["spaces"] if z < floor - FLOOR_TOL_M]
         stairs = [e for e in mine if e.ifc_class in STAIRS]
-        got.floor_openings, found = floor_openings(fp.polygon, floor, floors, walls, stairs, lower)
+        voids = [e for e in spaces if VOID.search(labels[e.eid])]
+        got.floor_openings, found = floor_openings(fp.polygon, floor, floors, walls, stairs, lower, voids)
     else:
         found = {}
     said = {"lowest space": "the lowest point of its spaces", "doors and walls": "where most of its doors and walls "

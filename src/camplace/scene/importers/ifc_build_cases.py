@@ -90,14 +90,15 @@ def write_roofed_house(path: str | Path, size: tuple[float, float] = (6.0, 4.0),
 
 
 def write_open_floors(path: str | Path, b: GridBuilding = GridBuilding(), opening=None, stair=None,
-                      atrium: bool = False, unit: str = "m") -> Path:
+                      atrium: bool = False, unit: str = "m", void: str | None = None) -> Path:
     """The grid building (ifc_build.GridBuilding, in m) on two storeys, 'Ground Floor' at 0
     and 'First Floor' at b.height + b.slab, with the first floor opened to the ground floor:
     ``opening`` (x0, y0, x1, y1) an IfcOpeningElement voiding its floor slab; ``stair``
     (x0, y0, x1, y1) an IfcStairFlight of the ground floor (a box) rising to it; ``atrium``:
     the first floor's slab covers only the first column of rooms (x <= b.room[0]) and the
-    ground floor's last room is an IfcSpace 'Atrium' two storeys high. ``unit``: the file's
-    length unit ('m' or 'mm'; lengths are given in m)."""
+    ground floor's last room is an IfcSpace 'Atrium' two storeys high; ``void``: the first
+    floor's last room holds a second IfcSpace of that LongName (e.g. 'Luftraum'). ``unit``:
+    the file's length unit ('m' or 'mm'; lengths are given in m)."""
     wr = _Writer(unit)
     up = b.height + b.slab
     ground = wr.storey("Ground Floor", 0.0, wr.scale)
@@ -113,6 +114,10 @@ def write_open_floors(path: str | Path, b: GridBuilding = GridBuilding(), openin
         lo, hi = b.space_boxes()[b.nx * b.ny - 1]
         sp = wr.box("IfcSpace", "A01", lo, hi + [0, 0, up], LongName="Atrium")
         wr.api.aggregate.assign_object(wr.m, products=[sp], relating_object=ground)
+    if void is not None:
+        lo, hi = b.space_boxes()[b.nx * b.ny - 1]
+        sp = wr.box("IfcSpace", "V01", lo + [0, 0, up], hi + [0, 0, up], LongName=void)
+        wr.api.aggregate.assign_object(wr.m, products=[sp], relating_object=first)
     if opening is not None:
         x0, y0, x1, y1 = opening
         hole = wr.box("IfcOpeningElement", "Slab opening", np.array([x0, y0, up - b.slab - 0.1]),

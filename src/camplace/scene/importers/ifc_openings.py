@@ -9,13 +9,17 @@ Four kinds of evidence, each from the model itself:
 - stair voids: the part of an IfcStair / IfcStairFlight / IfcRamp(Flight) of a lower storey
   that rises within HEADROOM_M of this floor and reaches it;
 - atria and double-height spaces: an IfcSpace of a lower storey that reaches more than
-  ATRIUM_M above this floor, where this storey has no floor slab over it.
+  ATRIUM_M above this floor, where this storey has no floor slab over it;
+- void spaces: an IfcSpace of this storey named as the air over a lower room or a shaft
+  (VOID: void, Luftraum, vide, vuoto, vacío, shaft, Schacht, gaine, open to below...).
 
 Each piece is cut to the storey's footprint; pieces under MIN_OPENING_M2 or narrower than
 MIN_WIDTH_M (the gaps between a room's finish floors under a wall) are dropped.
 """
 
 from __future__ import annotations
+
+import re
 
 import shapely
 from shapely.geometry import Polygon
@@ -29,6 +33,9 @@ ATRIUM_M = 1.0  # a space of a lower storey reaching this far above the floor is
 MIN_OPENING_M2 = 0.25
 MIN_WIDTH_M = 0.4  # narrower: a gap between slabs or finish floors, not a way through
 STAIRS = ("IfcStair", "IfcStairFlight", "IfcRamp", "IfcRampFlight")
+VOID = re.compile(r"(?:^|[^a-zäöüéíáó])(void|voids|luftraum|luftr[äa]ume|leerraum|vide|vides|vuoto|vac[ií]o|"
+                  r"doble altura|double[- ]height|open to below|shaft|shafts|schacht|gaine|cavedio|patinillo)"
+                  r"(?:[^a-zäöüéíáó]|$)", re.I)
 
 
 def slab_voids(floors: list[Element], walls: list[Element]) -> list:
@@ -63,12 +70,14 @@ def atria(lower_spaces: list[Element], floor: float, floors: list[Element]) -> l
 
 
 def floor_openings(footprint: Polygon, floor: float, floors: list[Element], walls: list[Element],
-                   stairs: list[Element], lower_spaces: list[Element]) -> tuple[list[list[list[float]]], dict]:
+                   stairs: list[Element], lower_spaces: list[Element], voids: list[Element] = ()
+                   ) -> tuple[list[list[list[float]]], dict]:
     """The plan rings (m, [[x, y], ...], world x, y) where the storey's floor at ``floor``
     (m, world z) is open to the storey below, cut to ``footprint``, and how many pieces came
-    from each kind of evidence, merged ({'slab openings': n, 'stair voids': n, 'atria': n})."""
+    from each kind of evidence, merged ({'slab openings': n, 'stair voids': n, 'atria': n,
+    'void spaces': n}); ``voids``: the storey's spaces named as voids (VOID)."""
     kinds = {"slab openings": slab_voids(floors, walls), "stair voids": stair_voids(stairs, floor),
-             "atria": atria(lower_spaces, floor, floors)}
+             "atria": atria(lower_spaces, floor, floors), "void spaces": [plan_shape(e) for e in voids]}
     counts, pieces = {}, []
     for kind, shapes in kinds.items():
         one = shapely.union_all([shapely.make_valid(s) for s in shapes]) if shapes else Polygon()
