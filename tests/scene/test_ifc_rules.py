@@ -22,6 +22,7 @@ from camplace.scene.importers.ifc_build import GridBuilding, write_grid_building
 from camplace.scene.importers.ifc_build_cases import write_beam_walls, write_roofed_house  # noqa: E402
 from camplace.scene.importers.ifc_checks import PLAUSIBLE_M2, suggested_unit  # noqa: E402
 from camplace.scene.importers.ifc_geometry import Element  # noqa: E402
+from camplace.scene.importers.ifc_model import structure  # noqa: E402
 from camplace.scene.importers.ifc_walls import storey_walls  # noqa: E402
 from tests.conftest import run_cli  # noqa: E402
 
@@ -155,6 +156,18 @@ def test_ceiling_from_the_covering_or_the_space_the_roof_only_where_neither_says
     got = read_plan(write_roofed_house(tmp_path / "house.ifc", **kw))
     assert got.scene["room"]["height"] == pytest.approx(height, abs=1e-3)
     assert words in got.used["ceiling"] and got.used["ceiling"].startswith(f"{height:.2f} m")
+
+
+def test_a_covering_of_a_space_belongs_to_the_space_s_storey(tmp_path):
+    """IFC4's IfcRelCoversSpaces, not a containment: the covering is the storey's, and its ceiling."""
+    import ifcopenshell
+
+    path = write_roofed_house(tmp_path / "house.ifc", space_height=2.4, covers_space=True)
+    m = ifcopenshell.open(str(path))
+    s = structure(m, 1.0)
+    cover, = m.by_type("IfcCovering")
+    assert not cover.ContainedInStructure and s.storey_key(cover.id()) == m.by_type("IfcBuildingStorey")[0].id()
+    assert read_plan(path).used["ceiling"] == "2.20 m (IfcCovering underside over the rooms)"
 
 
 def test_cli_names_the_flag_that_fixes_it_and_takes_wall_classes(files, tmp_path, monkeypatch, capsys):

@@ -68,24 +68,31 @@ def _pitched_roof(wr: _Writer, size: tuple[float, float], eave: float, ridge: fl
 
 def write_roofed_house(path: str | Path, size: tuple[float, float] = (6.0, 4.0), wall: float = 0.2,
                        eave: float = 1.74, ridge: float = 3.2, covering: float | None = 2.2,
-                       space_height: float | None = None, covering_type: str = "CEILING") -> Path:
+                       space_height: float | None = None, covering_type: str = "CEILING",
+                       covers_space: bool = False) -> Path:
     """One storey 'Ground Floor': four IfcWall 2.6 m high around [0, w] x [0, d] (m), a
     mono-pitch IfcRoof whose underside rises from ``eave`` to ``ridge``, a suspended ceiling
     (IfcCovering CEILING, 20 mm) at ``covering`` m over the room, an IfcSpace
     ``space_height`` m high (None: no covering, no space); ``covering_type``: the covering's
-    PredefinedType (ROOFING: a roof's covering, no ceiling)."""
+    PredefinedType (ROOFING: a roof's covering, no ceiling); ``covers_space``: the covering
+    belongs to the space (IfcRelCoversSpaces), not to the storey (needs ``space_height``)."""
     wr = _Writer("m")
     st = wr.storey("Ground Floor", 0.0, 1.0)
     (w, d), t = size, wall
     _outer_walls(wr, "IfcWall", "Wall", size, wall, (0.0, 2.6), st)
     _pitched_roof(wr, size, eave, ridge, 0.2, st)
     lo, hi = np.array([t / 2, t / 2, 0.0]), np.array([w - t / 2, d - t / 2, 0.0])
+    cover = sp = None
     if covering is not None:
-        wr.box("IfcCovering", "Suspended ceiling", lo + [0, 0, covering], hi + [0, 0, covering + 0.02], st,
-               PredefinedType=covering_type)
+        cover = wr.box("IfcCovering", "Suspended ceiling", lo + [0, 0, covering], hi + [0, 0, covering + 0.02],
+                       None if covers_space else st, PredefinedType=covering_type)
     if space_height is not None:
         sp = wr.box("IfcSpace", "R01", lo, hi + [0, 0, space_height], LongName="Living")
         wr.api.aggregate.assign_object(wr.m, products=[sp], relating_object=st)
+    if covers_space and cover is not None and sp is not None:
+        import ifcopenshell.guid
+
+        wr.m.createIfcRelCoversSpaces(ifcopenshell.guid.new(), None, None, None, sp, [cover])
     return atomic_write_text(Path(path), wr.m.to_string())
 
 

@@ -6,7 +6,8 @@ An element belongs to the storey its chain of relations leads to: contained in a
 spatial element (IfcRelContainedInSpatialStructure), part of an aggregate
 (IfcRelAggregates: a stair flight of its stair, a space of its storey), a door or window
 filling an opening (IfcRelFillsElement) voiding a wall (IfcRelVoidsElement), furniture
-contained in a space. One pass over the relations (no per-element lookups).
+contained in a space, a covering of a space or an element (IfcRelCoversSpaces,
+IfcRelCoversBldgElements). One pass over the relations (no per-element lookups).
 """
 
 from __future__ import annotations
@@ -146,6 +147,13 @@ def _parents(model) -> dict[int, int]:
         parent.setdefault(rel.RelatedBuildingElement.id(), rel.RelatingOpeningElement.id())
     for rel in rels("IfcRelVoidsElement"):
         parent.setdefault(rel.RelatedOpeningElement.id(), rel.RelatingBuildingElement.id())
+    for rel in rels("IfcRelCoversSpaces"):  # a ceiling covering of a space (IFC4 RelatingSpace, IFC2X3 RelatedSpace)
+        space = getattr(rel, "RelatingSpace", None) or getattr(rel, "RelatedSpace", None)
+        for o in (rel.RelatedCoverings or ()) if space is not None else ():
+            parent.setdefault(o.id(), space.id())
+    for rel in rels("IfcRelCoversBldgElements"):  # a covering of a slab or wall
+        for o in rel.RelatedCoverings or ():
+            parent.setdefault(o.id(), rel.RelatingBuildingElement.id())
     for rel in rels("IfcRelNests"):
         for o in rel.RelatedObjects or ():
             parent.setdefault(o.id(), rel.RelatingObject.id())
