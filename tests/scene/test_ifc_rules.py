@@ -70,6 +70,15 @@ def test_no_free_floor_ends_in_one_line_naming_what_covers_it(tmp_path):
     assert "\n" not in msg and "export its walls, slabs and spaces" in msg and err.value.option is None
 
 
+def test_a_storey_holding_only_a_small_thing_names_the_storeys_not_the_unit(tmp_path):
+    path = write_beam_walls(tmp_path / "chimney.ifc", cls="IfcWall", chimney="Chimney level")
+    with pytest.raises(InputError) as err:
+        read_plan(path, storey="Chimney level")
+    assert str(err.value) == (f"{path}: storey 'Chimney level': its elements' extent is 0.25 m² while the model spans "
+                              "26 m²: the storey holds no building to plan; pick another storey (storey): 'Undefined'")
+    assert err.value.option == "storey"
+
+
 def test_wall_classes_names_them_by_hand(files):
     got = read_plan(files["lying"], wall_classes="IfcBeam")
     assert Polygon(got.scene["room"]["footprint"]).area == pytest.approx(OUTLINE_M2, abs=0.05)

@@ -22,6 +22,7 @@ from collections import Counter
 from dataclasses import replace
 from pathlib import Path
 
+import numpy as np
 import shapely
 
 from camplace.core.errors import InputError
@@ -264,7 +265,8 @@ def read_storeys(path: str | Path, *, storey: str | None = None, doors: str = "o
                 budget=budget, ceiling=ceiling_height, several=len(chosen) > 1, why=why, named=named, roofs=roofs,
                 may_be=may_be, given=storey not in (None, "all"),
                 others=[x.name for x in s.storeys if rooms.get(x.key, StoreyRooms([], 0)).elements],
-                spaces=[(e, levels.get(where[e.eid], float("nan"))) for e in spaces])
+                spaces=[(e, levels.get(where[e.eid], float("nan"))) for e in spaces],
+                model_m2=_plan_extent(elements + spaces))
     out = []
     for st in chosen:
         own = [e for e in spaces if where[e.eid] == st.key]
@@ -299,11 +301,12 @@ def _storey(m: _Model, st: Storey, spaces: list[Element], elements: list[Element
     own = [e for e in mine if s.synthetic or s.storey_key(e.eid) in (st.key, 0)]
     if own or spaces:  # a wrong unit shrinks walls below a wall's height, rooms below a room's area: say it first
         extent = shapely.box(*shapely.union_all([plan_hull(e) for e in own + spaces]).bounds)
-        check_footprint(extent, "elements' extent", where, m.units, m.metres_per_unit)
+        check_footprint(extent, "elements' extent", where, m.units, m.metres_per_unit, opts["model_m2"], others)
     own = [e for e in own if e.z_range[1] > floor + 0.05 and e.z_range[0] < top]
     hint, fix = nothing_found(own, opts["may_be"], others, opts["given"])
     fp = storey_footprint(spaces, floors, walls, floor, height, opts["gap"], where, hint, fix)
-    check_footprint(fp.polygon, f"footprint (from {fp.how})", where, m.units, m.metres_per_unit)
+    check_footprint(fp.polygon, f"footprint (from {fp.how})", where, m.units, m.metres_per_unit, opts["model_m2"],
+                    others)
     skip = {"IfcDoor"} if opts["doors"] == "open" else set()
     skip |= {"IfcWindow"} if opts["glass"] == "transparent" else set()
     lying = {e.eid for e in floors}  # floor slabs and finishes: the floor itself, not obstacles
@@ -360,6 +363,15 @@ def _storey(m: _Model, st: Storey, spaces: list[Element], elements: list[Element
         "glass": f"{opts['glass']}: {n_glass} IfcWindow " + ("occlude" if opts["glass"] == "opaque" else "left out"),
     }
     return got
+
+
+def _plan_extent(elements: list[Element]) -> float:
+    """The area (m²) of the plan bounding box of ``elements`` (0 for none)."""
+    if not elements:
+        return 0.0
+    lo = np.min([e.vertices[:, :2].min(axis=0) for e in elements], axis=0)
+    hi = np.max([e.vertices[:, :2].max(axis=0) for e in elements], axis=0)
+    return float(np.prod(hi - lo))
 
 
 def _wall_words(walls: list[Element], by_hand: Counter, by_shape: Counter) -> str:

@@ -28,15 +28,20 @@ def _outer_walls(wr: _Writer, cls: str, name: str, size: tuple[float, float], wa
 
 def write_beam_walls(path: str | Path, size: tuple[float, float] = (6.0, 4.0), wall: float = 0.2,
                      height: float = 2.8, cls: str = "IfcBeam", standing: bool = True, unit: str = "m",
-                     block: bool = False) -> Path:
+                     block: bool = False, chimney: str | None = None) -> Path:
     """One storey 'Undefined' whose four outer walls are ``cls`` elements named 'WAND' (as a
     Tekla precast export), no IfcSpace, no slab: footprint (w + wall) x (d + wall) m².
     ``standing=False``: the same elements lie as 0.4 m beams at the top (no wall shape);
     ``unit``: the file's length unit ('m' or 'mm'; lengths are given in m); ``block``: an
-    IfcBuildingElementProxy 'Mass' fills the room from the floor to 2 m (no free floor)."""
+    IfcBuildingElementProxy 'Mass' fills the room from the floor to 2 m (no free floor);
+    ``chimney``: a second storey of that name at ``height`` holding only a 0.5 x 0.5 x 1 m
+    proxy."""
     wr = _Writer(unit)
     st = wr.storey("Undefined", 0.0, wr.scale)
     _outer_walls(wr, cls, "WAND", size, wall, (0.0, height) if standing else (height - 0.4, height), st)
+    if chimney:
+        wr.box("IfcBuildingElementProxy", "Chimney", np.array([1.0, 1.0, height]), np.array([1.5, 1.5, height + 1.0]),
+               wr.storey(chimney, height, wr.scale))
     if block:
         (w, d), t = size, wall
         wr.box("IfcBuildingElementProxy", "Mass", np.array([t / 2, t / 2, 0.0]), np.array([w - t / 2, d - t / 2, 2.0]),

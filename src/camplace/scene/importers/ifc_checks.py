@@ -54,12 +54,20 @@ def suggested_unit(area_m2: float, metres_per_unit: float) -> str | None:
     return None
 
 
-def check_footprint(polygon: Polygon, how: str, where: str, units: str, metres_per_unit: float) -> None:
-    """InputError (option units) for a footprint (or the elements' extent) under
-    MIN_FOOTPRINT_M2: the file's length unit is wrong (``units``: how the summary words
-    it); the line says which unit fits."""
+def check_footprint(polygon: Polygon, how: str, where: str, units: str, metres_per_unit: float,
+                    model_m2: float = 0.0, others: list[str] = ()) -> None:
+    """InputError for a footprint (or the elements' extent) under MIN_FOOTPRINT_M2: the
+    file's length unit is wrong (option units; ``units``: how the summary words it), the
+    line says which unit fits; but where the whole model spans a building (``model_m2``, m²,
+    the area of its plan extent), the storey holds only a small thing: pick another storey
+    (option storey, ``others``)."""
     if polygon.area >= MIN_FOOTPRINT_M2:
         return
+    if model_m2 >= PLAUSIBLE_M2[0]:
+        raise InputError(f"{where}: its {how.split(' (')[0]} is {polygon.area:.3g} m² while the model spans "
+                         f"{model_m2:.0f} m²: the storey holds no building to plan"
+                         + (f"; pick another storey (storey): {', '.join(repr(n) for n in others[:8])}" if others
+                            else ""), option="storey" if others else None)
     unit = suggested_unit(polygon.area, metres_per_unit)
     fix = f"give the unit it is drawn in, units={unit}" if unit else "give the unit it is drawn in (units)"
     raise InputError(f"{where}: its {how.split(' (')[0]} is {polygon.area:.3g} m², too small for a "
