@@ -40,7 +40,8 @@ FLAGS = {
     "viewpoints": "--viewpoint", "out": "--out", "frame": "--frame", "paper": "--paper",
     "cloud": "",  # the space file: the message names it already
     "units": "--units", "wall_height": "--wall-height", "ceiling_height": "--ceiling-height", "scale": "--scale",
-    "ref": "--ref", "storey": "--storey", "wall_layers": "--wall-layers", "furniture_heights": "--layer-height",
+    "ref": "--ref", "storey": "--storey", "wall_layers": "--wall-layers", "wall_classes": "--wall-classes",
+    "furniture_heights": "--layer-height",
     "doors": "--doors", "glass": "--glass", "threshold": "--threshold", "max_opening": "--max-opening",
     "min_room_area": "--min-room-area", "ocr": "--no-ocr", "page": "--page",
     **CROWD_FLAGS,

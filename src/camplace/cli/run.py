@@ -21,7 +21,7 @@ from camplace.cli.common import (CACHE_OPT, FRAME_OPT, MAX_MEMORY_OPT, NO_CACHE_
 from camplace.cli.space import (CEILING_OPT, REF_OPT, SCALE_OPT, STOREY_OPT, UNITS_OPT, WALL_HEIGHT_OPT,
                                  DOORS_OPT, GLASS_OPT, LAYER_HEIGHT_OPT, MAX_OPENING_OPT, MIN_ROOM_OPT, NO_OCR_OPT,
                                  PAGE_OPT,
-                                 THRESHOLD_OPT, WALL_LAYERS_OPT,
+                                 THRESHOLD_OPT, WALL_CLASSES_OPT, WALL_LAYERS_OPT,
                                  ImportOptions, describe_import, plan_import_options, scene_data_from_file, scene_yaml,
                                  space_kind)
 from camplace.cli.plan_preview import preview_of, run_extra
@@ -195,7 +195,8 @@ def run_cmd(scene: Optional[list[str]] = typer.Argument(None, help="Scene YAML f
             units: Optional[str] = UNITS_OPT, wall_height: Optional[float] = WALL_HEIGHT_OPT,
             ceiling_height: Optional[float] = CEILING_OPT, scale: Optional[str] = SCALE_OPT,
             ref: Optional[str] = REF_OPT, storey: Optional[str] = STOREY_OPT,
-            wall_layers: Optional[str] = WALL_LAYERS_OPT, layer_height: Optional[list[str]] = LAYER_HEIGHT_OPT,
+            wall_layers: Optional[str] = WALL_LAYERS_OPT, wall_classes: Optional[str] = WALL_CLASSES_OPT,
+            layer_height: Optional[list[str]] = LAYER_HEIGHT_OPT,
             doors: Optional[str] = DOORS_OPT, glass: Optional[str] = GLASS_OPT,
             threshold: Optional[float] = THRESHOLD_OPT, max_opening: Optional[float] = MAX_OPENING_OPT,
             min_room_area: Optional[float] = MIN_ROOM_OPT, no_ocr: bool = NO_OCR_OPT,
@@ -238,7 +239,8 @@ def run_cmd(scene: Optional[list[str]] = typer.Argument(None, help="Scene YAML f
     plan = plan_import_options("plan" if building else space_kind(scene) if isinstance(scene, str) else None,
                                units=units,
                                wall_height=wall_height, ceiling_height=ceiling_height, scale=scale, ref=ref,
-                               storey=storey, wall_layers=wall_layers, layer_height=layer_height, doors=doors,
+                               storey=storey, wall_layers=wall_layers, wall_classes=wall_classes,
+                               layer_height=layer_height, doors=doors,
                                glass=glass, threshold=threshold, max_opening=max_opening, min_room_area=min_room_area,
                                no_ocr=no_ocr, page=page)
     preview = source = None

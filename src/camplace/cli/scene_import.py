@@ -16,7 +16,7 @@ from camplace.cli.plan_preview import json_part, preview_of, write_files
 from camplace.cli.space import (CEILING_OPT, REF_OPT, SCALE_OPT, STOREY_OPT, UNITS_OPT, WALL_HEIGHT_OPT,
                                  DOORS_OPT, GLASS_OPT, LAYER_HEIGHT_OPT, MAX_OPENING_OPT, MIN_ROOM_OPT, NO_OCR_OPT,
                                  PAGE_OPT,
-                                 THRESHOLD_OPT, WALL_LAYERS_OPT,
+                                 THRESHOLD_OPT, WALL_CLASSES_OPT, WALL_LAYERS_OPT,
                                  ImportOptions, describe_import, scene_data_from_file, scene_yaml)
 from camplace.core.errors import InputError
 
@@ -48,7 +48,8 @@ def import_cmd(files: list[Path] = typer.Argument(..., help="A scan (PLY, PCD, X
                units: Optional[str] = UNITS_OPT, wall_height: Optional[float] = WALL_HEIGHT_OPT,
                ceiling_height: Optional[float] = CEILING_OPT, scale: Optional[str] = SCALE_OPT,
                ref: Optional[str] = REF_OPT, storey: Optional[str] = STOREY_OPT,
-               wall_layers: Optional[str] = WALL_LAYERS_OPT, layer_height: Optional[list[str]] = LAYER_HEIGHT_OPT,
+               wall_layers: Optional[str] = WALL_LAYERS_OPT, wall_classes: Optional[str] = WALL_CLASSES_OPT,
+               layer_height: Optional[list[str]] = LAYER_HEIGHT_OPT,
                doors: Optional[str] = DOORS_OPT, glass: Optional[str] = GLASS_OPT,
                threshold: Optional[float] = THRESHOLD_OPT, max_opening: Optional[float] = MAX_OPENING_OPT,
                min_room_area: Optional[float] = MIN_ROOM_OPT, no_ocr: bool = NO_OCR_OPT,
@@ -68,9 +69,9 @@ def import_cmd(files: list[Path] = typer.Argument(..., help="A scan (PLY, PCD, X
     opts = ImportOptions(up=up, level_floor=not no_level_floor, crop=crop, downsample=downsample, heights=heights,
                          coverage=coverage, wall_mounts=wall_mounts, viewpoint=list(viewpoint or []), units=units,
                          wall_height=wall_height, ceiling_height=ceiling_height, scale=scale, ref=ref, storey=storey,
-                         wall_layers=wall_layers, layer_height=layer_height, doors=doors, glass=glass,
-                         threshold=threshold, max_opening=max_opening, min_room_area=min_room_area, no_ocr=no_ocr,
-                         page=page)
+                         wall_layers=wall_layers, wall_classes=wall_classes, layer_height=layer_height, doors=doors,
+                         glass=glass, threshold=threshold, max_opening=max_opening, min_room_area=min_room_area,
+                         no_ocr=no_ocr, page=page)
     budgets = storey_budgets(storey_budget)
     if is_building([str(f) for f in files], storey):
         _write_building(files, opts, budget, out, elevations, budgets)
