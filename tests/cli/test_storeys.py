@@ -93,11 +93,17 @@ def test_unknown_storey_is_one_line_exit_2_nothing_written(building, tmp_path, m
     assert len(text.strip().splitlines()) == 1 and list(tmp_path.iterdir()) == []
 
 
-def test_storey_all_on_a_dxf_plan_is_refused(tmp_path, monkeypatch, capsys):
+def test_storey_all_on_a_dxf_plan_gives_its_plans(tmp_path, monkeypatch, capsys):
+    """A DXF sheet's plans are its storeys (issue 33): one plan, one scene file; a plan it
+    does not draw is refused in one line naming the ones it has."""
     from tests.scene.plan_drawings import draw_grid_dxf
 
     dxf = draw_grid_dxf(tmp_path / "plan.dxf", B)
-    code, text = run_cli(["scene", "import", dxf, "--storey", "all", "--out", tmp_path / "site.yaml"], monkeypatch,
+    code, text = run_cli(["--quiet", "scene", "import", dxf, "--storey", "all", "--out", tmp_path / "site.yaml"],
+                         monkeypatch, capsys)
+    assert code == 0, text
+    assert sorted(p.name for p in tmp_path.iterdir() if p.suffix == ".yaml") == ["site-plan-1.yaml"]
+    code, text = run_cli(["scene", "import", dxf, "--storey", "plan-2", "--out", tmp_path / "two.yaml"], monkeypatch,
                          capsys)
-    assert code == 2 and "all" in text and "IFC" in text and "--storey" in text
-    assert sorted(p.name for p in tmp_path.iterdir()) == ["plan.dxf"]
+    assert code == 2 and "--storey" in text and "it has plan-1" in text and len(text.strip().splitlines()) == 1
+    assert not (tmp_path / "two.yaml").exists()

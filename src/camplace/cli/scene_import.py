@@ -102,7 +102,7 @@ def storey_scenes(path: Path, opts: ImportOptions, budget: Optional[int]) -> lis
     from camplace.workflows.storeys import storey_slugs
 
     if space_kind(path) != "plan":
-        raise InputError(f"--storey: 'all' belongs to IFC files and plan images, not to {path}")
+        raise InputError(f"--storey: 'all' belongs to IFC files, DXF sheets and plan images, not to {path}")
     if not path.is_file():
         raise InputError(f"{path}: file not found" if not path.exists() else f"{path}: is a folder, expected a file")
     found = read_storey_plans(path, **opts.plan_kwargs(budget))

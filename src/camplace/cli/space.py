@@ -36,7 +36,9 @@ PAGE_OPT = typer.Option(None, "--page", help="PDF plans: the page to read (1-bas
 REF_OPT = typer.Option(None, "--ref", help="Plan images: two points 'x1,y1,x2,y2,DIST' (pixels, metres) for the scale.")
 STOREY_OPT = typer.Option(None, "--storey", help="IFC: the IfcBuildingStorey name (default: the storey a user plans, "
                           "most rooms, never a roof or foundation level); plan images: plan-N, the N-th plan on a "
-                          "sheet of several side by side (default: the one with most rooms); 'all': every storey "
+                          "sheet of several side by side (default: the one with most rooms); DXF: plan-N or the "
+                          "level a title names, e.g. 'First floor' (default: the plan with most walls); 'all': "
+                          "every storey "
                           "or plan with rooms (run: DIR/<storey>/ each and DIR/storeys.json; scene import: "
                           "OUT-<storey>.yaml each).")
 WALL_LAYERS_OPT = typer.Option(None, "--wall-layers", help="DXF: wall layer patterns, comma-separated fnmatch, "

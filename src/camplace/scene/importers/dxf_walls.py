@@ -246,22 +246,19 @@ def is_wall_fill(poly: Polygon) -> bool:
     return poly.area > 0 and 2 * poly.area <= MAX_WALL_WIDTH_M * poly.length
 
 
-def main_building(pieces: list, weights: list[float], gap: float = BUILDING_GAP_M) -> tuple[Polygon, np.ndarray]:
-    """(region, kept) of the building: pieces (m; walls, glass, columns) closer than
-    ``gap`` join one cluster; the cluster of the most ``weights`` (wall area) is the
-    building. ``region``: its pieces grown by gap / 2, holes filled; ``kept[k]``: piece
-    k is in it."""
+def building_clusters(pieces: list, weights: list[float], gap: float = BUILDING_GAP_M
+                      ) -> tuple[list[Polygon], np.ndarray, np.ndarray]:
+    """(clusters, cluster of each piece, each cluster's total weight): pieces (m; walls,
+    glass, columns) closer than ``gap`` join one cluster, its pieces grown by gap / 2."""
     if not pieces:
-        return Polygon(), np.zeros(0, bool)
+        return [], np.zeros(0, int), np.zeros(0)
     arr = np.asarray(pieces, dtype=object)
     blobs = polygons_of(shapely.union_all(shapely.buffer(arr, gap / 2)))
     tree = shapely.STRtree(np.asarray(blobs, dtype=object))
     inside = tree.query(shapely.point_on_surface(arr), predicate="within")
     blob_of = np.zeros(len(pieces), int)
     blob_of[inside[0]] = inside[1]
-    total = np.bincount(blob_of, weights=np.asarray(weights, float), minlength=len(blobs))
-    best = int(np.argmax(total))
-    return Polygon(blobs[best].exterior), blob_of == best
+    return blobs, blob_of, np.bincount(blob_of, weights=np.asarray(weights, float), minlength=len(blobs))
 
 
 def fill_gap(walls, opening, reach: float, touch: float = 0.1):
