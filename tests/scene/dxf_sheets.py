@@ -7,6 +7,7 @@ and 33), drawn with ezdxf; every answer known by hand (m):
   UNIT_ROOM_M2 and its texts print that area ('mq=28.51', '28.5 m²') unless ``texts`` is off.
 - ``draw_rooms_plan``: three rooms on A-AREA, the hall's outline left open ``hall_gap``
   m; an area text, a tatami count and a dimension string, a bare number beside a name.
+- ``draw_solid_block``: a 6 x 6 m block all wall (lines 0.5 m apart on A-WALL): no free floor.
 - ``draw_two_storeys``: a ground floor and a first floor side by side, each under a
   title naming its level (``titles``), 10 m apart.
 """
@@ -120,5 +121,17 @@ def draw_two_storeys(path: str | Path, titles: tuple = ("GROUND FLOOR PLAN 1:100
             _wall(msp, (x0 + x, 0.2), (x0 + x, h - 0.2), 0.2, "A-WALL", [(1.0, 1.9)])
     for x0, title in zip((0.0, TWO_FIRST_X), titles):
         msp.add_text(title, height=0.4, dxfattribs={"layer": "A-ANNO-TTLB", "insert": (x0, -1.5)})
+    doc.saveas(path)
+    return Path(path)
+
+
+def draw_solid_block(path: str | Path) -> Path:
+    """A 6 x 6 m block in m on A-WALL: 13 lines 0.5 m apart and its two sides, which the
+    wall closing fills whole: walls and no free floor."""
+    doc, msp = _new(6)
+    for k in range(13):
+        msp.add_line((0, 0.5 * k), (6, 0.5 * k), dxfattribs={"layer": "A-WALL"})
+    for x in (0, 6):
+        msp.add_line((x, 0), (x, 6), dxfattribs={"layer": "A-WALL"})
     doc.saveas(path)
     return Path(path)

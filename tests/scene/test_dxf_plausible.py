@@ -86,6 +86,14 @@ def test_wrong_unit_without_evidence_ends_in_one_line_naming_the_fix(files, tmp_
     assert read_plan(files["unit bare"], units="m").used["units"] == "m (given)"
 
 
+def test_storey_with_no_free_floor_ends_in_one_line(tmp_path):
+    """All wall, no floor, and no unit makes it a building: the cause, and the wall layers to name."""
+    with pytest.raises(InputError) as err:
+        read_plan(ds.draw_solid_block(tmp_path / "block.dxf"))
+    assert err.value.option == "wall_layers" and "the walls fill the footprint (36.0 m², 0.0 m² free floor)" in str(
+        err.value) and "(wall_layers)" in str(err.value)
+
+
 def test_open_room_outline_closed_when_the_gap_is_small(files):
     got = read_plan(files["rooms"])
     zones = {z["name"]: Polygon(z["polygon"]).area for z in got.scene["zones"]}

@@ -181,8 +181,11 @@ def _plan(sheet: _Sheet, index: int, why: str, *, name=None, wall_height=None, c
             out.used[f"{what}s"] = f"{len(rects)} on {listing(d, layers_of(parts[what], how), counts=False)}"
     if not columns.is_empty:
         out.used["columns"] = f"{len(polygons_of(columns))} on {listing(d, layers_of(parts['column'], how), False)}"
-    rooms, footprint = _rooms_and_footprint(out, d, parts["room"], role, how, region, uncut, glass, columns.union(gaps),
-                                            sheet.max_wall, str(path))
+    try:
+        rooms, footprint = _rooms_and_footprint(out, d, parts["room"], role, how, region, uncut, glass,
+                                                columns.union(gaps), sheet.max_wall, str(path))
+    except InputError:  # no walls to make a footprint of: say why (a wrong unit, most likely) and the fix
+        rooms, footprint = [], Polygon()
     check_floor(path, footprint, shapely.union_all([uncut, glass, columns]), unit_text, span(uncut) / scale)
     zones = room_zones(rooms, coverage or 2, skipped=out.skipped)
     title = name or (path.stem if len(sheet.plans) == 1 else f"{path.stem} {sheet.plans[index].name}")

@@ -168,7 +168,7 @@ def check_floor(path, footprint: Polygon, solids, units: str, span_units: float)
     fits = {u: span_units * s for u, s in UNITS_M.items() if 5.0 <= span_units * s <= 500.0}
     best = min(fits, key=lambda u: abs(np.log10(fits[u] / 30.0))) if fits else None
     what = (f"the footprint measures {area:.2g} m²" if area < MIN_FOOTPRINT_M2 else
-            f"the walls fill the footprint ({area:.1f} m², {free:.2g} m² free floor)")
+            f"the walls fill the footprint ({area:.1f} m², {free:.1f} m² free floor)")
     if best is not None and UNITS_M[best] != _unit_m(units):
         raise InputError(f"{path}: {what} read in {units}: the drawing unit is wrong; in {best} the walls span "
                          f"{fits[best]:.1f} m; give the unit (units={best})", option="units")
