@@ -53,6 +53,15 @@ def test_objects_on_a_wall_like_layer_are_obstacles_with_their_height(files, whi
     assert Polygon(got.scene["room"]["footprint"]).area == pytest.approx(60.0, rel=0.01)
 
 
+def test_partitions_drawn_as_closed_boxes_stay_walls(tmp_path):
+    """Partitions drawn one closed box per piece (small closed shapes) divide the flat
+    into rooms, doorways and all: walls, not objects."""
+    from tests.scene.dxf_drawings import draw_latin_plan
+
+    got = read_plan(draw_latin_plan(tmp_path / "fr.dxf", "fr"))
+    assert "CLOISONS (4 LWPOLYLINE)" in got.used["wall layers"] and not any("objects" in n for n in got.notes)
+
+
 def test_unit_the_area_texts_prove_is_used_with_a_note(files):
     """$INSUNITS says mm, the room is drawn in metres: its texts print 28.51 m² three ways
     and its outline measures 28.52 m² in metres only: read in m, said so."""
@@ -133,6 +142,23 @@ def test_tatami_counts_are_never_areas(value, suffix):
     assert printed_area(f"{value}{suffix}") is None
 
 
-@given(st.decimals(min_value="0.5", max_value="9999", places=2), st.sampled_from([" m²", "m2", " sqm", " mq", " m2"]))
+@given(st.decimals(min_value="0.5", max_value="9999", places=2),
+       st.sampled_from([" m²", "m2", " sqm", " mq", " m2", " sq m"]))
 def test_a_number_with_a_unit_of_area_is_that_area(value, unit):
     assert printed_area(f"{value}{unit}") == pytest.approx(float(value))
+
+
+@given(st.floats(1.0, 500.0), st.floats(0.3, 3.0), st.sampled_from(["mm", "cm", "m", "in", "ft"]))
+def test_area_texts_tell_the_unit_the_outline_is_drawn_in(area, aspect, unit):
+    """A room of ``area`` m² drawn in ``unit`` (read at 1 m per unit) and two texts printing
+    its area: the texts tell that unit, whatever its size and shape."""
+    from shapely.geometry import Point, box
+
+    from camplace.scene.importers import UNITS_M
+    from camplace.scene.importers.dxf_checks import unit_from_areas
+    from camplace.scene.importers.dxf_read import Label
+
+    w = (area * aspect) ** 0.5 / UNITS_M[unit]  # drawing units
+    outline = box(0, 0, w, area / (area * aspect) ** 0.5 / UNITS_M[unit])
+    labels = [Label(Point(1, 1), text, 0.2, "TEXT", "", 0) for text in (f"{area:.2f} m²", f"mq={area:.2f}")]
+    assert unit_from_areas(labels, [outline], 1.0).unit == unit

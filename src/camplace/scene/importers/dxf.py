@@ -135,8 +135,9 @@ def _unit_checked(doc, d: Drawing, units: str | None) -> Drawing:
     """``d``, or the drawing read again in the unit its area texts and closed outlines
     agree in (dxf_checks.unit_from_areas) where that is not the unit it was read in
     (never against a unit the user gave: a note then)."""
-    outlines = filled_polygons([sh for sh in d.shapes if sh.closed or not isinstance(sh.geom, LineString)])
-    ev = unit_from_areas(d.labels, outlines, d.scale)
+    ev = unit_from_areas(d.labels, lambda: filled_polygons([sh for sh in d.shapes
+                                                            if sh.closed or not isinstance(sh.geom, LineString)]),
+                         d.scale)
     if ev.unit is None or abs(UNITS_M[ev.unit] / d.scale - 1) < 1e-9:
         return d
     if units is not None:

@@ -79,29 +79,36 @@ class UnitEvidence:
     by_unit: dict
 
 
-def unit_from_areas(labels: list, outlines: list[Polygon], scale: float) -> UnitEvidence:
+def unit_from_areas(labels: list, outlines, scale: float) -> UnitEvidence:
     """The unit in which the drawing's closed ``outlines`` (m at ``scale`` m per drawing
-    unit) measure what its area texts (``labels``) print: the one unit in which
-    MIN_TEXTS texts or more agree with an outline (AREA_MATCH) and in which no other does."""
+    unit; a list, or a callable giving it, called only when there are area texts) measure
+    what its area texts (``labels``) print: the one unit in which MIN_TEXTS texts or
+    more agree with an outline (AREA_MATCH) and in which no other does."""
     printed = [(lb.text, a) for lb in labels if (a := printed_area(lb.text)) is not None and a > 0]
+    outlines = (outlines() if callable(outlines) else outlines) if printed else []
     by_unit, example = {}, {}
     if printed and outlines:
-        units2 = np.asarray([q.area for q in outlines]) / scale ** 2  # drawing units²
+        units2 = np.sort(np.asarray([q.area for q in outlines])) / scale ** 2  # drawing units², sorted
+        value = np.asarray([a for _, a in printed])
         for unit, metres in UNITS_M.items():
             area = units2 * metres ** 2
-            n = 0
-            for text, a in printed:
-                d = np.abs(area - a)
-                k = int(np.argmin(d))
-                if d[k] <= max(AREA_MATCH[0] * a, AREA_MATCH[1]):
-                    n += 1
-                    example.setdefault(unit, f"{text}: an outline of {area[k]:.2f} m²")
-            if n:
-                by_unit[unit] = n
+            near = _nearest(area, value)
+            ok = np.abs(area[near] - value) <= np.maximum(AREA_MATCH[0] * value, AREA_MATCH[1])
+            if ok.any():
+                by_unit[unit] = int(ok.sum())
+                k = int(np.argmax(ok))
+                example[unit] = f"{printed[k][0]}: an outline of {area[near[k]]:.2f} m²"
     agree = [u for u, n in by_unit.items() if n >= MIN_TEXTS]
     if len(by_unit) == 1 and agree:
         return UnitEvidence(agree[0], by_unit[agree[0]], example[agree[0]], by_unit)
     return UnitEvidence(None, 0, "", by_unit)
+
+
+def _nearest(ordered: np.ndarray, values: np.ndarray) -> np.ndarray:
+    """For each of ``values``, the index of the nearest entry of the sorted ``ordered``."""
+    hi = np.clip(np.searchsorted(ordered, values), 0, len(ordered) - 1)
+    lo = np.maximum(hi - 1, 0)
+    return np.where(np.abs(ordered[lo] - values) < np.abs(ordered[hi] - values), lo, hi)
 
 
 def close_outlines(shapes: list, gap: float) -> tuple[list[Polygon], int, list[float]]:

@@ -17,22 +17,26 @@ from shapely.geometry import LineString, Polygon
 from camplace.scene.importers import PlanImport, polygons_of, prism_obstacles
 from camplace.scene.importers.dxf_layers import block_role, matches
 from camplace.scene.importers.dxf_read import Drawing, Shape
-from camplace.scene.importers.dxf_walls import closing_solid, encloses_room, span
+from camplace.scene.importers.dxf_walls import closing_solid, rooms_closed, span
 
 DEFAULT_FURNITURE_M = 0.9
 FURNITURE_MAX_M = 6.0
 MIN_FURNITURE_M2 = 0.05  # a closed outline on a furniture layer smaller than this is a detail, no piece
 OBJECT_SHARE = 0.8  # a layer is objects when at least this share of its linework is small closed shapes or blocks
+DOORWAY_M = 1.05  # doorways up to this wide are closed when counting the rooms a layer closes
 
 
-def object_layers(d: Drawing, shapes: dict[str, list[Shape]], radius: float, single: float) -> dict[str, str]:
+def object_layers(d: Drawing, shapes: dict[str, list[Shape]], radius: float, single: float,
+                  around=None) -> dict[str, str]:
     """The layers (layer -> its shapes) that hold objects, not walls -> what they hold
     ('3 small closed shapes, 2 repeated blocks'): at least OBJECT_SHARE of the layer's
     linework (m) in closed shapes or in blocks inserted twice or more on it, each at most
-    FURNITURE_MAX_M large, and the layer's linework closed into solids (closing_solid
-    with ``radius``, ``single``) encloses no room."""
+    FURNITURE_MAX_M large, and the layer closes no room: with the other layers of
+    ``shapes`` and the walls ``around`` (a solid, m) it encloses no more rooms
+    (rooms_closed, doorways up to DOORWAY_M closed) than they do without it. Linework is
+    closed into solids by closing_solid with ``radius``, ``single``."""
     size = part_sizes(d)
-    out = {}
+    candidates = {}
     for layer, got in shapes.items():
         outer = [next(iter(reversed(list(chain(d, sh.part)))), -1) for sh in got]
         blocks = Counter(d.parts[p][1] for p in set(outer) if p >= 0)
@@ -46,15 +50,22 @@ def object_layers(d: Drawing, shapes: dict[str, list[Shape]], radius: float, sin
             elif p < 0 and sh.closed and span(sh.geom) <= FURNITURE_MAX_M:
                 small_closed.add(id(sh))
                 objects += length
-        if total <= 0 or objects < OBJECT_SHARE * total:
-            continue
+        if total > 0 and objects >= OBJECT_SHARE * total:
+            what = [f"{len(small_closed)} small closed shapes"] if small_closed else []
+            candidates[layer] = ", ".join(what + ([f"{len(repeated)} repeated blocks"] if repeated else []))
+    if not candidates:
+        return {}
+    solids = {}
+    for layer, got in shapes.items():
         lines = [sh.geom for sh in got if isinstance(sh.geom, LineString)]
         fills = [q for sh in got if not isinstance(sh.geom, LineString) for q in polygons_of(sh.geom)]
-        if encloses_room(closing_solid(lines, fills, radius, single)):
-            continue
-        what = [f"{len(small_closed)} small closed shapes"] if small_closed else []
-        what += [f"{len(repeated)} repeated blocks"] if repeated else []
-        out[layer] = ", ".join(what)
+        solids[layer] = closing_solid(lines, fills, radius, single)
+    base = around if around is not None else Polygon()
+    out = {}
+    for layer, what in candidates.items():
+        others = shapely.union_all([base, *(q for la, q in solids.items() if la != layer)])
+        if rooms_closed(shapely.union_all([others, solids[layer]]), DOORWAY_M) <= rooms_closed(others, DOORWAY_M):
+            out[layer] = what
     return out
 
 

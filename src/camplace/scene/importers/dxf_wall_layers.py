@@ -45,10 +45,12 @@ def layer_roles(d: Drawing, given: dict, radius: float, single: float) -> tuple[
     return role, how
 
 
-def _objects(d: Drawing, shapes: dict, role: dict, how: dict, radius: float, single: float) -> set[str]:
+def _objects(d: Drawing, shapes: dict, role: dict, how: dict, radius: float, single: float,
+             around=None) -> set[str]:
     """The layers of ``shapes`` (layer -> its shapes) that hold objects, not walls
-    (object_layers), made furniture layers with a note; their names."""
-    found = object_layers(d, shapes, radius, single)
+    (object_layers; ``around``: the solid of the other walls), made furniture layers
+    with a note; their names."""
+    found = object_layers(d, shapes, radius, single, around)
     for la, what in found.items():
         role[la], how[la] = "furniture", "by shape"
         d.notes.append(f"{la}: {what} that close no room: objects, not walls (furniture_heights gives their "
@@ -131,7 +133,9 @@ def _walls_by_geometry(d: Drawing, parts: dict, role: dict, radius: float, singl
     stats = layer_pairs(by_line, by_fill)
     chosen = wall_layers_by_geometry(stats, {n: single_line_rooms(ls) for n, ls in straight.items()})
     things = [sh for sh in parts.get("none", []) + parts.get("other", []) if sh.layer in chosen]
-    for n in _objects(d, {n: [sh for sh in things if sh.layer == n] for n in chosen}, role, {}, radius, single):
+    named = closing_solid(*lines_fills(parts.get("wall", [])), radius, single)
+    for n in _objects(d, {n: [sh for sh in things if sh.layer == n] for n in chosen}, role, {}, radius, single,
+                      named):
         del chosen[n]
     if not chosen:
         return None

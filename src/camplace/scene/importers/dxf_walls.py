@@ -178,9 +178,18 @@ def door_leaves(lines: list, arcs: list) -> np.ndarray:
 def encloses_room(solid) -> bool:
     """True when wall solids (m) enclose a free area of at least MIN_ROOM_FACE_M2 that is
     wider on average than a wall (a room, not the strip between two faces)."""
+    return rooms_closed(solid) > 0
+
+
+def rooms_closed(solid, bridge: float = 0.0) -> int:
+    """How many free areas wall solids (m) enclose, each at least MIN_ROOM_FACE_M2 and
+    wider on average than a wall, once gaps up to ``bridge`` m (doorways) are closed."""
+    if bridge > 0 and not solid.is_empty:
+        d = bridge / 2
+        solid = shapely.union_all([solid, solid.buffer(d, join_style="mitre").buffer(-d, join_style="mitre")])
     filled = shapely.union_all([Polygon(q.exterior) for q in polygons_of(solid)] or [Polygon()])
-    return any(q.area >= MIN_ROOM_FACE_M2 and 2 * q.area > PAIR_M[1] * q.length
-               for q in polygons_of(filled.difference(solid)))
+    return sum(1 for q in polygons_of(filled.difference(solid))
+               if q.area >= MIN_ROOM_FACE_M2 and 2 * q.area > PAIR_M[1] * q.length)
 
 
 def wall_layers_by_geometry(stats: dict[str, LayerPairs],
