@@ -91,6 +91,7 @@ def test_wrong_unit_without_evidence_ends_in_one_line_naming_the_fix(files, tmp_
     code, text = run_cli(["scene", "import", files["unit bare"], "--out", tmp_path / "s.yaml"], monkeypatch, capsys)
     lines = [ln for ln in text.strip().splitlines() if ln.strip()]
     assert code == 2 and len(lines) == 1 and "(--units m)" in lines[0] and "--storey" not in lines[0], text
+    assert "--units:" not in lines[0]  # no prefix as if the user had given --units
     assert not (tmp_path / "s.yaml").exists()
     assert read_plan(files["unit bare"], units="m").used["units"] == "m (given)"
 

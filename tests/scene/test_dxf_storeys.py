@@ -37,6 +37,15 @@ def test_every_plan_is_a_storey_in_the_sheets_coordinates(sheets):
         assert len(got.scene["zones"]) == rooms
 
 
+def test_a_title_outside_the_plan_names_it_before_a_room_text_inside(tmp_path):
+    import ezdxf
+
+    doc = ezdxf.readfile(ds.draw_two_storeys(tmp_path / "house.dxf"))
+    doc.modelspace().add_text("Basement store", height=0.2, dxfattribs={"layer": "A-ANNO-TEXT", "insert": (2, 4)})
+    doc.saveas(tmp_path / "store.dxf")
+    assert [name for name, _, _ in read_storey_plans(tmp_path / "store.dxf")] == ["GROUND FLOOR", "FIRST FLOOR"]
+
+
 def test_plans_without_titles_are_plan_1_to_n_left_to_right(sheets):
     found = read_storey_plans(sheets["bare"])
     assert [name for name, _, _ in found] == ["plan-1", "plan-2"]

@@ -94,8 +94,9 @@ def level_name(text: str) -> str | None:
 
 
 def _name_levels(plans: list[Plan], labels: list) -> None:
-    """Each plan named by the level a text near it names (the nearest such text, and no
-    plan nearer to it), unless two plans would share a name."""
+    """Each plan named by the level a text near it names (no plan nearer to it; a title
+    outside the plan before a text inside it, a taller text first, then the nearer),
+    unless two plans would share a name."""
     if not labels:
         return
     pts = np.asarray([lb.point for lb in labels], dtype=object)
@@ -103,7 +104,8 @@ def _name_levels(plans: list[Plan], labels: list) -> None:
     near = np.array([max(NEAR_M, NEAR_SHARE * span(p.region)) for p in plans])
     names: list[str | None] = []
     for i, p in enumerate(plans):
-        ranked = [j for j in np.argsort(dist[i]) if dist[i, j] <= near[i] and dist[:, j].argmin() == i]
+        ranked = sorted((j for j in range(len(labels)) if dist[i, j] <= near[i] and dist[:, j].argmin() == i),
+                        key=lambda j: (dist[i, j] == 0, -labels[j].height, dist[i, j]))
         names.append(next((nm for j in ranked if (nm := level_name(labels[j].text))), None))
     for p, nm in zip(plans, names):
         if nm and sum(1 for x in names if x and x.upper() == nm.upper()) == 1:
