@@ -31,7 +31,9 @@ def files(tmp_path_factory):
     (ds.ART_LAYER, None), ("Murales", None), ("Wallpaper", None), ("MURS_PORTEURS", "wall"), ("MURA", "wall"),
     ("Walls", "wall"), ("TABIQUES", "wall"), ("PARTITIONS", "wall"), ("A-ANNO-TEXT", "annotation"),
     ("DEMOLITION", "annotation"), ("STAIRCASE", "other"), ("HABITACIONES", "room"), ("Colonne", "column"),
-    ("A-GLAZ", "window"), ("Einrichtung", "furniture")])
+    ("A-GLAZ", "window"), ("Einrichtung", "furniture"), ("TITLEBLOCK", "annotation"), ("GRIDLINES", "annotation"),
+    ("Schriftfeld", "annotation"), ("Murature portanti", "wall"), ("Tamponamenti", "wall"), ("AREE", "room"),
+    ("POTEAUX", "column"), ("CURTAINWALL", "window")])
 def test_layer_words_are_whole_words(name, role):
     assert layer_role(name) == role
 
