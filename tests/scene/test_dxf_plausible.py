@@ -14,7 +14,7 @@ pytest.importorskip("ezdxf")
 
 from camplace.core.errors import InputError  # noqa: E402
 from camplace.scene.importers import read_plan  # noqa: E402
-from camplace.scene.importers.dxf_checks import printed_area  # noqa: E402
+from camplace.scene.importers.area_text import printed_area  # noqa: E402
 from camplace.scene.importers.dxf_layers import layer_role  # noqa: E402
 from tests.scene import dxf_sheets as ds  # noqa: E402
 
@@ -140,9 +140,13 @@ def test_printed_area_reads_only_areas(text, area):
     assert printed_area(text) == (pytest.approx(area) if area is not None else None)
 
 
-@given(st.decimals(min_value="0.5", max_value="9999", places=2), st.sampled_from(["帖", "畳", " jō", " JO", " tatami"]))
+@given(st.decimals(min_value="0.5", max_value="9999", places=2),
+       st.sampled_from(["帖", "畳", " jō", " JO", " tatami"]))
 def test_tatami_counts_are_never_areas(value, suffix):
-    assert printed_area(f"{value}{suffix}") is None
+    """Neither in a DXF's texts nor in a plan image's OCR lines."""
+    from camplace.scene.importers import image_ocr
+
+    assert printed_area(f"{value}{suffix}") is None and image_ocr.printed_area(f"{value}{suffix}") is None
 
 
 @given(st.decimals(min_value="0.5", max_value="9999", places=2),

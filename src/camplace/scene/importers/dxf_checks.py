@@ -3,7 +3,8 @@ against what was read of it (m).
 
 - Area texts (``28.51 m²``, ``mq=28.51``, ``NGF: 24,35``, ``120 sq ft``) are printed
   areas; dimension strings and tatami counts (``6帖``, ``6畳``, ``6 jō``) never are
-  (printed_area). A bare number counts only beside a room's name (room_printed_areas).
+  (area_text.printed_area). A bare number counts only beside a room's name
+  (room_printed_areas).
 - Those texts against the closed outlines of the drawing tell its unit
   (unit_from_areas): a file whose $INSUNITS says mm but that is drawn in metres is read
   in metres, with a note, when two texts or more agree with the outlines in one unit
@@ -25,46 +26,14 @@ from shapely.geometry import LineString, Polygon
 
 from camplace.core.errors import InputError
 from camplace.scene.importers import UNITS_M, polygons_of
-from camplace.scene.importers.dxf_layers import normalise
+from camplace.scene.importers.area_text import printed_area
 
-SQ_FT_M2 = 0.09290304
 MIN_FOOTPRINT_M2 = 1.0  # a footprint smaller than this is no building: wrong units or no walls
 MIN_FREE_M2 = 1.0  # a storey needs at least this much floor the walls leave free
 AREA_MATCH = (0.02, 0.05)  # a printed area and an outline agree within 2 % or 0.05 m²
 MIN_TEXTS = 2  # texts agreeing with outlines in one unit (and none in another) that prove the unit
 NEAR_NAME = 4.0  # a bare number names a room's area within this many text heights of its name
-_NUM = r"(\d{1,6}(?:[.,]\d{1,3})?)"
-_M2 = r"(?:M\s?2|SQ\.?\s?M|SQM|MQ|QM|M\.Q\.)"
-_FT2 = r"(?:SQ\.?\s?FT|SF|FT\s?2)"
-_WORD = r"(?:AREA|SUPERFICIE|SUPERF|SUP|SURFACE|FLAECHE|NGF|NRF|HNF|NF|GFA|NIA|GIA|A|S|F)\.?"
-_AREA = re.compile(rf"^(?:(?P<w>{_WORD})\s*[:=]?\s*)?(?:(?P<pre>{_M2}|{_FT2})\s*[:=]?\s*)?{_NUM}\s*"
-                   rf"(?P<unit>{_M2}|{_FT2})?\.?$")
-_IN_TEXT = re.compile(rf"(?<![\d.,]){_NUM}\s*(?P<unit>{_M2}|{_FT2})(?![A-Z])|(?<![A-Z])(?P<pre>{_M2}|{_FT2})\s*[:=]?\s*"
-                      rf"(\d{{1,6}}(?:[.,]\d{{1,3}})?)(?![\d])")
-_TATAMI = re.compile(r"帖|畳|疊|(?<![A-Z])JO(?![A-Z])|(?<![A-Z])TATAMI")
 _BARE = re.compile(r"^\d{1,4}[.,]\d{1,2}$")
-
-
-def printed_area(text: str) -> float | None:
-    """The area (m²) a text states: a number with a unit of area (m², m2, sqm, mq, qm;
-    sq ft, sf converted) before or after it, or after an area word ('Area: 28.5',
-    'NGF=24,35'); None for anything else: a dimension ('3.60', '3600'), a tatami count
-    ('6帖', '6畳', '6 jō'), a level ('+0.00')."""
-    t = normalise(text).strip()
-    if not t or _TATAMI.search(t) or "帖" in text or "畳" in text:
-        return None
-    m = _AREA.match(t)
-    if m:
-        unit, number = m.group("unit") or m.group("pre"), m.group(3)
-        if unit is None and (m.group("w") is None or m.group("w").rstrip(".") in ("A", "S", "F")):
-            return None  # a bare number, or 'A=3.6': any quantity
-    else:  # 'Soggiorno mq 28,51', 'Living 28.5 m²': a number with its unit inside a longer text
-        m = _IN_TEXT.search(t)
-        if not m:
-            return None
-        unit, number = m.group("unit") or m.group("pre"), m.group(1) or m.group(4)
-    value = float(number.replace(",", "."))
-    return value * SQ_FT_M2 if unit is not None and re.fullmatch(_FT2, unit) else value
 
 
 @dataclass
