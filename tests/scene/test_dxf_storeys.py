@@ -93,3 +93,22 @@ def test_reading_order_rows_top_to_bottom_left_to_right():
 def test_reading_order_is_a_permutation(rects):
     boxes = [(x, y, x + w, y + h) for x, y, w, h in rects]
     assert sorted(reading_order(boxes)) == list(range(len(boxes)))
+
+
+def test_a_plan_without_floor_is_left_out_and_said(tmp_path):
+    """A block of wall with no floor beside the two storeys (more wall area than either):
+    not the default plan, left out of 'all' with a note."""
+    import ezdxf
+
+    doc = ezdxf.readfile(ds.draw_two_storeys(tmp_path / "house.dxf"))
+    msp = doc.modelspace()
+    for k in range(13):
+        msp.add_line((50, 0.5 * k), (56, 0.5 * k), dxfattribs={"layer": "A-WALL"})
+    for x in (50, 56):
+        msp.add_line((x, 0), (x, 6), dxfattribs={"layer": "A-WALL"})
+    doc.saveas(tmp_path / "block.dxf")
+    got = read_plan(tmp_path / "block.dxf")
+    assert _box(got)[0] == pytest.approx(ds.TWO_FIRST_X, abs=0.01) and "plan-3 has none" in got.used["plans"]
+    found = read_storey_plans(tmp_path / "block.dxf")
+    assert [name for name, _, _ in found] == ["GROUND FLOOR", "FIRST FLOOR"]
+    assert any(n.startswith("left out plan-3: the walls fill the footprint") for n in found[0][1].notes)

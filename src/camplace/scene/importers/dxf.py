@@ -80,19 +80,43 @@ def read(path: Path, *, storey: str | None = None, name: str | None = None, wall
     name; default the plan with most walls)."""
     sheet = _sheet(path, **options)
     index, why = choose(sheet.plans, storey, path)
-    return _plan(sheet, index, why, name=name, wall_height=wall_height, ceiling_height=ceiling_height,
-                 heights=heights, coverage=coverage, budget=budget)
+    scene = {"name": name, "wall_height": wall_height, "ceiling_height": ceiling_height, "heights": heights,
+             "coverage": coverage, "budget": budget}
+    try:
+        return _plan(sheet, index, why, **scene)
+    except InputError:
+        if storey is not None or len(sheet.plans) == 1:
+            raise
+        for k in sorted(range(len(sheet.plans)), key=lambda k: -sheet.plans[k].walls_m2)[1:]:  # the next that imports
+            try:
+                return _plan(sheet, k, f"most walls of the plans with a floor; {sheet.plans[index].name} has none",
+                             **scene)
+            except InputError:
+                continue
+        raise
 
 
 def read_storeys(path: Path, *, storey: str | None = None, name: str | None = None, wall_height=None,
                  ceiling_height=None, heights=None, coverage=None, budget=None,
                  **options) -> list[tuple[str, PlanImport]]:
     """(storey name, what was understood) of every plan drawn on the sheet, in reading
-    order (dxf_plans), each in the sheet's coordinates."""
+    order (dxf_plans), each in the sheet's coordinates; a plan that cannot be a storey
+    (no floor) is left out and named in the others' notes (its error raised when no plan
+    can)."""
     sheet = _sheet(path, **options)
-    return [(p.name, _plan(sheet, i, "storey 'all'", name=name and f"{name} {p.name}", wall_height=wall_height,
-                           ceiling_height=ceiling_height, heights=heights, coverage=coverage, budget=budget))
-            for i, p in enumerate(sheet.plans)]
+    out, failed = [], []
+    for i, p in enumerate(sheet.plans):
+        try:
+            out.append((p.name, _plan(sheet, i, "storey 'all'", name=name and f"{name} {p.name}",
+                                      wall_height=wall_height, ceiling_height=ceiling_height, heights=heights,
+                                      coverage=coverage, budget=budget)))
+        except InputError as err:
+            failed.append((p.name, err))
+    if not out:
+        raise failed[0][1]
+    for _, got in out:
+        got.notes += [f"left out {n}: {str(err).split(': ', 1)[-1]}" for n, err in failed]
+    return out
 
 
 def storey_elevations(path: Path, units=None) -> dict[str, float]:

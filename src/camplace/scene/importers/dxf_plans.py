@@ -1,8 +1,8 @@
 """Several plans on one DXF sheet (issue 33): a ground floor and a first floor drawn side
 by side become one storey each. The walls, glass and columns cluster into buildings
-(dxf_walls.building_clusters); every cluster with at least PLAN_SHARE of the largest
-one's wall area and a building's size is a plan (a title block's key plan, a legend or a
-detail is not). Plans are ordered left to right, then top to bottom (rows of plans
+(dxf_walls.building_clusters); every cluster with walls whose extent (its pieces grown
+by half the gap, holes filled) is at least PLAN_SHARE of the largest one's and a
+building's size is a plan (a title block's key plan, a legend or a detail is not). Plans are ordered left to right, then top to bottom (rows of plans
 whose heights overlap), named plan-1..n, or by the level a text near them names
 ("Ground floor", "Erdgeschoss", "Piano terra", "Level 1", ...).
 """
@@ -20,7 +20,7 @@ from camplace.core.errors import InputError
 from camplace.scene.importers.dxf_layers import normalise
 from camplace.scene.importers.dxf_walls import building_clusters, span
 
-PLAN_SHARE = 0.25  # a cluster with at least this share of the largest one's wall area is a plan of its own
+PLAN_SHARE = 0.25  # a cluster with at least this share of the largest one's extent (m²) is a plan of its own
 MIN_PLAN_M = 3.0  # ... and at least this wide (m)
 NEAR_SHARE = 0.2  # a text names a plan's level within this share of the plan's size (at least NEAR_M) of it
 NEAR_M = 3.0
@@ -56,8 +56,9 @@ def find_plans(pieces: list, weights: list[float], labels: list) -> list[Plan]:
     blobs, blob_of, total = building_clusters(pieces, weights)
     if not blobs:
         return []
-    big = float(total.max())
-    keep = [k for k in range(len(blobs)) if total[k] >= PLAN_SHARE * big and span(blobs[k]) >= MIN_PLAN_M]
+    size = np.array([Polygon(b.exterior).area for b in blobs])  # a plan's extent, not its ink
+    keep = [k for k in range(len(blobs)) if total[k] > 0 and size[k] >= PLAN_SHARE * size[total > 0].max()
+            and span(blobs[k]) >= MIN_PLAN_M]
     keep = keep or [int(np.argmax(total))]
     regions = [Polygon(blobs[k].exterior) for k in keep]
     order = reading_order([r.bounds for r in regions])
