@@ -101,3 +101,29 @@ def test_several_plan_files_need_elevations(building, tmp_path, monkeypatch, cap
     code, text = run_cli(["run", building, building, "--elevations", "0", "--out", tmp_path / "o"], monkeypatch,
                          capsys)
     assert code == 2 and "--elevations: 1 value(s) for 2 plan file(s)" in text
+
+
+@pytest.mark.parametrize("cmd", [["run", "{ifc}", "--out", "{tmp}/out"], ["scene", "import", "{ifc}", "--out",
+                                                                            "{tmp}/site.yaml"]])
+def test_unknown_storey_is_one_line_exit_2_nothing_written(building, tmp_path, monkeypatch, capsys, cmd):
+    args = [a.format(ifc=building, tmp=tmp_path) for a in cmd] + ["--storey", "Attic"]
+    code, text = run_cli(args, monkeypatch, capsys)
+    assert code == 2 and "Attic" in text and "'Ground Floor', 'First Floor', 'Roof'" in text
+    assert len(text.strip().splitlines()) == 1 and list(tmp_path.iterdir()) == []
+
+
+def test_storey_all_on_a_dxf_plan_gives_its_plans(tmp_path, monkeypatch, capsys):
+    """A DXF sheet's plans are its storeys (issue 33): one plan, one scene file; a plan it
+    does not draw is refused in one line naming the ones it has."""
+    from tests.scene.plan_drawings import draw_grid_dxf
+
+    dxf = draw_grid_dxf(tmp_path / "plan.dxf", B)
+    code, text = run_cli(["--quiet", "scene", "import", dxf, "--storey", "all", "--out", tmp_path / "site.yaml"],
+                         monkeypatch, capsys)
+    assert code == 0, text
+    assert sorted(p.name for p in tmp_path.iterdir() if p.suffix == ".yaml") == ["site.yaml"]
+    assert list(yaml.safe_load((tmp_path / "site.yaml").read_text())["storeys"]) == ["plan-1"]
+    code, text = run_cli(["scene", "import", dxf, "--storey", "plan-2", "--out", tmp_path / "two.yaml"], monkeypatch,
+                         capsys)
+    assert code == 2 and "--storey" in text and "it has plan-1" in text and len(text.strip().splitlines()) == 1
+    assert not (tmp_path / "two.yaml").exists()

@@ -36,9 +36,10 @@ PAGE_OPT = typer.Option(None, "--page", help="PDF plans: the page to read (1-bas
 REF_OPT = typer.Option(None, "--ref", help="Plan images: two points 'x1,y1,x2,y2,DIST' (pixels, metres) for the scale.")
 STOREY_OPT = typer.Option(None, "--storey", help="IFC: the IfcBuildingStorey name (default: the storey a user plans, "
                           "most rooms, never a roof or foundation level); plan images: plan-N, the N-th plan on a "
-                          "sheet of several side by side (default: the one with most rooms); 'all' or 'A,B': every "
-                          "storey with rooms, or those named, as one building (one budget, one run; scene import: "
-                          "one scene with storeys:).")
+                          "sheet of several side by side (default: the one with most rooms); DXF: plan-N or the "
+                          "level a title names, e.g. 'First floor' (default: the plan with most walls); 'all' or "
+                          "'A,B': every storey with rooms, or those named, as one building (one budget, one run; "
+                          "scene import: one scene with storeys:).")
 WALL_LAYERS_OPT = typer.Option(None, "--wall-layers", help="DXF: wall layer patterns, comma-separated fnmatch, "
                                "case-insensitive, replacing the defaults (default: layers named like walls in the "
                                "common conventions and languages - A-WALL, WALL, WAND, MUR, MURO, PARED, ... - else "

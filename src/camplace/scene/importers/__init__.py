@@ -102,10 +102,10 @@ def import_plan(path: str | Path, **options: Any) -> dict:
 
 def read_storey_plans(path: str | Path, **options: Any) -> list[tuple[str, PlanImport, float]]:
     """(storey name, what was understood, floor elevation m) of every storey of an IFC
-    file, or of every plan drawn side by side on a plan image (storey 'all'; options as
-    read_plan). Each scene has its floor at z = 0."""
-    if plan_kind(path) not in (None, "ifc", "image"):
-        raise InputError(f"storey: 'all' belongs to IFC files and plan images; {Path(path).name} is a "
+    file, or of every plan drawn side by side on a plan image or a DXF sheet (storey
+    'all'; options as read_plan). Each scene has its floor at z = 0."""
+    if plan_kind(path) not in (None, "ifc", "image", "dxf"):
+        raise InputError(f"storey: 'all' belongs to IFC files, DXF sheets and plan images; {Path(path).name} is a "
                          f"{plan_kind(path)} plan with one storey", option="storey")
     module, p, given = _importer(path, dict(options, storey="all"))
     levels = module.storey_elevations(p, units=given.get("units"))
