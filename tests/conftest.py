@@ -30,6 +30,25 @@ def box_room(obstacles=(), targets=None, mounts=None, footprint=None, height=3.0
     })
 
 
+def two_storeys(upper: float = 3.5):
+    """A generated two-storey building (issue 33): Ground 8 m x 6 m, 'Level 1' 6 m x 6 m at
+    ``upper`` m with a 1 m x 1 m floor opening at (2..3, 2..3) and a desk box; both 3 m tall,
+    2 cameras each (storey budgets), one layer of 0.5 m targets at 1 m, occupancy 0.1 m."""
+    cam = [{"name": "cam", "resolution": [640, 480], "fov_deg": [90, 70], "max_range": 10.0}]
+    return parse_scene({
+        "name": "two-storeys", "voxel_size": 0.5, "occupancy_resolution": 0.1, "cameras": cam,
+        "targets": [{"name": "floor", "kind": "volume", "heights": [1.0], "coverage": 1}],
+        "mounts": [{"kind": "ceiling_grid", "camera": "cam", "spacing": 2.0, "yaw_deg": [0, 180], "pitch_deg": [45]}],
+        "storeys": {
+            "Ground": {"elevation": 0.0, "room": {"footprint": [[0, 0], [8, 0], [8, 6], [0, 6]], "height": 3.0},
+                       "budget": 2},
+            "Level 1": {"elevation": upper, "room": {"footprint": [[0, 0], [6, 0], [6, 6], [0, 6]], "height": 3.0},
+                        "floor_openings": [[[2, 2], [3, 2], [3, 3], [2, 3]]], "budget": 2,
+                        "obstacles": [{"name": "desk", "box": {"min": [4, 4, 0], "max": [5, 5, 1.0]}}]},
+        },
+    })
+
+
 def builtin_inputs(name: str):
     """(scene, targets, candidates) of a built-in scene, before visibility."""
     from camplace.spec.builtin import resolve_scene

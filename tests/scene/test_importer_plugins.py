@@ -81,8 +81,8 @@ def test_an_option_the_format_does_not_take_is_refused_in_one_vocabulary(plugin,
 
 
 def test_storey_all_needs_an_importer_that_reads_storeys(plugin, tmp_path):
-    with pytest.raises(InputError, match=r"^storey: 'all' belongs to formats with several storeys \(IFC \(BIM\) models; plan "
-                                         r"images and PDF pages\); "
+    with pytest.raises(InputError, match=r"^storey: 'all' belongs to formats with several storeys \(IFC \(BIM\) models; DXF "
+                                         r"drawings; plan images and PDF pages\); "
                                          r"two.rooms is a rooms plan with one storey$"):
         read_storey_plans(write_rooms(tmp_path / "two.rooms"))
 

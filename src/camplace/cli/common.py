@@ -40,7 +40,8 @@ FLAGS = {
     "viewpoints": "--viewpoint", "out": "--out", "frame": "--frame", "paper": "--paper",
     "cloud": "",  # the space file: the message names it already
     "units": "--units", "wall_height": "--wall-height", "ceiling_height": "--ceiling-height", "scale": "--scale",
-    "ref": "--ref", "storey": "--storey", "wall_layers": "--wall-layers", "furniture_heights": "--layer-height",
+    "ref": "--ref", "storey": "--storey", "wall_layers": "--wall-layers", "wall_classes": "--wall-classes",
+    "furniture_heights": "--layer-height",
     "doors": "--doors", "glass": "--glass", "threshold": "--threshold", "max_opening": "--max-opening",
     "min_room_area": "--min-room-area", "ocr": "--no-ocr", "page": "--page",
     **CROWD_FLAGS,
@@ -67,7 +68,8 @@ def word_error(err: CamplaceError) -> str:
     """The error's line for the command line. With ``err.option`` set, the library's
     leading 'param:' (or '(param)') becomes the flag, else the flag is put in front
     (an option of "" - the command's argument - only drops 'param: '); 'param=value'
-    advice and the quoted 'param' in the message are worded as flags too."""
+    advice and the quoted 'param' in the message are worded as flags too; a message that
+    names its fix as '(param=value)' keeps no prefix (the user may not have given it)."""
     msg = str(err)
     opt = getattr(err, "option", None)
     if opt is None or opt not in FLAGS:
@@ -80,6 +82,8 @@ def word_error(err: CamplaceError) -> str:
         return flag + msg[len(opt):] if flag else msg[len(opt) + 1:].lstrip()
     if f"({opt})" in msg:
         return msg.replace(f"({opt})", f"({flag})") if flag else msg
+    if flag and re.search(rf"\({re.escape(flag)} [^)\s]+\)", msg):  # ends in the fix, '(--units m)': no prefix
+        return msg
     return f"{flag}: {msg}" if flag else msg
 
 

@@ -65,13 +65,17 @@ PAGE_OPT = typer.Option(None, "--page", help="PDF plans: the page to read (1-bas
 REF_OPT = typer.Option(None, "--ref", help="Plan images: two points 'x1,y1,x2,y2,DIST' (pixels, metres) for the scale.")
 STOREY_OPT = typer.Option(None, "--storey", help="IFC: the IfcBuildingStorey name (default: the storey a user plans, "
                           "most rooms, never a roof or foundation level); plan images: plan-N, the N-th plan on a "
-                          "sheet of several side by side (default: the one with most rooms); 'all': every storey "
-                          "or plan with rooms (run: DIR/<storey>/ each and DIR/storeys.json; scene import: "
-                          "OUT-<storey>.yaml each).")
+                          "sheet of several side by side (default: the one with most rooms); DXF: plan-N or the "
+                          "level a title names, e.g. 'First floor' (default: the plan with most walls); 'all' or "
+                          "'A,B': every storey with rooms, or those named, as one building (one budget, one run; "
+                          "scene import: one scene with storeys:).")
 WALL_LAYERS_OPT = typer.Option(None, "--wall-layers", help="DXF: wall layer patterns, comma-separated fnmatch, "
                                "case-insensitive, replacing the defaults (default: layers named like walls in the "
                                "common conventions and languages - A-WALL, WALL, WAND, MUR, MURO, PARED, ... - else "
                                "the layers whose lines pair like wall faces; the summary says which were taken).")
+WALL_CLASSES_OPT = typer.Option(None, "--wall-classes", help="IFC: classes whose elements are walls, comma-separated "
+                                "(e.g. IfcBeam,IfcPlate), beside IfcWall and the elements shaped like walls (tall, "
+                                "thin, standing on the floor, closing rooms); the summary says which were taken.")
 LAYER_HEIGHT_OPT = typer.Option(None, "--layer-height", help="DXF: LAYER=M, the height (m) of the furniture blocks on "
                                 "layers matching LAYER; repeat for several.")
 DOORS_OPT = typer.Option(None, "--doors", help="IFC, DXF: open (default; doors do not occlude) or closed.")
@@ -85,7 +89,8 @@ MIN_ROOM_OPT = typer.Option(None, "--min-room-area", help="Plan images: the smal
 NO_OCR_OPT = typer.Option(False, "--no-ocr", help="Plan images: no OCR (rooms named room-1..n; give --scale or --ref).")
 PLAN_FLAGS = {"units": "--units", "wall_height": "--wall-height", "ceiling_height": "--ceiling-height",
               "scale": "--scale", "ref": "--ref", "storey": "--storey", "wall_layers": "--wall-layers",
-              "layer_height": "--layer-height", "doors": "--doors", "glass": "--glass", "threshold": "--threshold",
+              "wall_classes": "--wall-classes", "layer_height": "--layer-height", "doors": "--doors",
+              "glass": "--glass", "threshold": "--threshold",
               "max_opening": "--max-opening", "min_room_area": "--min-room-area", "no_ocr": "--no-ocr",
               "page": "--page"}
 
@@ -109,6 +114,7 @@ class ImportOptions:
     ref: str | None = None
     storey: str | None = None
     wall_layers: str | None = None
+    wall_classes: str | None = None
     layer_height: list[str] | None = None
     doors: str | None = None
     glass: str | None = None
@@ -128,7 +134,8 @@ class ImportOptions:
                     ref=floats(self.ref, "--ref", 5) if self.ref else None, storey=self.storey, page=self.page,
                     heights=floats(self.heights, "--heights"), coverage=self.coverage, budget=budget,
                     wall_layers=tuple(p.strip() for p in self.wall_layers.split(",") if p.strip())
-                    if self.wall_layers else None, furniture_heights=layer_heights(self.layer_height),
+                    if self.wall_layers else None, wall_classes=self.wall_classes or None,
+                    furniture_heights=layer_heights(self.layer_height),
                     doors=self.doors, glass=self.glass, threshold=self.threshold, max_opening=self.max_opening,
                     min_room_area=self.min_room_area, ocr=False if self.no_ocr else None)
 

@@ -18,6 +18,7 @@ from camplace.cameras.candidates import Candidates, ypr_from_rotation
 from camplace.core.errors import InputError, Interrupted
 from camplace.core.files import AtomicBatch, atomic_savez, atomic_write_json, atomic_write_text
 from camplace.metrics.coverage import Metrics
+from camplace.outputs.storeys import cameras_ifc_wanted, mark_storeys, write_run_cameras_ifc
 from camplace.outputs.bom import recording_load, selected_models
 from camplace.outputs.writers import OutputResult, write_registered
 from camplace.scene.frames import map_poses
@@ -203,6 +204,7 @@ def write_outputs(out_dir: str | Path, scene_name: str, vis: Visibility, placeme
     T = getattr(scene, "input_from_scene", None)
     days = getattr(getattr(getattr(scene, "spec", None), "recording", None), "retention_days", None)
     pdict = placement_dict(scene_name, placement, budget, vis.candidates, T, frame, days)
+    mark_storeys(pdict, scene)  # a building: each camera's storey (issue 33)
     builtin = (getattr(scene, "info", None) or {}).get("builtin")
     if builtin:  # the built-in scene as named ('warehouse:1000'): camplace serve reopens the run with it
         pdict = {**dict(list(pdict.items())[:1]), "builtin_scene": str(builtin), **pdict}
@@ -221,6 +223,10 @@ def write_outputs(out_dir: str | Path, scene_name: str, vis: Visibility, placeme
     result = OutputResult(pdict, _metrics_dict(metrics, timings, repeatable), scene_name, placement, metrics,
                           problem, vis, scene, None, timings, frame, repeatable, dict(paths))
     paths.update(write_registered(out, result))
+    if cameras_ifc_wanted(scene):  # a building or an IFC input: the cameras back into the BIM model (issue 33)
+        in_scene = pdict if frame == "scene" else placement_dict(scene_name, placement, budget, vis.candidates, T)
+        mark_storeys(in_scene, scene)
+        paths.update(write_run_cameras_ifc(out, in_scene, scene, selected_models(vis.candidates, placement.selected)))
     if not report:
         return paths
     if plan:
@@ -235,6 +241,7 @@ def write_outputs(out_dir: str | Path, scene_name: str, vis: Visibility, placeme
         # the report's pictures and mount table are drawn in the scene frame; exports follow ``frame``
         shown = pdict if frame == "scene" else placement_dict(scene_name, placement, budget, vis.candidates, T,
                                                               retention_days=days)
+        mark_storeys(shown, scene)
         _write_report_set(out, vis, placement, shown, metrics, report_timings, scene, repeatable,
                           paper if plan else None, T if frame == "input" else None, parts, tuple(paths))
         paths.update(parts.paths)

@@ -95,8 +95,8 @@ def import_plan(path: str | Path, **options: Any) -> dict:
 
 def read_storey_plans(path: str | Path, **options: Any) -> list[tuple[str, PlanImport, float]]:
     """(storey name, what was understood, floor elevation m) of every storey of a file whose
-    importer reads storeys (IFC; the plans drawn side by side on a plan image; a plugin with
-    ``read_storeys``), storey 'all'; options as read_plan. Each scene has its floor at z = 0."""
+    importer reads storeys (IFC; the plans drawn side by side on a plan image or a DXF sheet;
+    a plugin with ``read_storeys``), storey 'all'; options as read_plan. Each scene has its floor at z = 0."""
     kind = plan_kind(path)
     if kind is not None and not callable(getattr(IMPORTERS[kind], "read_storeys", None)):
         storeyed = [getattr(IMPORTERS[n], "label", None) or n for n in IMPORTERS
