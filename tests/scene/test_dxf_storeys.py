@@ -5,6 +5,7 @@ their title names, else plan-1..n; --storey chooses one."""
 from __future__ import annotations
 
 import pytest
+import yaml
 from hypothesis import given
 from hypothesis import strategies as st
 from shapely.geometry import Polygon
@@ -69,7 +70,13 @@ def test_storey_all_on_the_command_line(sheets, tmp_path, monkeypatch, capsys):
     code, text = run_cli(["--quiet", "scene", "import", sheets["titled"], "--storey", "all", "--out",
                           tmp_path / "house.yaml"], monkeypatch, capsys)
     assert code == 0, text
-    assert sorted(p.name for p in tmp_path.glob("*.yaml")) == ["house-first-floor.yaml", "house-ground-floor.yaml"]
+    assert sorted(p.name for p in tmp_path.glob("*.yaml")) == ["house.yaml"]  # one building (issue 33)
+    data = yaml.safe_load((tmp_path / "house.yaml").read_text())
+    assert list(data["storeys"]) == ["GROUND FLOOR", "FIRST FLOOR"]
+    assert data["storeys"]["FIRST FLOOR"]["elevation"] > data["storeys"]["GROUND FLOOR"]["elevation"]
+    ground = [p[0] for p in data["storeys"]["GROUND FLOOR"]["room"]["footprint"]]
+    first = [p[0] for p in data["storeys"]["FIRST FLOOR"]["room"]["footprint"]]
+    assert min(first) == pytest.approx(min(ground), abs=0.01)  # side by side on the sheet, stacked in the building
 
 
 @pytest.mark.parametrize("text, name", [

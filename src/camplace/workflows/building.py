@@ -94,7 +94,7 @@ def building_scene(name: str, storeys: list[tuple[str, dict, float, list]], budg
         if k + 1 < len(order):
             gap = order[k + 1][2] - elev
             if room["height"] > gap - SLAB_M:
-                room["height"] = round(max(gap - SLAB_M, 0.5 * gap), 4)
+                room["height"] = round(float(max(gap - SLAB_M, 0.5 * gap)), 4)
         entry = {"elevation": float(elev), "room": room, "obstacles": _clip_obstacles(scene.get("obstacles", []),
                                                                                        room["height"]),
                  "zones": scene.get("zones", [])}
@@ -102,7 +102,7 @@ def building_scene(name: str, storeys: list[tuple[str, dict, float, list]], budg
             if scene.get(key) is not None and scene[key] != first.get(key):
                 entry[key] = scene[key]
         if openings:
-            entry["floor_openings"] = [list(map(list, o)) for o in openings]
+            entry["floor_openings"] = [[[float(v) for v in p] for p in o] for o in openings]
         out[st_name] = entry
     data["storeys"] = out
     return data
@@ -175,7 +175,7 @@ def _moved(obj, d: np.ndarray, kind: str | None = None):
     """A scene mapping (or part of one) moved by d (2,) m in plan: footprints, polygons,
     holes, boxes (x, y of min / max), wall segments; everything else as is."""
     def pts(ps):
-        return [[round(float(p[0]) + d[0], 4), round(float(p[1]) + d[1], 4), *p[2:]] for p in ps]
+        return [[round(float(p[0] + d[0]), 4), round(float(p[1] + d[1]), 4), *p[2:]] for p in ps]
 
     if kind == "points":
         return pts(obj)
