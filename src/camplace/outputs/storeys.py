@@ -68,3 +68,20 @@ def write_run_cameras_ifc(out_dir, pdict: dict, scene, models: list) -> dict:
     write_cameras_ifc(path, cams, storeys, Path(source["file"]) if source.get("file") else None,
                       project=str(pdict.get("scene", "camplace")))
     return {"cameras.ifc": path}
+
+
+def cameras_ifc_writer(out_dir, result) -> list:
+    """The ``cameras-ifc`` output writer (entry point of camplace.outputs, issue 35): cameras.ifc
+    for a building or an IFC input (write_run_cameras_ifc), nothing otherwise or without a
+    scene (``camplace solve``). ``result``: camplace.outputs.writers.OutputResult; a plan's
+    input frame is its scene frame (plan imports are not moved), so the poses are used as
+    placement.json has them."""
+    from camplace.outputs.bom import selected_models
+
+    scene, vis = result.scene, result.visibility
+    if scene is None or vis is None or result.solution is None or not cameras_ifc_wanted(scene):
+        return []
+    pdict = dict(result.placement)
+    mark_storeys(pdict, scene)
+    models = selected_models(vis.candidates, result.solution.selected)
+    return list(write_run_cameras_ifc(out_dir, pdict, scene, models).values())

@@ -16,9 +16,9 @@ import numpy as np
 
 from camplace.cameras.candidates import Candidates, ypr_from_rotation
 from camplace.core.errors import InputError, Interrupted
-from camplace.core.files import AtomicBatch, atomic_savez, atomic_write_json, atomic_write_text
+from camplace.core.files import AtomicBatch, atomic_write_json
 from camplace.metrics.coverage import Metrics
-from camplace.outputs.storeys import cameras_ifc_wanted, mark_storeys, write_run_cameras_ifc
+from camplace.outputs.storeys import mark_storeys
 from camplace.outputs.bom import recording_load, selected_models
 from camplace.outputs.writers import OutputResult, write_registered
 from camplace.scene.frames import map_poses
@@ -223,10 +223,6 @@ def write_outputs(out_dir: str | Path, scene_name: str, vis: Visibility, placeme
     result = OutputResult(pdict, _metrics_dict(metrics, timings, repeatable), scene_name, placement, metrics,
                           problem, vis, scene, None, timings, frame, repeatable, dict(paths))
     paths.update(write_registered(out, result))
-    if cameras_ifc_wanted(scene):  # a building or an IFC input: the cameras back into the BIM model (issue 33)
-        in_scene = pdict if frame == "scene" else placement_dict(scene_name, placement, budget, vis.candidates, T)
-        mark_storeys(in_scene, scene)
-        paths.update(write_run_cameras_ifc(out, in_scene, scene, selected_models(vis.candidates, placement.selected)))
     if not report:
         return paths
     if plan:
