@@ -23,6 +23,7 @@ m). Step by step (image_walls, image_rooms, image_ocr, image_text):
 from __future__ import annotations
 
 import math
+import re
 from collections import Counter
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -34,8 +35,9 @@ from scipy import ndimage
 from camplace.core.errors import InputError
 from camplace.scene.importers import (DEFAULT_CEILING_M, PlanImport, clean_polygons, plan_scene, polygons_of,
                                       prism_obstacles, room_zones, rooms_footprint)
-from camplace.scene.importers.image_ocr import (NUMBER_RE, ocr_engine, read_lines, room_name, room_number,
-                                                text_lines_mask)
+from camplace.scene.importers.image_names import name_rooms
+from camplace.scene.importers.image_ocr import ocr_engine
+from camplace.scene.importers.image_pages import is_pdf, page_count, page_names, page_of_storey
 from camplace.scene.importers.image_read import metres_per_pixel, read_sheet
 from camplace.scene.importers.image_rooms import colour_rooms, free_regions, mask_polygons
 from camplace.scene.importers.image_scale import scale_from_sheet
@@ -44,6 +46,7 @@ from camplace.scene.importers.image_walls import (EIGHT, HOLLOW_WALL_M, LINE_WAL
                                                   otsu_threshold, solid_walls)
 
 HOLLOW_GAIN = 1.25  # the walls read as empty outlines are taken when their rooms are this much larger
+PLAN_RE = re.compile(r"plan-\d+")  # a plan of a sheet, as storeys names it
 WORK_M_PER_PX = 0.01  # images finer than this are read at an integer fraction of their pixels
 OPTIONS = ("scale", "ref", "threshold", "storey", "min_wall_thickness", "max_wall_thickness", "hatch_spacing",
            "max_opening", "min_room_area", "ocr", "page")
@@ -150,7 +153,7 @@ def analyse(path: Path, scale=None, ref=None, threshold=None, min_wall_thickness
         raise InputError(f"{path}: no closed room found (no free region of at least {min_room_area} m² "
                          "enclosed by walls)")
     if engine is not None:
-        _name_rooms(engine, dark, ink, plans)
+        name_rooms(engine, dark, ink, plans)
     return Sheet(s, scale_from, t, how, plans, dark.shape[0], ocr_line, skipped, max_wall_thickness, walls_from)
 
 
@@ -243,53 +246,6 @@ def _colour_split(plan: PlanRooms, rgb: np.ndarray, ink: np.ndarray, s: float, m
     marks = np.pad(marks, [(0, m[0] - marks.shape[0]), (0, m[1] - marks.shape[1])], mode="edge")
     plan.labels, plan.rooms, plan.coloured = colour_rooms(colours, marks, plan.walls, plan.labels, plan.rooms, s,
                                                           min_room_area)
-
-
-def _name_rooms(engine, dark: np.ndarray, ink: np.ndarray, plans: list[PlanRooms]) -> None:
-    """Room names and printed areas from the text lines in or beside each room (a label
-    whose middle falls on no room, e.g. inside the ring around a room number, goes to
-    the nearest room within 1.5 character heights; none on a wall); one OCR call. A room
-    number read for two rooms of a plan stays with the more confident reading (the other is
-    misread); a word may name several rooms (two flats' 'Living Room'), each with its room
-    number where it has one ('Living Room B102', as the IFC import names them), else the
-    zones become 'Living Room', 'Living Room-2'."""
-    lines, n, hc = text_lines_mask(ink)
-    if n == 0:
-        return
-    boxes = ndimage.find_objects(lines)
-    where: dict[int, tuple[int, int]] = {}
-    for i, plan in enumerate(plans):
-        room_at = np.where(np.isin(plan.labels, plan.rooms), plan.labels, 0)
-        gap, (near_r, near_c) = ndimage.distance_transform_edt(room_at == 0, return_indices=True)
-        for k, b in enumerate(boxes, 1):
-            if b is None:
-                continue
-            r, c = (b[0].start + b[0].stop) // 2 - plan.box[0].start, (b[1].start + b[1].stop) // 2 - plan.box[1].start
-            if (0 <= r < room_at.shape[0] and 0 <= c < room_at.shape[1] and gap[r, c] <= 1.5 * hc
-                    and not plan.walls[r, c]):
-                where[k] = (i, int(room_at[near_r[r, c], near_c[r, c]]))
-    found: dict[tuple[int, int], list] = {}
-    for ln in read_lines(engine, dark, ink, lines, sorted(where), hc):
-        k = int(np.max(lines[ln.box[0]:ln.box[2], ln.box[1]:ln.box[3]]))
-        found.setdefault(where[k], []).append(ln)
-    best: dict[tuple, tuple[float, int]] = {}
-    numbers: dict[tuple[int, int], str] = {}
-    for (i, room), got in found.items():
-        name, conf, area = room_name(got, hc)
-        key = (i, name) if name and NUMBER_RE.match(name) else (i, name, room)  # words repeat: 'Bedroom', 'WC'
-        if name and conf > best.get(key, (-1.0, 0))[0]:
-            best[key] = (conf, room)
-        if area is not None:
-            plans[i].printed[room] = area
-        if (number := room_number(got, hc)) is not None and number != name:
-            numbers[(i, room)] = number
-    for (i, name, *_), (_, room) in best.items():
-        plans[i].names[room] = name
-    for i, plan in enumerate(plans):  # a word naming several rooms: with each one's number, as IFC's 'Foyer A101'
-        seen = Counter(plan.names.values())
-        for room, name in plan.names.items():
-            if seen[name] > 1 and (i, room) in numbers:
-                plan.names[room] = f"{name} {numbers[(i, room)]}"
 
 
 def _polygons(plan: PlanRooms, sheet: Sheet, min_area: float):
@@ -399,10 +355,19 @@ def _common(options: dict) -> tuple[dict, dict]:
 
 
 def read(path: Path, **options) -> PlanImport:
-    """What was understood of the plan image (one plan: ``storey`` 'plan-N', else the default)."""
+    """What was understood of the plan image (one plan: ``storey`` 'plan-N', else the
+    default; of a PDF, ``storey`` may name a page as read_storeys names it)."""
     analysis, scene = _common(options)
-    sheet = analyse(path, **analysis)
     storey = options.get("storey")
+    pages = page_names(path) if is_pdf(path) and analysis.get("page") is None else []
+    label = None
+    if storey is not None and len(pages) > 1 and not PLAN_RE.fullmatch(storey):
+        page = page_of_storey(storey, pages)
+        if page is None:
+            raise InputError(f"storey: {path.name} has no page '{storey}'; its pages are {', '.join(pages)} "
+                             "(or 'all')", option="storey")
+        analysis["page"], label, storey = page, pages[page - 1], None
+    sheet = analyse(path, **analysis)
     if storey is None:
         index, why = default_plan(sheet)
     else:
@@ -411,15 +376,52 @@ def read(path: Path, **options) -> PlanImport:
             raise InputError(f"storey: {path.name} has no plan '{storey}'; it has {', '.join(names)} "
                              "(or 'all')", option="storey")
         index, why = names.index(storey), "chosen"
-    return plan_import(path, sheet, index, why, **scene)
+    if label is not None:
+        scene.setdefault("name", f"{path.stem} {label}")
+    got = plan_import(path, sheet, index, why, **scene)
+    if len(pages) > 1 and label is None:
+        got.notes.append(f"{path.name} has {len(pages)} pages ({', '.join(pages)}): page 1 read; choose one with "
+                         "page=N or storey='NAME', or storey='all' for every page")
+    return got
 
 
 def read_storeys(path: Path, **options) -> list[tuple[str, PlanImport]]:
-    """(plan-N, what was understood) of every plan on the sheet that has rooms."""
+    """(name, what was understood) of every plan with rooms: on a sheet, plan-N; of a PDF
+    of several pages (page not given), one storey per page, named by the level its text
+    gives or page-N (image_pages.page_names; 'NAME plan-K' for a page holding several plans)."""
     analysis, scene = _common(options)
+    if is_pdf(path) and analysis.get("page") is None and page_count(path) > 1:
+        return _page_storeys(path, analysis, scene)
     sheet = analyse(path, **analysis)
     return [(f"plan-{i + 1}", plan_import(path, sheet, i, "storey 'all'", **scene))
             for i, p in enumerate(sheet.plans) if p.rooms]
+
+
+def _page_storeys(path: Path, analysis: dict, scene: dict) -> list[tuple[str, PlanImport]]:
+    """One storey per page of a PDF plan set, each in its page's coordinates; a page with
+    no closed room (a cover, a legend) is left out with a note; none with rooms: InputError."""
+    out, left, rows = [], [], []
+    for page, name in enumerate(page_names(path), 1):
+        try:
+            sheet = analyse(path, **dict(analysis, page=page))
+        except InputError as err:
+            if err.option is not None:  # an option that does not suit the pages (its scale): one line
+                raise
+            left.append(f"{name} ({str(err).removeprefix(f'{path}: ')})")
+            continue
+        with_rooms = [i for i, p in enumerate(sheet.plans) if p.rooms]
+        for i in with_rooms:
+            label = name if len(with_rooms) == 1 else f"{name} plan-{i + 1}"
+            got = plan_import(path, sheet, i, f"page {page}", **{"name": f"{path.stem} {label}", **scene})
+            out.append((label, got))
+            rows.append(dict(got.storeys[i], name=label))
+    if not out:
+        raise InputError(f"{path}: no page holds a plan with a closed room: {'; '.join(left)}")
+    for label, got in out:
+        got.storeys = [dict(r, chosen=r["name"] == label) for r in rows]
+        if left:
+            got.notes.append(f"pages left out: {'; '.join(left)}")
+    return out
 
 
 def storey_elevations(path: Path, units=None) -> dict[str, float]:
