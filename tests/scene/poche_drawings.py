@@ -39,16 +39,17 @@ def box_walls(w: float, h: float, t: float, door: tuple[float, float] | None = N
     return south + [(0, h - t, w, h), (0, t, t, h - t), (w - t, t, w, h - t)]
 
 
-def draw_stippled(path: str | Path, t: float = 0.7, w: float = 9.0, h: float = 7.0, seed: int = 0) -> Path:
+def draw_stippled(path: str | Path, t: float = 0.7, w: float = 9.0, h: float = 7.0, seed: int = 0,
+                  dots: bool = True) -> Path:
     """A room w x h m outside whose walls, ``t`` thick, are drawn as masonry poché: a
     thin outline (1 px) round each wall filled with a random stipple of 1-2 px dots (no
-    hatch lines), closed at a 0.9 m door in the south wall. The room's clear area is
-    (w - 2t) x (h - 2t)."""
+    hatch lines; ``dots`` False: empty outlines), closed at a 0.9 m door in the south
+    wall. The room's clear area is (w - 2t) x (h - 2t)."""
     rng = np.random.default_rng(seed)
     im, d, p = _canvas((w, h))
     for x0, y0, x1, y1 in box_walls(w, h, t, door=(w / 2 - 0.45, w / 2 + 0.45)):
         _rect(d, p, x0, y0, x1, y1, outline="black", width=1)
-        n = int((x1 - x0) * (y1 - y0) / 0.004)  # one dot per 40 cm²
+        n = int((x1 - x0) * (y1 - y0) / 0.004) if dots else 0  # one dot per 40 cm²
         for x, y in zip(rng.uniform(x0 + 0.04, x1 - 0.04, n), rng.uniform(y0 + 0.04, y1 - 0.04, n)):
             c, r = p(x, y)
             d.rectangle([c, r, c + int(rng.integers(0, 2)), r], fill="black")
@@ -58,22 +59,22 @@ def draw_stippled(path: str | Path, t: float = 0.7, w: float = 9.0, h: float = 7
 
 def draw_grid_lines(path: str | Path, w: float = 10.0, h: float = 8.0, t: float = 0.3) -> Path:
     """A room w x h m outside (solid walls ``t``, a 0.9 m door south) crossed by column
-    grid lines 0.08 m wide (4 px: as a photo thickens them), two each way, running 2.5 m
+    grid lines 0.12 m wide (6 px: as a photo thickens them), two each way, running 2.5 m
     past the building to a grid bubble, and a dimension line 1 m south of the building
     with extension lines from the wall: none of them is a wall, the room is one."""
     im, d, p = _canvas((w, h))
     for x0, y0, x1, y1 in box_walls(w, h, t, door=(2.0, 2.9)):
         _rect(d, p, x0, y0, x1, y1, fill="black")
-    g = 0.08
+    g = 0.12
     for x in (w / 3, 2 * w / 3):
         _rect(d, p, x - g / 2, -2.5, x + g / 2, h + 2.5, fill="black")
         d.ellipse([*(np.array(p(x - 0.35, h + 3.2))), *(np.array(p(x + 0.35, h + 2.5)))], outline="black", width=4)
     for y in (h / 3, 2 * h / 3):
         _rect(d, p, -2.5, y - g / 2, w + 2.5, y + g / 2, fill="black")
         d.ellipse([*(np.array(p(-3.2 + 0.0, y + 0.35))), *(np.array(p(-2.5, y - 0.35)))], outline="black", width=4)
-    _rect(d, p, 0, -1.04, w, -0.96, fill="black")  # the dimension line ...
+    _rect(d, p, 0, -1.06, w, -0.94, fill="black")  # the dimension line ...
     for x in (0.0, w):
-        _rect(d, p, x - 0.04, -1.3, x + 0.04, -0.05, fill="black")  # ... and its extension lines
+        _rect(d, p, x - 0.06, -1.3, x + 0.06, -0.05, fill="black")  # ... and its extension lines
     im.save(path, dpi=(DPI, DPI))
     return Path(path)
 
@@ -81,13 +82,13 @@ def draw_grid_lines(path: str | Path, w: float = 10.0, h: float = 8.0, t: float 
 def draw_counter(path: str | Path, w: float = 8.0, h: float = 6.0, t: float = 0.3) -> Path:
     """A kitchen w x h m outside (solid walls ``t``, a door south) with a counter 0.6 m
     deep along the north wall from x = 1 to 5 m, and an island 2.0 x 0.9 m in the room,
-    each drawn as a 0.08 m outline (as a photo thickens furniture lines): one room of
+    each drawn as a 0.12 m outline (as a photo thickens furniture lines): one room of
     (w - 2t) x (h - 2t), the counter and island obstacles, not walls."""
     im, d, p = _canvas((w, h))
     for x0, y0, x1, y1 in box_walls(w, h, t, door=(2.0, 2.9)):
         _rect(d, p, x0, y0, x1, y1, fill="black")
     for x0, y0, x1, y1 in ((1.0, h - t - 0.6, 5.0, h - t), (3.0, 2.0, 5.0, 2.9)):
-        _rect(d, p, x0, y0, x1, y1, outline="black", width=4)
+        _rect(d, p, x0, y0, x1, y1, outline="black", width=6)
     im.save(path, dpi=(DPI, DPI))
     return Path(path)
 

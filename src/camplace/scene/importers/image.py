@@ -37,11 +37,12 @@ from camplace.scene.importers import (DEFAULT_CEILING_M, PlanImport, clean_polyg
                                       prism_obstacles, room_zones, rooms_footprint)
 from camplace.scene.importers.image_names import name_rooms
 from camplace.scene.importers.image_ocr import ocr_engine
+from camplace.scene.importers.image_poche import FURNITURE_M, settle
 from camplace.scene.importers.image_pages import is_pdf, page_count, page_names, page_of_storey
 from camplace.scene.importers.image_read import metres_per_pixel, read_sheet
 from camplace.scene.importers.image_rooms import colour_rooms, free_regions, mask_polygons
 from camplace.scene.importers.image_scale import scale_from_sheet
-from camplace.scene.importers.image_walls import (EIGHT, HOLLOW_WALL_M, LINE_WALL_M, REACH_M, bridge_openings,
+from camplace.scene.importers.image_walls import (EIGHT, HOLLOW_WALL_M, LINE_WALL_M, REACH_M,
                                                   brightness, colour_lines, find_plans, ink_threshold, line_walls,
                                                   otsu_threshold, solid_walls)
 
@@ -65,8 +66,9 @@ class PlanRooms:
     """One plan of the sheet: ``box`` (rows, cols slices of the sheet), its ``walls`` and
     ``bridges`` (bool masks in the box), free-region ``labels`` (int, in the box), the
     labels that are ``rooms`` and their ``names`` (None: not read) and printed areas, the
-    pixels of its ``outline`` and the ``enclosed`` mask: the free space inside the outer
-    walls (rooms, stairs, closets)."""
+    pixels of its ``outline``, the ``enclosed`` mask: the free space inside the outer
+    walls (rooms, stairs, closets), the ``objects`` mask (counters, furniture: image_poche)
+    and its thickest wall (m, at least max_wall_thickness)."""
 
     box: tuple[slice, slice]
     walls: np.ndarray
@@ -78,6 +80,8 @@ class PlanRooms:
     coloured: int = 0
     outline_px: int = 0
     enclosed: np.ndarray | None = None
+    objects: np.ndarray | None = None
+    max_wall: float = 0.0
 
 
 @dataclass
@@ -148,10 +152,12 @@ def analyse(path: Path, scale=None, ref=None, threshold=None, min_wall_thickness
                 ink = ink | pens
     if not raw_any and not plans:
         raise InputError(f"{path}: no walls found (no dark strokes at least {min_wall_thickness} m thick, "
-                         "nor single lines enclosing a room)")
+                         f"nor single lines enclosing a room); walls drawn lighter than the ink: give a threshold above "
+                         f"{t:g} (threshold); walls thinner: a smaller min_wall_thickness")
     if not any(p.rooms for p in plans):
         raise InputError(f"{path}: no closed room found (no free region of at least {min_room_area} m² "
-                         "enclosed by walls)")
+                         f"enclosed by walls at {s:g} m/px); check the scale (scale), or give a larger max_opening "
+                         f"than {max_opening:g} m where a wide opening leaves the rooms open")
     if engine is not None:
         name_rooms(engine, dark, ink, plans)
     return Sheet(s, scale_from, t, how, plans, dark.shape[0], ocr_line, skipped, max_wall_thickness, walls_from)
@@ -205,7 +211,7 @@ def _plan_rooms(plan_of: np.ndarray, k: int, box, s: float, max_opening: float, 
     m = int(max_opening / s) + 2
     walls = np.pad(plan_of == k, m)[box[0].start:box[0].stop + 2 * m, box[1].start:box[1].stop + 2 * m]
     box = (slice(box[0].start - m, box[0].stop + m), slice(box[1].start - m, box[1].stop + m))
-    bridges = bridge_openings(walls, s, max_opening, max_wall)
+    walls, bridges, objects, max_wall = settle(walls, s, max_opening, max_wall, skipped)
     labels, n, outside = free_regions(walls | bridges)
     idle = _bridges_parting_nothing(bridges, labels)
     if idle.any():  # e.g. from a table drawn as a blot to a wall: the room goes round it
@@ -220,7 +226,8 @@ def _plan_rooms(plan_of: np.ndarray, k: int, box, s: float, max_opening: float, 
     small = int(np.count_nonzero(inside & (area < min_room_area) & (area > 0)))
     if small:
         skipped[f"enclosed pieces under {min_room_area:g} m² (not rooms)"] += small
-    return PlanRooms(box, walls, bridges, labels, rooms, outline_px=outline_px, enclosed=enclosed)
+    return PlanRooms(box, walls, bridges, labels, rooms, outline_px=outline_px, enclosed=enclosed, objects=objects,
+                     max_wall=max_wall)
 
 
 def _bridges_parting_nothing(bridges: np.ndarray, labels: np.ndarray) -> np.ndarray:
@@ -273,7 +280,8 @@ def _footprint(plan: PlanRooms, sheet: Sheet, source: str):
     at = (plan.box[0].start, plan.box[1].start)
     inside = mask_polygons(plan.enclosed | np.isin(plan.labels, plan.rooms), sheet.s, at, sheet.rows)
     walls = mask_polygons(plan.walls | plan.bridges, sheet.s, at, sheet.rows)
-    return rooms_footprint(polygons_of(inside.simplify(sheet.s / 2)), walls.simplify(sheet.s / 2), sheet.max_wall,
+    return rooms_footprint(polygons_of(inside.simplify(sheet.s / 2)), walls.simplify(sheet.s / 2),
+                           max(sheet.max_wall, plan.max_wall),
                            source)
 
 
@@ -311,6 +319,12 @@ def plan_import(path: Path, sheet: Sheet, index: int, why: str, *, name=None, wa
     skipped = Counter(sheet.skipped)
     obstacles = prism_obstacles(walls, 0.0, min(float(wall_height or ceiling), ceiling), "wall", src, tolerance=0,
                                 skipped=skipped)
+    n_walls = len(obstacles)
+    if plan.objects is not None and plan.objects.any():
+        shapes = mask_polygons(plan.objects, sheet.s, (plan.box[0].start, plan.box[1].start), sheet.rows)
+        obstacles += prism_obstacles(shapes.simplify(sheet.s / 2), 0.0, min(FURNITURE_M, ceiling - 0.05), "furniture",
+                                     dict(src, entity="outlines in rooms (counters, furniture)"), tolerance=0,
+                                     skipped=skipped)
     footprint = _footprint(plan, sheet, str(path))
     zones = room_zones(rooms, coverage or 2, skipped=skipped)
     title = name or (path.stem if len(sheet.plans) == 1 else f"{path.stem} plan-{index + 1}")
@@ -321,10 +335,13 @@ def plan_import(path: Path, sheet: Sheet, index: int, why: str, *, name=None, wa
     used = {"scale": f"{sheet.s:g} m/px ({sheet.scale_from})",
             "threshold": f"{sheet.threshold:g} of 255, brightest channel ({sheet.threshold_from})",
             "plans": f"{len(sheet.plans)} on the sheet; plan-{index + 1} ({why})",
-            "walls": f"{len(obstacles)} wall prisms from {sheet.walls_from}",
+            "walls": f"{n_walls} wall prisms from {sheet.walls_from}",
             "openings": f"{len(openings)} door and window gaps bridged",
             "ocr": sheet.ocr if not sheet.ocr.startswith("tesseract") else
             f"{sheet.ocr}: {named} of {len(plan.rooms)} rooms named"}
+    if len(obstacles) > n_walls:
+        used["furniture"] = (f"{len(obstacles) - n_walls} counters and furniture drawn as closed outlines in rooms, "
+                             f"{min(FURNITURE_M, ceiling - 0.05):g} m high")
     notes = []
     if sheet.scale_from.startswith("read from"):
         notes.append(f"scale {sheet.s:.5g} m/px {sheet.scale_from} against a length you know (or give scale or ref)")
