@@ -38,6 +38,19 @@ def test_every_page_a_storey_named_by_its_title(sets):
     assert [s["chosen"] for s in got[1][1].storeys] == [False, True]
 
 
+def test_the_scale_printed_on_the_page(tmp_path):
+    """No scale given, no OCR: the page's own '1:100' gives it (at 200 dpi: 0.0127 m/px)."""
+    pdf = draw_pdf_levels(tmp_path / "set.pdf", [GROUND], ["GROUND FLOOR PLAN 1:100"], ["ramp 1:12"])
+    got = read_plan(pdf, ocr=False)
+    assert got.used["scale"].startswith("0.0127 m/px (1:100 at 200 dpi: the scale printed on the page")
+    assert _areas(got) == pytest.approx([24.0], abs=0.4)
+    assert any("printed on the page" in n for n in got.notes)
+    two = draw_pdf_levels(tmp_path / "two.pdf", [GROUND], ["PLAN 1:100"], ["DETAIL 1:20"])
+    with pytest.raises(InputError) as err:  # two plan scales on the page: not guessed
+        read_plan(two, ocr=False)
+    assert err.value.option == "scale"
+
+
 def test_pages_without_text_are_page_n(sets):
     got = read_storey_plans(sets[1], scale="1:100", ocr=False)
     assert [name for name, _, _ in got] == ["page-1", "page-2"]

@@ -38,7 +38,7 @@ from camplace.scene.importers import (DEFAULT_CEILING_M, PlanImport, clean_polyg
 from camplace.scene.importers.image_names import name_rooms
 from camplace.scene.importers.image_ocr import ocr_engine
 from camplace.scene.importers.image_poche import FURNITURE_M, settle
-from camplace.scene.importers.image_pages import is_pdf, page_count, page_names, page_of_storey
+from camplace.scene.importers.image_pages import is_pdf, page_count, page_names, page_of_storey, printed_scale
 from camplace.scene.importers.image_read import metres_per_pixel, read_sheet
 from camplace.scene.importers.image_rooms import colour_rooms, free_regions, mask_polygons
 from camplace.scene.importers.image_scale import scale_from_sheet
@@ -119,6 +119,9 @@ def analyse(path: Path, scale=None, ref=None, threshold=None, min_wall_thickness
     if read is None:
         if engine is not None:
             read = scale_from_sheet(engine, dark, dark < otsu_threshold(dark))
+        if read is None and paper.pdf and (printed := printed_scale(path, page or 1)) is not None:
+            s, how = metres_per_pixel(path, paper, f"1:{printed}", None)  # a PDF printed at its drawing scale
+            read = s, f"{how}: the scale printed on the page, if the page was printed to scale; check it"
         if read is None:
             why = ("no dimension line nor scale bar could be read" if engine is not None else
                    f"OCR not available: {ocr_line}")
@@ -343,7 +346,7 @@ def plan_import(path: Path, sheet: Sheet, index: int, why: str, *, name=None, wa
         used["furniture"] = (f"{len(obstacles) - n_walls} counters and furniture drawn as closed outlines in rooms, "
                              f"{min(FURNITURE_M, ceiling - 0.05):g} m high")
     notes = []
-    if sheet.scale_from.startswith("read from"):
+    if sheet.scale_from.startswith("read from") or "printed on the page" in sheet.scale_from:
         notes.append(f"scale {sheet.s:.5g} m/px {sheet.scale_from} against a length you know (or give scale or ref)")
     if len(sheet.plans) > 1:
         notes.append(f"{len(sheet.plans)} plans side by side on the sheet (" + ", ".join(

@@ -27,6 +27,11 @@ LEVEL_RE = re.compile("|".join((
 )), re.IGNORECASE)
 
 
+# a drawing scale printed on a sheet ('1:100', 'M 1:50', 'Scale 1:200'), one of the scales plans are drawn at
+SCALE_TEXT_RE = re.compile(r"(?<![\d.:/])1\s*:\s*(\d{2,4})(?![\d:.,])")
+PLAN_SCALES = (20, 25, 50, 75, 100, 125, 150, 200, 250, 500, 1000)
+
+
 def is_pdf(path: Path) -> bool:
     """True for a PDF file (by its suffix, as plan_kind)."""
     return path.suffix.lower() == ".pdf"
@@ -64,6 +69,27 @@ def level_name(text: str, sizes: dict[str, float] | None = None) -> str | None:
         return None
     best = max(found, key=lambda f: (sizes or {}).get(f, 0.0)) if sizes else found[0]
     return best.capitalize() if best.isupper() and any(len(w) > 3 for w in best.split()) else best
+
+
+def printed_scale(path: Path, page: int) -> int | None:
+    """N of the drawing scale 1:N printed on page ``page`` (1-based) of a PDF, when its
+    text gives one plan scale (PLAN_SCALES) and no other; None otherwise (no text, no
+    scale, or a plan at 1:100 beside a detail at 1:20: the dimension lines decide)."""
+    doc = open_pdf(path)
+    try:
+        if not 1 <= page <= len(doc):
+            return None
+        pg = doc[page - 1]
+        textpage = pg.get_textpage()
+        try:
+            text = textpage.get_text_range()
+        finally:
+            textpage.close()
+            pg.close()
+    finally:
+        doc.close()
+    found = {int(m.group(1)) for m in SCALE_TEXT_RE.finditer(text)} & set(PLAN_SCALES)
+    return found.pop() if len(found) == 1 else None
 
 
 def page_names(path: Path) -> list[str]:
