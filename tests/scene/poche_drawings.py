@@ -145,3 +145,43 @@ def draw_pdf_levels(path: str | Path, rooms: list[list[tuple[float, float, float
                 ax.text(0, -2.5, extra[k], fontsize=8)
             pdf.savefig(fig)
     return Path(path)
+
+
+def draw_photo_ldk(path: str | Path, dashed: bool = True, seed: int = 0) -> Path:
+    """A photo (JPEG: blurred, uneven light, yellowish paper, noise) of a 14.6 x 7.1 m flat
+    (outside; solid 0.3 m outer walls, a 0.2 m wall with a door): a living-dining-kitchen
+    of 10.0 x 6.5 = 65.0 m² clear and a bedroom of 3.8 x 6.5 = 24.7 m², crossed by column
+    grid lines 0.1 m thick (dash-dot when ``dashed``) running 2.5 m past the building each
+    way, and a kitchen counter 4.0 x 0.65 m against the north wall drawn as a 0.1 m outline."""
+    from PIL import Image, ImageFilter
+
+    w, h, t, g = 14.6, 7.1, 0.3, 0.1
+    im, d, p = _canvas((w, h))
+    for r in box_walls(w, h, t, door=(2.0, 2.9)) + [(10.3, t, 10.5, 3.0), (10.3, 3.9, 10.5, h - t)]:
+        _rect(d, p, *r, fill="black")
+
+    def line(a: tuple[float, float], b: tuple[float, float]) -> None:  # axis-parallel, dash-dot or solid
+        (x0, y0), (x1, y1) = a, b
+        length, at = max(x1 - x0, y1 - y0), 0.0
+        pattern = ((1.2, True), (0.2, False), (0.15, True), (0.2, False)) if dashed else ((length, True),)
+        while at < length:
+            for piece, ink in pattern:
+                end = min(at + piece, length)
+                if ink:
+                    _rect(d, p, *((x0 - g / 2, y0 + at, x0 + g / 2, y0 + end) if x0 == x1 else
+                                  (x0 + at, y0 - g / 2, x0 + end, y0 + g / 2)), fill="black")
+                at = end
+                if at >= length:
+                    break
+
+    for x in (3.5, 7.0):
+        line((x, -2.5), (x, h + 2.5))
+    line((-2.5, 3.55), (w + 2.5, 3.55))
+    _rect(d, p, 0.8, h - t - 0.65, 4.8, h - t, outline="black", width=5)
+    rng = np.random.default_rng(seed)
+    a = np.asarray(im.filter(ImageFilter.GaussianBlur(1.2))).astype(float)
+    yy, xx = np.mgrid[0:a.shape[0], 0:a.shape[1]]
+    light = 0.8 + 0.2 * np.cos((xx / a.shape[1] - 0.3) * 2) * np.cos((yy / a.shape[0] - 0.5) * 2)
+    a = a * light[..., None] * np.array([1.0, 0.97, 0.9]) + rng.normal(0, 6, a.shape)
+    Image.fromarray(np.clip(a, 0, 255).astype(np.uint8)).save(path, quality=80)
+    return Path(path)

@@ -13,7 +13,7 @@ from shapely.geometry import Point, Polygon, shape
 from camplace.scene.importers import read_plan
 from camplace.scene.importers.image_poche import closed_strips, lines_past, thin
 from camplace.scene.importers.image_walls import evenly_marked
-from tests.scene.poche_drawings import MARGIN, PX, draw_counter, draw_grid_lines, draw_stippled
+from tests.scene.poche_drawings import MARGIN, PX, draw_counter, draw_grid_lines, draw_photo_ldk, draw_stippled
 
 
 def _zones(got) -> list[float]:
@@ -56,6 +56,17 @@ def test_grid_and_dimension_lines_past_the_building_are_not_walls(tmp_path):
     assert not _in_walls(got, 10 / 3, 4.0) and not _in_walls(got, 5.0, 8 / 3)  # grid lines in the room
     fp = _footprint(got).buffer(PX)
     assert all(fp.contains(Polygon(o["prism"]["polygon"])) for o in _prisms(got, "wall"))
+
+
+@pytest.mark.parametrize("dashed", [True, False])
+def test_photo_grid_lines_and_counter_leave_the_living_room_whole(tmp_path, dashed):
+    """The issue's photo: grid lines and the kitchen counter cut a 51 m² living room to 37."""
+    got = read_plan(draw_photo_ldk(tmp_path / "plan.jpg", dashed=dashed), scale=PX, ocr=False)
+    assert _zones(got) == pytest.approx([24.7, 65.0], rel=0.02)
+    assert _footprint(got).area == pytest.approx(14.6 * 7.1, rel=0.01)
+    furniture = _prisms(got, "furniture")
+    assert len(furniture) == 1 and furniture[0]["prism"]["z"] == [0.0, 0.9]
+    assert Polygon(furniture[0]["prism"]["polygon"]).contains(Point(2.8 + MARGIN, 6.45 + MARGIN))
 
 
 def test_counter_and_island_are_obstacles_not_dividers(tmp_path):

@@ -200,7 +200,7 @@ def _plans(raw: np.ndarray, ink: np.ndarray, rgb: np.ndarray, s: float, max_open
            min_room_area: float, skipped: Counter, reach: float = REACH_M) -> list[PlanRooms]:
     """The plans of the wall mask ``raw`` with their openings and rooms (``reach``: m, see find_plans)."""
     found = find_plans(raw, ink, s, max_opening, max_wall, skipped, reach)
-    plans = [_plan_rooms(found.plan_of, k, box, s, max_opening, max_wall, min_room_area, skipped)
+    plans = [_plan_rooms(found.plan_of, k, box, s, max_opening, max_wall, min_room_area, skipped, raw)
              for k, box in enumerate(found.plans, 1)]
     for plan in plans:
         _colour_split(plan, rgb, ink, s, min_room_area)
@@ -208,13 +208,15 @@ def _plans(raw: np.ndarray, ink: np.ndarray, rgb: np.ndarray, s: float, max_open
 
 
 def _plan_rooms(plan_of: np.ndarray, k: int, box, s: float, max_opening: float, max_wall: float,
-                min_room_area: float, skipped: Counter) -> PlanRooms:
+                min_room_area: float, skipped: Counter, raw: np.ndarray) -> PlanRooms:
     """Plan ``k`` in its box (widened by an opening, paper beyond the sheet's edge):
-    openings bridged, rooms found."""
+    lines past the building dropped, wall insides and objects told (image_poche.settle,
+    ``raw`` the sheet's walls), openings bridged, rooms found."""
     m = int(max_opening / s) + 2
-    walls = np.pad(plan_of == k, m)[box[0].start:box[0].stop + 2 * m, box[1].start:box[1].stop + 2 * m]
+    window = (slice(box[0].start, box[0].stop + 2 * m), slice(box[1].start, box[1].stop + 2 * m))
+    walls = np.pad(plan_of == k, m)[window]
     box = (slice(box[0].start - m, box[0].stop + m), slice(box[1].start - m, box[1].stop + m))
-    walls, bridges, objects, max_wall = settle(walls, s, max_opening, max_wall, skipped)
+    walls, bridges, objects, max_wall = settle(walls, s, max_opening, max_wall, skipped, np.pad(raw, m)[window])
     labels, n, outside = free_regions(walls | bridges)
     idle = _bridges_parting_nothing(bridges, labels)
     if idle.any():  # e.g. from a table drawn as a blot to a wall: the room goes round it
@@ -381,7 +383,7 @@ def read(path: Path, **options) -> PlanImport:
     storey = options.get("storey")
     pages = page_names(path) if is_pdf(path) and analysis.get("page") is None else []
     label = None
-    if storey is not None and len(pages) > 1 and not PLAN_RE.fullmatch(storey):
+    if storey is not None and pages and not PLAN_RE.fullmatch(storey):
         page = page_of_storey(storey, pages)
         if page is None:
             raise InputError(f"storey: {path.name} has no page '{storey}'; its pages are {', '.join(pages)} "

@@ -61,19 +61,20 @@ def wall_thickness(walls: np.ndarray, s: float) -> float:
     return 2 * s * float(ndimage.distance_transform_edt(walls).max()) if walls.any() else 0.0
 
 
-def settle(walls: np.ndarray, s: float, max_opening: float, max_wall: float,
-           skipped: Counter) -> tuple[np.ndarray, np.ndarray, np.ndarray, float]:
+def settle(walls: np.ndarray, s: float, max_opening: float, max_wall: float, skipped: Counter,
+           context: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray, float]:
     """(walls, bridges, objects, thickest wall m) of a plan's wall mask: the lines running
     past the building dropped (lines_past), each closed door-less strip (closed_strips)
     made wall, or, in a plan whose walls are solid (solid_plan), an object (a counter, a
     piece of furniture: its inside and its outline, ``objects``) when taking its outline
     away joins it to no more than the one room around it. Openings are bridged through
-    walls up to the thickest one found (at most POCHE_MAX_M) or ``max_wall``."""
+    walls up to the thickest one found (at most POCHE_MAX_M) or ``max_wall``. ``context``:
+    the sheet's walls around the plan (as ``walls``), for lines_past."""
     def thickest(w: np.ndarray) -> float:  # bridges pass through walls this thick
         return max(max_wall, min(wall_thickness(w, s), POCHE_MAX_M))
 
     bridges = bridge_openings(walls, s, max_opening, thickest(walls))
-    past = lines_past(walls, bridges, s)
+    past = lines_past(walls, bridges, s, context)
     if past.any():
         walls = walls & ~past
         skipped["lines running past the building (grid, dimension lines)"] += ndimage.label(past, EIGHT)[1]
@@ -112,35 +113,43 @@ def _object_outline(walls: np.ndarray, bridges: np.ndarray, labels: np.ndarray, 
     return outline if len(merged) <= 1 and not outside[merged].any() else None
 
 
-def lines_past(walls: np.ndarray, bridges: np.ndarray, s: float) -> np.ndarray:
+def lines_past(walls: np.ndarray, bridges: np.ndarray, s: float, context: np.ndarray | None = None) -> np.ndarray:
     """The wall pixels to drop: the thin parts of every straight line (along either axis,
-    at least PAST_M long, joined across the walls it crosses) with PAST_M or more of its
-    length outside the building (building) grown by PAST_TOLERANCE_M: column grid lines,
-    dimension lines and their extension lines, and the thin pieces left of them wholly
-    outside. A wall of the building never runs outside it."""
+    at least PAST_M long, joined across the walls it crosses and the gaps of a dashed
+    line) with PAST_M or more of its length outside the building (building) grown by
+    PAST_TOLERANCE_M: column grid lines, dimension lines and their extension lines, and
+    the thin pieces left of them wholly outside; not where a line across them that runs
+    past nothing crosses (a counter's edge). ``context``: the sheet's walls around the
+    plan (the dashes of a grid line beyond the plan's own pieces). A wall of the building
+    never runs outside it."""
     inside = building(walls, bridges, s)
     rows, cols = np.nonzero(walls)
     if not len(rows) or inside.sum() < 0.25 * (np.ptp(rows) + 1) * (np.ptp(cols) + 1):  # no closed building
         return np.zeros_like(walls)
     outside = ~ndimage.maximum_filter(inside, size=odd(2 * PAST_TOLERANCE_M / s, 3))
-    lines = thin(walls, s)
-    drop = np.zeros_like(walls)
+    ink = walls if context is None else walls | context
+    lines = thin(ink, s)
     run = odd(PAST_M / s, 3)
+    alongs, drops = [], []
     for axis in (0, 1):
-        along = _line(lines & ~_line(lines, odd(LINE_THIN_M / s + 1), 1 - axis, "open"), run, axis, "open")
-        joined = _line(along | (walls & ~lines), odd(POCHE_MAX_M / s, 3), axis, "close") & (along | walls)
+        straight = lines & ~_line(lines, odd(LINE_THIN_M / s + 1), 1 - axis, "open")  # thin across this axis
+        along = _line(straight, run, axis, "open")
+        joined = _line(straight | (ink & ~lines), odd(POCHE_MAX_M / s, 3), axis, "close")  # across walls and gaps
         structure = np.zeros((3, 3), bool)
         structure[1, :] = True
         lab, n = ndimage.label(joined, structure if axis == 1 else structure.T)
-        if n == 0:
-            continue
         out = np.bincount(lab[outside & along], minlength=n + 1) * s
-        past = np.r_[False, out[1:] >= PAST_M]
-        drop |= past[lab] & lines
-    if drop.any():  # what is left of them outside: the stubs of extension lines past a dimension line
-        lab, n = ndimage.label(walls & ~drop, EIGHT)
-        gone = np.r_[False, (np.bincount(lab[outside], minlength=n + 1) == np.bincount(lab.ravel(), minlength=n + 1))[1:]]
-        drop |= gone[lab] & lines
+        alongs.append(_line(lines, run, axis, "open"))  # every run this long, crossings included
+        drops.append(np.r_[False, out[1:] >= PAST_M][lab] & lines)
+    drop = ((drops[0] & ~(alongs[1] & ~drops[1])) | (drops[1] & ~(alongs[0] & ~drops[0]))) & walls
+    if drop.any():  # what is left of them outside (the stubs of extension lines past a dimension line) or small
+        lab, n = ndimage.label(walls & ~drop, EIGHT)  # (the corners of a blurred crossing)
+        size = np.bincount(lab.ravel(), minlength=n + 1)
+        touch = np.zeros(n + 1, bool)
+        touch[lab[ndimage.maximum_filter(drop, size=3)]] = True
+        gone = (np.bincount(lab[outside], minlength=n + 1) == size) | (touch & (size * s * s <= LINE_THIN_M ** 2))
+        gone[0] = False
+        drop |= gone[lab] & lines & walls
     return drop
 
 
