@@ -73,12 +73,13 @@ def settle(walls: np.ndarray, s: float, max_opening: float, max_wall: float, ski
     def thickest(w: np.ndarray) -> float:  # bridges pass through walls this thick
         return max(max_wall, min(wall_thickness(w, s), POCHE_MAX_M))
 
-    bridges = bridge_openings(walls, s, max_opening, thickest(walls))
+    reach = thickest(walls)
+    bridges = bridge_openings(walls, s, max_opening, reach)
     past = lines_past(walls, bridges, s, context)
-    if past.any():
+    if past.any():  # thin lines: the thickest wall stays
         walls = walls & ~past
         skipped["lines running past the building (grid, dimension lines)"] += ndimage.label(past, EIGHT)[1]
-        bridges = bridge_openings(walls, s, max_opening, thickest(walls))
+        bridges = bridge_openings(walls, s, max_opening, reach)
     labels, n, outside = free_regions(walls | bridges)
     strips = closed_strips(labels, [k for k in range(1, n + 1) if not outside[k]], bridges, s)
     objects = np.zeros_like(walls)
@@ -94,8 +95,9 @@ def settle(walls: np.ndarray, s: float, max_opening: float, max_wall: float, ski
                 walls = walls & ~outline
                 objects |= region | outline
                 skipped["counters and furniture drawn as outlines (obstacles, not walls)"] += 1
-    max_wall = thickest(walls)
-    return walls, bridge_openings(walls, s, max_opening, max_wall), objects, max_wall
+        reach = thickest(walls)
+        bridges = bridge_openings(walls, s, max_opening, reach)
+    return walls, bridges, objects, reach
 
 
 def _object_outline(walls: np.ndarray, bridges: np.ndarray, labels: np.ndarray, outside: np.ndarray,
