@@ -15,9 +15,15 @@ m). Step by step (image_walls, image_rooms, image_ocr, image_text):
    gutter no room spans (image_walls.gutter_bridges); marks off the plans (title block,
    legend, scale bar, key plan) and text blocks are dropped. Several plans side by side
    (storeys on one sheet) are ``storeys``; the default is the one with most rooms.
-4. Rooms: door and window gaps up to ``max_opening`` between walls in line are bridged
+4. Each plan (image_poche.settle): lines running past the building (grid, dimension
+   lines) are not walls; a closed door-less strip up to a wall thick is a wall's inside,
+   or in a plan of solid walls a counter or piece of furniture (an obstacle FURNITURE_M high).
+5. Rooms: door and window gaps up to ``max_opening`` between walls in line are bridged
    (for the rooms only: the walls keep their openings); the enclosed free regions of at
    least ``min_room_area`` are the rooms, named by the text OCR reads inside them.
+
+A PDF of several pages is a plan set: read_storeys gives one storey per page
+(image_pages: named by the level its text gives, else page-N).
 """
 
 from __future__ import annotations
