@@ -79,6 +79,10 @@ def test_unknown_page_name_and_blank_pages(sets, tmp_path):
     got = read_storey_plans(tmp_path / "cover.pdf", scale="1:100", ocr=False)
     assert [name for name, _, _ in got] == ["page-1"]
     assert any(n.startswith("pages left out: page-2 (no walls found") for n in got[0][1].notes)
+    cover = draw_pdf_levels(tmp_path / "cover2.pdf", [GROUND, GROUND], ["COVER SHEET", "GROUND FLOOR PLAN 1:100"])
+    got = read_storey_plans(cover, ocr=False)  # no --scale: page 2 prints its 1:100, page 1 no scale
+    assert [name for name, _, _ in got] == ["Ground floor"]
+    assert any(n.startswith("pages left out: page-1 (the plan's scale is unknown") for n in got[0][1].notes)
     blank.save(tmp_path / "blank.pdf", save_all=True, append_images=[blank], resolution=DPI)
     with pytest.raises(InputError, match="no page holds a plan with a closed room"):
         read_storey_plans(tmp_path / "blank.pdf", scale="1:100", ocr=False)

@@ -426,15 +426,15 @@ def read_storeys(path: Path, **options) -> list[tuple[str, PlanImport]]:
 
 
 def _page_storeys(path: Path, analysis: dict, scene: dict) -> list[tuple[str, PlanImport]]:
-    """One storey per page of a PDF plan set, each in its page's coordinates; a page with
-    no closed room (a cover, a legend) is left out with a note; none with rooms: InputError."""
-    out, left, rows = [], [], []
+    """One storey per page of a PDF plan set, each in its page's coordinates; a page that
+    cannot be read (a cover, a legend, no scale) is left out with a note; none read:
+    InputError (the first naming an option, as a scale to give, else one naming the pages)."""
+    out, left, rows, errors = [], [], [], []
     for page, name in enumerate(page_names(path), 1):
         try:
             sheet = analyse(path, **dict(analysis, page=page))
-        except InputError as err:
-            if err.option is not None:  # an option that does not suit the pages (its scale): one line
-                raise
+        except InputError as err:  # a cover, a legend, a page with no scale to read
+            errors.append(err)
             left.append(f"{name} ({str(err).removeprefix(f'{path}: ')})")
             continue
         with_rooms = [i for i, p in enumerate(sheet.plans) if p.rooms]
@@ -444,6 +444,9 @@ def _page_storeys(path: Path, analysis: dict, scene: dict) -> list[tuple[str, Pl
             out.append((label, got))
             rows.append(dict(got.storeys[i], name=label))
     if not out:
+        first = next((e for e in errors if e.option is not None), None)
+        if first is not None:  # the same option fails on the pages (a scale to give): its one line
+            raise first
         raise InputError(f"{path}: no page holds a plan with a closed room: {'; '.join(left)}")
     for label, got in out:
         got.storeys = [dict(r, chosen=r["name"] == label) for r in rows]
