@@ -40,15 +40,15 @@ def box_walls(w: float, h: float, t: float, door: tuple[float, float] | None = N
 
 
 def draw_stippled(path: str | Path, t: float = 0.7, w: float = 9.0, h: float = 7.0, seed: int = 0,
-                  dots: bool = True) -> Path:
+                  dots: bool = True, solid: bool = False) -> Path:
     """A room w x h m outside whose walls, ``t`` thick, are drawn as masonry poché: a
     thin outline (1 px) round each wall filled with a random stipple of 1-2 px dots (no
-    hatch lines; ``dots`` False: empty outlines), closed at a 0.9 m door in the south
-    wall. The room's clear area is (w - 2t) x (h - 2t)."""
+    hatch lines; ``dots`` False: empty outlines; ``solid``: filled black), closed at a 0.9 m
+    door in the south wall. The room's clear area is (w - 2t) x (h - 2t)."""
     rng = np.random.default_rng(seed)
     im, d, p = _canvas((w, h))
     for x0, y0, x1, y1 in box_walls(w, h, t, door=(w / 2 - 0.45, w / 2 + 0.45)):
-        _rect(d, p, x0, y0, x1, y1, outline="black", width=1)
+        _rect(d, p, x0, y0, x1, y1, outline="black", width=1, **({"fill": "black"} if solid else {}))
         n = int((x1 - x0) * (y1 - y0) / 0.004) if dots else 0  # one dot per 40 cm²
         for x, y in zip(rng.uniform(x0 + 0.04, x1 - 0.04, n), rng.uniform(y0 + 0.04, y1 - 0.04, n)):
             c, r = p(x, y)

@@ -4,6 +4,8 @@ gives (else page-N), each in its page's coordinates; ``page`` still reads one pa
 from __future__ import annotations
 
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 from PIL import Image
 from shapely.geometry import Polygon
 
@@ -103,3 +105,13 @@ def test_page_of_storey():
     assert page_of_storey("level 2", names) == 2
     assert page_of_storey("page-1", names) == 1
     assert page_of_storey("page-3", names) is None
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.lists(st.sampled_from(["Kitchen", "12 m²", "Level", "3", "floor", "Ground", "WC", "1:100", "og", "EG",
+                                 "Erdgeschoss", "first", "étage", "1er", "\n", "plan"]), max_size=12))
+def test_a_level_name_is_text_of_the_page(words):
+    """Whatever the page says, the name is None or a piece of its text (spaces collapsed)."""
+    text = " ".join(words)
+    name = level_name(text)
+    assert name is None or name.lower() in " ".join(text.split()).lower()

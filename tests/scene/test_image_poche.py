@@ -35,9 +35,10 @@ def _in_walls(got, x: float, y: float) -> bool:
     return any(Polygon(o["prism"]["polygon"]).buffer(PX).contains(pt) for o in _prisms(got, "wall"))
 
 
-@pytest.mark.parametrize("t, dots", [(0.5, True), (0.7, True), (0.9, True), (0.7, False), (0.9, False)])
-def test_stippled_and_empty_poche_is_wall(tmp_path, t, dots):
-    got = read_plan(draw_stippled(tmp_path / "plan.png", t=t, dots=dots), scale=PX, ocr=False)
+@pytest.mark.parametrize("t, dots, solid", [(0.5, True, False), (0.7, True, False), (0.9, True, False),
+                                            (0.7, False, False), (0.9, False, False), (0.9, False, True)])
+def test_stippled_empty_and_solid_poche_is_wall(tmp_path, t, dots, solid):
+    got = read_plan(draw_stippled(tmp_path / "plan.png", t=t, dots=dots, solid=solid), scale=PX, ocr=False)
     clear = (9.0 - 2 * t) * (7.0 - 2 * t)
     zones = _zones(got)
     assert len(zones) == 1  # the room, no room made of a wall's inside
