@@ -429,13 +429,13 @@ def _page_storeys(path: Path, analysis: dict, scene: dict) -> list[tuple[str, Pl
     """One storey per page of a PDF plan set, each in its page's coordinates; a page that
     cannot be read (a cover, a legend, no scale) is left out with a note; none read:
     InputError (the first naming an option, as a scale to give, else one naming the pages)."""
-    out, left, rows, errors = [], [], [], []
+    out, unread, rows, errors = [], [], [], []
     for page, name in enumerate(page_names(path), 1):
         try:
             sheet = analyse(path, **dict(analysis, page=page))
         except InputError as err:  # a cover, a legend, a page with no scale to read
             errors.append(err)
-            left.append(f"{name} ({str(err).removeprefix(f'{path}: ')})")
+            unread.append((name, str(err).removeprefix(f"{path}: ")))
             continue
         with_rooms = [i for i, p in enumerate(sheet.plans) if p.rooms]
         for i in with_rooms:
@@ -443,6 +443,10 @@ def _page_storeys(path: Path, analysis: dict, scene: dict) -> list[tuple[str, Pl
             got = plan_import(path, sheet, i, f"page {page}", **{"name": f"{path.stem} {label}", **scene})
             out.append((label, got))
             rows.append(dict(got.storeys[i], name=label))
+    causes: dict[str, list[str]] = {}
+    for name, cause in unread:  # pages left out for one cause named together
+        causes.setdefault(cause, []).append(name)
+    left = [f"{', '.join(names)} ({cause})" for cause, names in causes.items()]
     if not out:
         first = next((e for e in errors if e.option is not None), None)
         if first is not None:  # the same option fails on the pages (a scale to give): its one line
