@@ -15,14 +15,21 @@ m). Step by step (image_walls, image_rooms, image_ocr, image_text):
    gutter no room spans (image_walls.gutter_bridges); marks off the plans (title block,
    legend, scale bar, key plan) and text blocks are dropped. Several plans side by side
    (storeys on one sheet) are ``storeys``; the default is the one with most rooms.
-4. Rooms: door and window gaps up to ``max_opening`` between walls in line are bridged
+4. Each plan (image_poche.settle): lines running past the building (grid, dimension
+   lines) are not walls; a closed door-less strip up to a wall thick is a wall's inside,
+   or in a plan of solid walls a counter or piece of furniture (an obstacle FURNITURE_M high).
+5. Rooms: door and window gaps up to ``max_opening`` between walls in line are bridged
    (for the rooms only: the walls keep their openings); the enclosed free regions of at
    least ``min_room_area`` are the rooms, named by the text OCR reads inside them.
+
+A PDF of several pages is a plan set: read_storeys gives one storey per page
+(image_pages: named by the level its text gives, else page-N).
 """
 
 from __future__ import annotations
 
 import math
+import re
 from collections import Counter
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -34,16 +41,19 @@ from scipy import ndimage
 from camplace.core.errors import InputError
 from camplace.scene.importers import (DEFAULT_CEILING_M, PlanImport, clean_polygons, plan_scene, polygons_of,
                                       prism_obstacles, room_zones, rooms_footprint)
-from camplace.scene.importers.image_ocr import (NUMBER_RE, ocr_engine, read_lines, room_name, room_number,
-                                                text_lines_mask)
+from camplace.scene.importers.image_names import name_rooms
+from camplace.scene.importers.image_ocr import ocr_engine
+from camplace.scene.importers.image_poche import FURNITURE_M, settle
+from camplace.scene.importers.image_pages import is_pdf, page_count, page_names, page_of_storey, printed_scale
 from camplace.scene.importers.image_read import metres_per_pixel, read_sheet
 from camplace.scene.importers.image_rooms import colour_rooms, free_regions, mask_polygons
 from camplace.scene.importers.image_scale import scale_from_sheet
-from camplace.scene.importers.image_walls import (EIGHT, HOLLOW_WALL_M, LINE_WALL_M, REACH_M, bridge_openings,
+from camplace.scene.importers.image_walls import (EIGHT, HOLLOW_WALL_M, LINE_WALL_M, REACH_M,
                                                   brightness, colour_lines, find_plans, ink_threshold, line_walls,
                                                   otsu_threshold, solid_walls)
 
 HOLLOW_GAIN = 1.25  # the walls read as empty outlines are taken when their rooms are this much larger
+PLAN_RE = re.compile(r"plan-\d+")  # a plan of a sheet, as storeys names it
 WORK_M_PER_PX = 0.01  # images finer than this are read at an integer fraction of their pixels
 OPTIONS = ("scale", "ref", "threshold", "storey", "min_wall_thickness", "max_wall_thickness", "hatch_spacing",
            "max_opening", "min_room_area", "ocr", "page")
@@ -62,8 +72,9 @@ class PlanRooms:
     """One plan of the sheet: ``box`` (rows, cols slices of the sheet), its ``walls`` and
     ``bridges`` (bool masks in the box), free-region ``labels`` (int, in the box), the
     labels that are ``rooms`` and their ``names`` (None: not read) and printed areas, the
-    pixels of its ``outline`` and the ``enclosed`` mask: the free space inside the outer
-    walls (rooms, stairs, closets)."""
+    pixels of its ``outline``, the ``enclosed`` mask: the free space inside the outer
+    walls (rooms, stairs, closets), the ``objects`` mask (counters, furniture: image_poche)
+    and its thickest wall (m, at least max_wall_thickness)."""
 
     box: tuple[slice, slice]
     walls: np.ndarray
@@ -75,6 +86,8 @@ class PlanRooms:
     coloured: int = 0
     outline_px: int = 0
     enclosed: np.ndarray | None = None
+    objects: np.ndarray | None = None
+    max_wall: float = 0.0
 
 
 @dataclass
@@ -112,6 +125,9 @@ def analyse(path: Path, scale=None, ref=None, threshold=None, min_wall_thickness
     if read is None:
         if engine is not None:
             read = scale_from_sheet(engine, dark, dark < otsu_threshold(dark))
+        if read is None and paper.pdf and (printed := printed_scale(path, page or 1)) is not None:
+            s, how = metres_per_pixel(path, paper, f"1:{printed}", None)  # a PDF printed at its drawing scale
+            read = s, f"{how}: the scale printed on the page, if the page was printed to scale; check it"
         if read is None:
             why = ("no dimension line nor scale bar could be read" if engine is not None else
                    f"OCR not available: {ocr_line}")
@@ -145,12 +161,14 @@ def analyse(path: Path, scale=None, ref=None, threshold=None, min_wall_thickness
                 ink = ink | pens
     if not raw_any and not plans:
         raise InputError(f"{path}: no walls found (no dark strokes at least {min_wall_thickness} m thick, "
-                         "nor single lines enclosing a room)")
+                         f"nor single lines enclosing a room); walls drawn lighter than the ink: give a threshold above "
+                         f"{t:g} (threshold); walls thinner: a smaller min_wall_thickness")
     if not any(p.rooms for p in plans):
         raise InputError(f"{path}: no closed room found (no free region of at least {min_room_area} m² "
-                         "enclosed by walls)")
+                         f"enclosed by walls at {s:g} m/px); check the scale (scale), or give a larger max_opening "
+                         f"than {max_opening:g} m where a wide opening leaves the rooms open")
     if engine is not None:
-        _name_rooms(engine, dark, ink, plans)
+        name_rooms(engine, dark, ink, plans)
     return Sheet(s, scale_from, t, how, plans, dark.shape[0], ocr_line, skipped, max_wall_thickness, walls_from)
 
 
@@ -188,7 +206,7 @@ def _plans(raw: np.ndarray, ink: np.ndarray, rgb: np.ndarray, s: float, max_open
            min_room_area: float, skipped: Counter, reach: float = REACH_M) -> list[PlanRooms]:
     """The plans of the wall mask ``raw`` with their openings and rooms (``reach``: m, see find_plans)."""
     found = find_plans(raw, ink, s, max_opening, max_wall, skipped, reach)
-    plans = [_plan_rooms(found.plan_of, k, box, s, max_opening, max_wall, min_room_area, skipped)
+    plans = [_plan_rooms(found.plan_of, k, box, s, max_opening, max_wall, min_room_area, skipped, raw)
              for k, box in enumerate(found.plans, 1)]
     for plan in plans:
         _colour_split(plan, rgb, ink, s, min_room_area)
@@ -196,13 +214,15 @@ def _plans(raw: np.ndarray, ink: np.ndarray, rgb: np.ndarray, s: float, max_open
 
 
 def _plan_rooms(plan_of: np.ndarray, k: int, box, s: float, max_opening: float, max_wall: float,
-                min_room_area: float, skipped: Counter) -> PlanRooms:
+                min_room_area: float, skipped: Counter, raw: np.ndarray) -> PlanRooms:
     """Plan ``k`` in its box (widened by an opening, paper beyond the sheet's edge):
-    openings bridged, rooms found."""
+    lines past the building dropped, wall insides and objects told (image_poche.settle,
+    ``raw`` the sheet's walls), openings bridged, rooms found."""
     m = int(max_opening / s) + 2
-    walls = np.pad(plan_of == k, m)[box[0].start:box[0].stop + 2 * m, box[1].start:box[1].stop + 2 * m]
+    window = (slice(box[0].start, box[0].stop + 2 * m), slice(box[1].start, box[1].stop + 2 * m))
+    walls = np.pad(plan_of == k, m)[window]
     box = (slice(box[0].start - m, box[0].stop + m), slice(box[1].start - m, box[1].stop + m))
-    bridges = bridge_openings(walls, s, max_opening, max_wall)
+    walls, bridges, objects, max_wall = settle(walls, s, max_opening, max_wall, skipped, np.pad(raw, m)[window])
     labels, n, outside = free_regions(walls | bridges)
     idle = _bridges_parting_nothing(bridges, labels)
     if idle.any():  # e.g. from a table drawn as a blot to a wall: the room goes round it
@@ -217,7 +237,8 @@ def _plan_rooms(plan_of: np.ndarray, k: int, box, s: float, max_opening: float, 
     small = int(np.count_nonzero(inside & (area < min_room_area) & (area > 0)))
     if small:
         skipped[f"enclosed pieces under {min_room_area:g} m² (not rooms)"] += small
-    return PlanRooms(box, walls, bridges, labels, rooms, outline_px=outline_px, enclosed=enclosed)
+    return PlanRooms(box, walls, bridges, labels, rooms, outline_px=outline_px, enclosed=enclosed, objects=objects,
+                     max_wall=max_wall)
 
 
 def _bridges_parting_nothing(bridges: np.ndarray, labels: np.ndarray) -> np.ndarray:
@@ -245,53 +266,6 @@ def _colour_split(plan: PlanRooms, rgb: np.ndarray, ink: np.ndarray, s: float, m
                                                           min_room_area)
 
 
-def _name_rooms(engine, dark: np.ndarray, ink: np.ndarray, plans: list[PlanRooms]) -> None:
-    """Room names and printed areas from the text lines in or beside each room (a label
-    whose middle falls on no room, e.g. inside the ring around a room number, goes to
-    the nearest room within 1.5 character heights; none on a wall); one OCR call. A room
-    number read for two rooms of a plan stays with the more confident reading (the other is
-    misread); a word may name several rooms (two flats' 'Living Room'), each with its room
-    number where it has one ('Living Room B102', as the IFC import names them), else the
-    zones become 'Living Room', 'Living Room-2'."""
-    lines, n, hc = text_lines_mask(ink)
-    if n == 0:
-        return
-    boxes = ndimage.find_objects(lines)
-    where: dict[int, tuple[int, int]] = {}
-    for i, plan in enumerate(plans):
-        room_at = np.where(np.isin(plan.labels, plan.rooms), plan.labels, 0)
-        gap, (near_r, near_c) = ndimage.distance_transform_edt(room_at == 0, return_indices=True)
-        for k, b in enumerate(boxes, 1):
-            if b is None:
-                continue
-            r, c = (b[0].start + b[0].stop) // 2 - plan.box[0].start, (b[1].start + b[1].stop) // 2 - plan.box[1].start
-            if (0 <= r < room_at.shape[0] and 0 <= c < room_at.shape[1] and gap[r, c] <= 1.5 * hc
-                    and not plan.walls[r, c]):
-                where[k] = (i, int(room_at[near_r[r, c], near_c[r, c]]))
-    found: dict[tuple[int, int], list] = {}
-    for ln in read_lines(engine, dark, ink, lines, sorted(where), hc):
-        k = int(np.max(lines[ln.box[0]:ln.box[2], ln.box[1]:ln.box[3]]))
-        found.setdefault(where[k], []).append(ln)
-    best: dict[tuple, tuple[float, int]] = {}
-    numbers: dict[tuple[int, int], str] = {}
-    for (i, room), got in found.items():
-        name, conf, area = room_name(got, hc)
-        key = (i, name) if name and NUMBER_RE.match(name) else (i, name, room)  # words repeat: 'Bedroom', 'WC'
-        if name and conf > best.get(key, (-1.0, 0))[0]:
-            best[key] = (conf, room)
-        if area is not None:
-            plans[i].printed[room] = area
-        if (number := room_number(got, hc)) is not None and number != name:
-            numbers[(i, room)] = number
-    for (i, name, *_), (_, room) in best.items():
-        plans[i].names[room] = name
-    for i, plan in enumerate(plans):  # a word naming several rooms: with each one's number, as IFC's 'Foyer A101'
-        seen = Counter(plan.names.values())
-        for room, name in plan.names.items():
-            if seen[name] > 1 and (i, room) in numbers:
-                plan.names[room] = f"{name} {numbers[(i, room)]}"
-
-
 def _polygons(plan: PlanRooms, sheet: Sheet, min_area: float):
     """(room (name, polygon) list, wall geometry, opening polygons) of a plan (m)."""
     boxes = ndimage.find_objects(plan.labels)
@@ -317,7 +291,8 @@ def _footprint(plan: PlanRooms, sheet: Sheet, source: str):
     at = (plan.box[0].start, plan.box[1].start)
     inside = mask_polygons(plan.enclosed | np.isin(plan.labels, plan.rooms), sheet.s, at, sheet.rows)
     walls = mask_polygons(plan.walls | plan.bridges, sheet.s, at, sheet.rows)
-    return rooms_footprint(polygons_of(inside.simplify(sheet.s / 2)), walls.simplify(sheet.s / 2), sheet.max_wall,
+    return rooms_footprint(polygons_of(inside.simplify(sheet.s / 2)), walls.simplify(sheet.s / 2),
+                           max(sheet.max_wall, plan.max_wall),
                            source)
 
 
@@ -355,6 +330,12 @@ def plan_import(path: Path, sheet: Sheet, index: int, why: str, *, name=None, wa
     skipped = Counter(sheet.skipped)
     obstacles = prism_obstacles(walls, 0.0, min(float(wall_height or ceiling), ceiling), "wall", src, tolerance=0,
                                 skipped=skipped)
+    n_walls = len(obstacles)
+    if plan.objects is not None and plan.objects.any():
+        shapes = mask_polygons(plan.objects, sheet.s, (plan.box[0].start, plan.box[1].start), sheet.rows)
+        obstacles += prism_obstacles(shapes.simplify(sheet.s / 2), 0.0, min(FURNITURE_M, ceiling - 0.05), "furniture",
+                                     dict(src, entity="outlines in rooms (counters, furniture)"), tolerance=0,
+                                     skipped=skipped)
     footprint = _footprint(plan, sheet, str(path))
     zones = room_zones(rooms, coverage or 2, skipped=skipped)
     title = name or (path.stem if len(sheet.plans) == 1 else f"{path.stem} plan-{index + 1}")
@@ -365,12 +346,15 @@ def plan_import(path: Path, sheet: Sheet, index: int, why: str, *, name=None, wa
     used = {"scale": f"{sheet.s:g} m/px ({sheet.scale_from})",
             "threshold": f"{sheet.threshold:g} of 255, brightest channel ({sheet.threshold_from})",
             "plans": f"{len(sheet.plans)} on the sheet; plan-{index + 1} ({why})",
-            "walls": f"{len(obstacles)} wall prisms from {sheet.walls_from}",
+            "walls": f"{n_walls} wall prisms from {sheet.walls_from}",
             "openings": f"{len(openings)} door and window gaps bridged",
             "ocr": sheet.ocr if not sheet.ocr.startswith("tesseract") else
             f"{sheet.ocr}: {named} of {len(plan.rooms)} rooms named"}
+    if len(obstacles) > n_walls:
+        used["furniture"] = (f"{len(obstacles) - n_walls} counters and furniture drawn as closed outlines in rooms, "
+                             f"{min(FURNITURE_M, ceiling - 0.05):g} m high")
     notes = []
-    if sheet.scale_from.startswith("read from"):
+    if sheet.scale_from.startswith("read from") or "printed on the page" in sheet.scale_from:
         notes.append(f"scale {sheet.s:.5g} m/px {sheet.scale_from} against a length you know (or give scale or ref)")
     if len(sheet.plans) > 1:
         notes.append(f"{len(sheet.plans)} plans side by side on the sheet (" + ", ".join(
@@ -399,10 +383,19 @@ def _common(options: dict) -> tuple[dict, dict]:
 
 
 def read(path: Path, **options) -> PlanImport:
-    """What was understood of the plan image (one plan: ``storey`` 'plan-N', else the default)."""
+    """What was understood of the plan image (one plan: ``storey`` 'plan-N', else the
+    default; of a PDF, ``storey`` may name a page as read_storeys names it)."""
     analysis, scene = _common(options)
-    sheet = analyse(path, **analysis)
     storey = options.get("storey")
+    pages = page_names(path) if is_pdf(path) and analysis.get("page") is None else []
+    label = None
+    if storey is not None and pages and not PLAN_RE.fullmatch(storey):
+        page = page_of_storey(storey, pages)
+        if page is None:
+            raise InputError(f"storey: {path.name} has no page '{storey}'; its pages are {', '.join(pages)} "
+                             "(or 'all')", option="storey")
+        analysis["page"], label, storey = page, pages[page - 1], None
+    sheet = analyse(path, **analysis)
     if storey is None:
         index, why = default_plan(sheet)
     else:
@@ -411,15 +404,59 @@ def read(path: Path, **options) -> PlanImport:
             raise InputError(f"storey: {path.name} has no plan '{storey}'; it has {', '.join(names)} "
                              "(or 'all')", option="storey")
         index, why = names.index(storey), "chosen"
-    return plan_import(path, sheet, index, why, **scene)
+    if label is not None:
+        scene.setdefault("name", f"{path.stem} {label}")
+    got = plan_import(path, sheet, index, why, **scene)
+    if len(pages) > 1 and label is None:
+        got.notes.append(f"{path.name} has {len(pages)} pages ({', '.join(pages)}): page 1 read; choose one with "
+                         "page=N or storey='NAME', or storey='all' for every page")
+    return got
 
 
 def read_storeys(path: Path, **options) -> list[tuple[str, PlanImport]]:
-    """(plan-N, what was understood) of every plan on the sheet that has rooms."""
+    """(name, what was understood) of every plan with rooms: on a sheet, plan-N; of a PDF
+    of several pages (page not given), one storey per page, named by the level its text
+    gives or page-N (image_pages.page_names; 'NAME plan-K' for a page holding several plans)."""
     analysis, scene = _common(options)
+    if is_pdf(path) and analysis.get("page") is None and page_count(path) > 1:
+        return _page_storeys(path, analysis, scene)
     sheet = analyse(path, **analysis)
     return [(f"plan-{i + 1}", plan_import(path, sheet, i, "storey 'all'", **scene))
             for i, p in enumerate(sheet.plans) if p.rooms]
+
+
+def _page_storeys(path: Path, analysis: dict, scene: dict) -> list[tuple[str, PlanImport]]:
+    """One storey per page of a PDF plan set, each in its page's coordinates; a page that
+    cannot be read (a cover, a legend, no scale) is left out with a note; none read:
+    InputError (the first naming an option, as a scale to give, else one naming the pages)."""
+    out, unread, rows, errors = [], [], [], []
+    for page, name in enumerate(page_names(path), 1):
+        try:
+            sheet = analyse(path, **dict(analysis, page=page))
+        except InputError as err:  # a cover, a legend, a page with no scale to read
+            errors.append(err)
+            unread.append((name, str(err).removeprefix(f"{path}: ")))
+            continue
+        with_rooms = [i for i, p in enumerate(sheet.plans) if p.rooms]
+        for i in with_rooms:
+            label = name if len(with_rooms) == 1 else f"{name} plan-{i + 1}"
+            got = plan_import(path, sheet, i, f"page {page}", **{"name": f"{path.stem} {label}", **scene})
+            out.append((label, got))
+            rows.append(dict(got.storeys[i], name=label))
+    causes: dict[str, list[str]] = {}
+    for name, cause in unread:  # pages left out for one cause named together
+        causes.setdefault(cause, []).append(name)
+    left = [f"{', '.join(names)} ({cause})" for cause, names in causes.items()]
+    if not out:
+        first = next((e for e in errors if e.option is not None), None)
+        if first is not None:  # the same option fails on the pages (a scale to give): its one line
+            raise first
+        raise InputError(f"{path}: no page holds a plan with a closed room: {'; '.join(left)}")
+    for label, got in out:
+        got.storeys = [dict(r, chosen=r["name"] == label) for r in rows]
+        if left:
+            got.notes.append(f"pages left out: {'; '.join(left)}")
+    return out
 
 
 def storey_elevations(path: Path, units=None) -> dict[str, float]:

@@ -19,6 +19,7 @@ from pathlib import Path
 import numpy as np
 
 from camplace.core.errors import InputError
+from camplace.scene.importers.image_pages import open_pdf
 
 MAX_PIXELS = 100_000_000
 INCH_M = 0.0254
@@ -122,14 +123,7 @@ def _dpi(value) -> float | None:
 
 def _pdf_page(path: Path, page: int, ratio: float | None) -> SheetImage:
     """Page ``page`` of a PDF rendered on white paper (PDFium, through pypdfium2)."""
-    try:
-        import pypdfium2 as pdfium
-    except ImportError:  # pragma: no cover - a declared dependency
-        raise InputError(f"{path}: reading a PDF needs pypdfium2 (pip install pypdfium2)") from None
-    try:
-        doc = pdfium.PdfDocument(str(path))
-    except (pdfium.PdfiumError, OSError) as err:
-        raise InputError(f"{path}: not a readable PDF ({str(err).splitlines()[0]})") from None
+    doc = open_pdf(path)
     try:
         n = len(doc)
         if not isinstance(page, int) or not 1 <= page <= n:

@@ -23,6 +23,9 @@ HOLLOW_WALL_M = 0.5  # a closed strip of paper up to this wide between two lines
 LINE_RUN_M = 1.0  # a wall drawn as a single line runs straight this far somewhere along its piece of ink
 LINE_PIECE_M = 0.4  # ... or is a straight piece this long in line with such walls
 LINE_WALL_M = 0.1  # the thickness given to walls drawn as single lines (m)
+POCHE_MAX_M = 1.0  # the widest wall whose inside, filled with marks of any kind (poché), is wall
+POCHE_SPREAD_M = 0.12  # the marks of a poché lie at most this far from every point of it ...
+POCHE_COVER = 0.9  # ... over this share of it
 
 
 def brightness(rgb: np.ndarray) -> np.ndarray:
@@ -125,7 +128,7 @@ def solid_walls(ink: np.ndarray, s: float, hatch_m: float, min_wall_m: float, ma
     strokes = square_morphology(extent[lab] * s >= LONG_STROKE_M, 3, "close")  # small breaks sealed
     free = ~strokes & ~_edge_paper(~strokes)  # the paper between a sheet's frame and its edge is no wall
     cells = free & ~square_morphology(free, hatch_m / s, "open")  # hatch cells, the inside of thin walls
-    bands = free & ~square_morphology(free, max_wall_m / s, "open")  # strips no wider than a wall
+    bands = free & ~square_morphology(free, max(max_wall_m, POCHE_MAX_M) / s, "open")  # strips no wider than a wall
     blab, nb = ndimage.label(bands)
     marked = np.zeros(nb + 1, bool)
     closed = np.zeros(nb + 1, bool)
@@ -135,22 +138,33 @@ def solid_walls(ink: np.ndarray, s: float, hatch_m: float, min_wall_m: float, ma
         diagonal = (marks & (np.roll(marks, (1, 1), (0, 1)) | np.roll(marks, (1, -1), (0, 1)))).astype(np.int8)
         square = (marks & (np.roll(marks, 1, 0) | np.roll(marks, 1, 1))).astype(np.int8)
         long = np.bincount(blab.ravel(), minlength=nb + 1)[1:] >= 8 * width ** 2
-        marked[1:] = ((label_mean(marks, blab, nb)[1:] >= 0.08) & long
+        marked[1:] = ((label_mean(marks, blab, nb)[1:] >= 0.08) & long & (width <= max_wall_m / s / 2)
                       & (label_sum(diagonal, blab, nb)[1:] > label_sum(square, blab, nb)[1:]))
+        marked[1:] |= long & (label_mean(marks, blab, nb)[1:] >= 0.03) & evenly_marked(marks, blab, nb, s)
         closed[1:] = long & (width <= HOLLOW_WALL_M / s / 2) & _closed_bands(free, blab, nb) & ~marked[1:]
     solid = ink | strokes | cells | marked[blab]
-    walls = _finished(solid, ink, s, min_wall_m, max_wall_m, skipped)
+    poche = marked[blab]
+    walls = _finished(solid, ink, s, min_wall_m, max_wall_m, skipped, poche)
     if not closed.any():
         return walls, None
     return walls, _finished(solid | closed[blab], ink, s, min_wall_m, max_wall_m,
-                            hollow_skipped if hollow_skipped is not None else Counter())
+                            hollow_skipped if hollow_skipped is not None else Counter(), poche)
+
+
+def evenly_marked(marks: np.ndarray, blab: np.ndarray, nb: int, s: float) -> np.ndarray:
+    """(nb,) bool: the strips 1..nb of ``blab`` whose ``marks`` (ink inside them) cover them
+    evenly, poché of any kind: at least POCHE_COVER of each strip lies within
+    POCHE_SPREAD_M of a mark (a stipple of dots, a hatch at any angle). The text between
+    a wall and its dimension line covers a few places of its strip, not all of it."""
+    near = ndimage.maximum_filter(marks, size=odd(2 * POCHE_SPREAD_M / s, 3))
+    return label_mean(near, blab, nb)[1:] >= POCHE_COVER
 
 
 def _finished(solid: np.ndarray, ink: np.ndarray, s: float, min_wall_m: float, max_wall_m: float,
-              skipped: Counter) -> np.ndarray:
+              skipped: Counter, poche: np.ndarray) -> np.ndarray:
     """The filled wall mask ``solid`` with its broad areas that were mostly paper given
-    back to ``ink`` (stair treads, text blocks: counted in ``skipped``) and strokes thinner
-    than ``min_wall_m`` opened away."""
+    back to ``ink`` (stair treads, text blocks: counted in ``skipped``; not the ``poche``,
+    walls filled evenly with marks) and strokes thinner than ``min_wall_m`` opened away."""
     solid = solid.copy()
     broad = square_morphology(solid, max_wall_m / s, "open")
     if broad.any():
@@ -158,7 +172,7 @@ def _finished(solid: np.ndarray, ink: np.ndarray, s: float, min_wall_m: float, m
         textured = np.r_[False, label_mean(ink, blab, nb)[1:] < 0.5]
         if textured.any():
             skipped["textured areas (stairs, text blocks)"] += int(textured.sum())
-            back = textured[blab]
+            back = textured[blab] & ~ndimage.maximum_filter(poche, size=3)
             solid[back] = ink[back]
     return square_morphology(solid, max(min_wall_m / s, 2), "open")
 
@@ -309,7 +323,7 @@ def find_plans(raw: np.ndarray, ink: np.ndarray, s: float, max_opening_m: float,
     keep &= group > 0
     gsum = np.bincount(group, weights=area * keep, minlength=ng + 1)
     gsum[0] = 0
-    plans = [int(g) for g in np.flatnonzero(gsum >= 0.25 * gsum.max())]
+    plans = [int(g) for g in np.flatnonzero((gsum > 0) & (gsum >= 0.25 * gsum.max()))]  # none: no plan
     on_plan = np.isin(group, plans)
     if np.count_nonzero(on_plan & ~keep):
         skipped["text and symbols on the plans"] += int(np.count_nonzero(on_plan & ~keep))
