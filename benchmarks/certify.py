@@ -130,7 +130,7 @@ def run_hull(problem, time_s: float) -> dict:
     lag = lagrangian_bound(problem, time_limit_s=time_s, incumbent_cost=ub, lam0=lam0)
     hull = target_hull_bound(problem, lam0, time_limit_s=time_s, incumbent_cost=ub)
     after = target_hull_bound(problem, lag.multipliers, time_limit_s=time_s, incumbent_cost=ub)
-    row = lambda r: {"bound": r.bound, "seconds": round(r.seconds, 2), **{k: v for k, v in r.info.items()}}  # noqa: E731
+    row = lambda r: {"bound": r.bound, "seconds": round(r.seconds, 2), **{k: v for k, v in r.info.items()}}
     return {"method": "hull", "incumbent": ub, "engine_bound": eng["bound"], "engine_seconds": eng["seconds"],
             "lagrangian": row(lag), "target_hull": row(hull), "target_hull_after_lagrangian": row(after)}
 

@@ -8,11 +8,10 @@ import itertools
 
 import numpy as np
 import scipy.sparse as sp
+from conftest import small_problems, small_random_problem
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from scipy.optimize import linprog
-
-from conftest import small_problems, small_random_problem
 
 from camplace.problem.model import PlacementProblem, brute_force_optimum
 from camplace.solvers.bounds import Lagrangian, tight_model_arrays
@@ -29,7 +28,7 @@ def _lp(c, A_ub, b_ub, A_eq=None, b_eq=None, n=0) -> float:
 
 def standard_lp(p: PlacementProblem) -> float:
     """The convex model's LP (certify.md §0, §5) by scipy's HiGHS."""
-    A, cost, lo, hi, row_lo, row_hi, _ = tight_model_arrays(p)
+    A, cost, _, _, row_lo, row_hi, _ = tight_model_arrays(p)
     A = sp.csr_matrix(A)
     up, down = np.isfinite(row_hi), np.isfinite(row_lo)
     A_ub = sp.vstack([A[up], -A[down]])

@@ -95,7 +95,7 @@ class TargetDecomposition:
     n_loc: int
 
     @classmethod
-    def of(cls, problem: PlacementProblem) -> "TargetDecomposition":
+    def of(cls, problem: PlacementProblem) -> TargetDecomposition:
         coo = sp.coo_matrix(problem.V)
         rows = coo.row.astype(np.int64)
         cols = coo.col.astype(np.int64)
