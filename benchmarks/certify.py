@@ -4,6 +4,7 @@ Usage (one job at a time on a 2-core machine; each writes one JSON line per inst
     python benchmarks/certify.py highs   --out benchmarks/results/certify-highs.jsonl  [--time 600]
     python benchmarks/certify.py papermip --out benchmarks/results/certify-papermip.jsonl [--time 600]
     python benchmarks/certify.py engine  --out benchmarks/results/certify-engine.jsonl [--time 600]
+    python benchmarks/certify.py hull --time 10 --out benchmarks/results/certify-hull.jsonl  # issue 37, §10
     python benchmarks/certify.py table      # the docs/results.md table from benchmarks/results/*.jsonl
 Instances: standard-store at N_s = 20, 40, 60, 80 and store-a at N_s = 40 (`--only scene:N` to pick).
 The engine run records the incumbent and bound it held at 10 s, 60 s and the end.
@@ -110,7 +111,28 @@ def run_engine(problem, time_s: float, **options) -> dict:
     return {"method": "certify", "objective": p.objective, "bound": p.bound, "gap": p.gap,
             "incumbent_method": p.info.get("incumbent_method"), "bound_method": p.info.get("bound_method"),
             "snapshots": snaps, "seconds": round(time.perf_counter() - t0, 2), "trace": trace[-200:],
-            "lp": p.info.get("lp"), "region": p.info.get("region")}
+            "lp": p.info.get("lp"), "region": p.info.get("region"),
+            "selected": np.isin(np.arange(problem.n_candidates), p.selected)}
+
+
+def run_hull(problem, time_s: float) -> dict:
+    """Issue 37: the per-target decomposition bound (certify.md §10) against today's bounds,
+    each given `time_s`: (a) the certify engine (incumbent + bound, threads 2); (b) the
+    coverage-row Lagrangian alone, started from (a)'s incumbent; (c) the per-target ascent
+    from the same start; (d) the per-target ascent started where (b) ended."""
+    from camplace.solvers.bounds import Lagrangian, lagrangian_bound
+    from camplace.solvers.target_hull import target_hull_bound
+
+    eng = run_engine(problem, time_s)
+    sel = np.flatnonzero(eng.pop("selected"))
+    ub, cov = float(problem.cost(sel)), problem.coverage(sel)
+    lam0 = Lagrangian(problem).initial_multipliers(cov)
+    lag = lagrangian_bound(problem, time_limit_s=time_s, incumbent_cost=ub, lam0=lam0)
+    hull = target_hull_bound(problem, lam0, time_limit_s=time_s, incumbent_cost=ub)
+    after = target_hull_bound(problem, lag.multipliers, time_limit_s=time_s, incumbent_cost=ub)
+    row = lambda r: {"bound": r.bound, "seconds": round(r.seconds, 2), **{k: v for k, v in r.info.items()}}
+    return {"method": "hull", "incumbent": ub, "engine_bound": eng["bound"], "engine_seconds": eng["seconds"],
+            "lagrangian": row(lag), "target_hull": row(hull), "target_hull_after_lagrangian": row(after)}
 
 
 def _ceil(b):
@@ -160,7 +182,7 @@ def main(argv: list[str] | None = None) -> None:
         print(table(Path(sys.argv[2]) if len(sys.argv) > 2 else Path(__file__).resolve().parent / "results"))
         return
     ap = argparse.ArgumentParser()
-    ap.add_argument("what", choices=["highs", "papermip", "engine"])
+    ap.add_argument("what", choices=["highs", "papermip", "engine", "hull"])
     ap.add_argument("--out", required=True)
     ap.add_argument("--time", type=float, default=600.0)
     ap.add_argument("--only", action="append", default=None, help="scene:N, repeatable")
@@ -176,8 +198,11 @@ def main(argv: list[str] | None = None) -> None:
             res = run_highs(prob, a.time, str(out.with_suffix("")) + f"-{scene}-{n}.log")
         elif a.what == "papermip":
             res = run_papermip(prob, a.time)
+        elif a.what == "hull":
+            res = run_hull(prob, a.time)
         else:
             res = run_engine(prob, a.time, **({"region": True} if a.region else {}))
+            res.pop("selected")
         res.update({"scene": scene, "budget": n, "time_limit_s": a.time,
                     "wall_s": round(time.perf_counter() - t0, 2)})
         with out.open("a") as f:
