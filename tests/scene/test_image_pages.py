@@ -115,3 +115,19 @@ def test_a_level_name_is_text_of_the_page(words):
     text = " ".join(words)
     name = level_name(text)
     assert name is None or name.lower() in " ".join(text.split()).lower()
+
+
+def test_a_pdf_set_is_one_building(sets, tmp_path, monkeypatch, capsys):
+    """issue 33: every page a storey of one building, stacked (3 m apart: a plan set has no
+    elevations), planned in one run with one budget."""
+    import json
+
+    from tests.conftest import run_cli
+
+    code, text = run_cli(["--quiet", "run", sets[0], "--storey", "all", "--scale", "1:100", "--no-ocr", "--budget",
+                          "3", "--grid-only", "--no-plan", "--no-cache", "--out", tmp_path / "o"], monkeypatch, capsys)
+    assert code == 0, text
+    placement = json.loads((tmp_path / "o" / "placement.json").read_text())
+    assert [s["name"] for s in placement["storeys"]] == ["Ground floor", "Level 2"]
+    assert [s["elevation_m"] for s in placement["storeys"]] == [0.0, 3.0]
+    assert len(placement["cameras"]) <= 3 and all("storey" in c for c in placement["cameras"])
