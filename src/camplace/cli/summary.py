@@ -62,6 +62,10 @@ def _table(result, out_dir: Path, paths: dict, skipped: list[str] = ()) -> Table
     t.add_row("non-triangulatable", f"{m.non_triangulatable_pct:.2f} %")
     if m.well_triangulated_pct is not None:
         t.add_row("well triangulated", f"{m.well_triangulated_pct:.2f} % (rays meet at a usable angle)")
+    for st in getattr(m, "storeys", None) or []:  # a building (issue 33): one row per storey
+        cap = "" if st["budget"] is None else f" (at most {st['budget']})"
+        t.add_row(f"  storey {st['storey']}", f"{st['cameras']} cameras{cap}, floor at {st['elevation_m']:g} m, "
+                                             f"{st['targets']} targets, gap {st['coverage_gap']:.4f}")
     for name, r in m.regions.items():
         t.add_row(f"  region {name}", f"{r['targets']} targets, gap {r['coverage_gap']:.4f}, "
                                      f"non-tri {r['non_triangulatable_pct']:.1f} %")
