@@ -24,7 +24,7 @@ def test_bound_below_optimum_and_incumbent_exact(p):
 
 
 def test_small_instance_proven_optimal():
-    p = random_problem(4, n_g=40, n_p=60, budget=4, n_loc=15, density=0.25)
+    p = random_problem(4, n_g=30, n_p=60, budget=4, n_loc=12, density=0.25)
     r = solve_certify(p, time_limit_s=20, threads=1)
     opt, _ = brute_force(p)
     assert r.objective == opt
