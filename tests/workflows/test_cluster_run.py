@@ -12,7 +12,7 @@ distributed = pytest.importorskip("distributed")
 
 from conftest import run_cli, same_csr  # noqa: E402
 
-SCENE = "warehouse:300"
+SCENE = "warehouse:200"  # the smallest warehouse: 4 visibility chunks, 6 zone tiles
 
 
 def _outputs(d):
