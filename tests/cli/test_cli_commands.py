@@ -193,7 +193,7 @@ def test_scene_import_out_must_be_a_yaml_file(scan_ply, tmp_path, monkeypatch, c
 
 def test_deprecated_cloud_alias_and_save_scene(scan_ply, tmp_path, monkeypatch, capsys):
     text = _run_ok(["run", "--cloud", scan_ply, "--save-scene", tmp_path / "s.yaml", "--budget", "3",
-                    "--out", tmp_path / "out", "--no-cache"], monkeypatch, capsys)
+                    "--out", tmp_path / "out", "--no-cache", "--no-plan"], monkeypatch, capsys)
     assert "deprecated" in text and (tmp_path / "s.yaml").is_file() and (tmp_path / "out" / "placement.json").is_file()
     code, text = run_cli(["run", "demo", "--save-scene", tmp_path / "t.yaml"], monkeypatch, capsys)
     assert code == 2 and "scene import" in text and not (tmp_path / "t.yaml").exists()
