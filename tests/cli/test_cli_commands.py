@@ -92,14 +92,15 @@ def test_scene_import_of_a_scan_gives_a_scene_run_accepts(scan_ply, tmp_path, mo
     assert scene.read_text().startswith("# camplace scene built from a space file")
     spec = load_scene_file(scene)
     assert abs(spec.room.height - 3.0) < 0.05
-    _run_ok(["-q", "run", scene, "--out", tmp_path / "out", "--no-cache"], monkeypatch, capsys)
+    _run_ok(["-q", "run", scene, "--out", tmp_path / "out", "--no-cache", "--no-plan"], monkeypatch, capsys)
     assert (tmp_path / "out" / "placement.json").is_file()
 
 
 def test_run_takes_a_scan_directly(scan_ply, tmp_path, monkeypatch, capsys):
     import json
 
-    _run_ok(["-q", "run", scan_ply, "--budget", "3", "--out", tmp_path / "out", "--no-cache"], monkeypatch, capsys)
+    _run_ok(["-q", "run", scan_ply, "--budget", "3", "--out", tmp_path / "out", "--no-cache", "--no-plan"], monkeypatch,
+            capsys)
     p = json.loads((tmp_path / "out" / "placement.json").read_text())
     assert len(p["cameras"]) == 3
 
@@ -117,7 +118,7 @@ def test_scene_import_of_a_mesh_and_run(tmp_path, monkeypatch, capsys):
     assert abs(spec.room.height - 3.0) < 0.05
     fp = np.asarray(spec.room.footprint)
     assert np.allclose(fp.min(0), [0, 0], atol=0.1) and np.allclose(fp.max(0), [6, 5], atol=0.1)
-    _run_ok(["-q", "run", tmp_path / "room.obj", "--budget", "3", "--out", tmp_path / "out", "--no-cache"],
+    _run_ok(["-q", "run", tmp_path / "room.obj", "--budget", "3", "--out", tmp_path / "out", "--no-cache", "--no-plan"],
             monkeypatch, capsys)
     assert (tmp_path / "out" / "placement.json").is_file()
 
@@ -131,7 +132,8 @@ def test_scene_import_of_an_octomap_and_run(tmp_path, monkeypatch, capsys):
     ob = yaml.safe_load(scene.read_text())["obstacles"][0]
     assert ob["octomap"] == str(bt.resolve()) and "rotate_deg" not in ob.get("transform", {})
     load_scene_file(scene)
-    _run_ok(["-q", "run", scene, "--budget", "3", "--out", tmp_path / "out", "--no-cache"], monkeypatch, capsys)
+    _run_ok(["-q", "run", scene, "--budget", "3", "--out", tmp_path / "out", "--no-cache", "--no-plan"], monkeypatch,
+            capsys)
     code, text = run_cli(["scene", "import", bt, "--out", tmp_path / "b.yaml", "--up", "+y"], monkeypatch, capsys)
     assert code == 2 and "--up" in text and not (tmp_path / "b.yaml").exists()
 
@@ -191,7 +193,7 @@ def test_scene_import_out_must_be_a_yaml_file(scan_ply, tmp_path, monkeypatch, c
 
 def test_deprecated_cloud_alias_and_save_scene(scan_ply, tmp_path, monkeypatch, capsys):
     text = _run_ok(["run", "--cloud", scan_ply, "--save-scene", tmp_path / "s.yaml", "--budget", "3",
-                    "--out", tmp_path / "out", "--no-cache"], monkeypatch, capsys)
+                    "--out", tmp_path / "out", "--no-cache", "--no-plan"], monkeypatch, capsys)
     assert "deprecated" in text and (tmp_path / "s.yaml").is_file() and (tmp_path / "out" / "placement.json").is_file()
     code, text = run_cli(["run", "demo", "--save-scene", tmp_path / "t.yaml"], monkeypatch, capsys)
     assert code == 2 and "scene import" in text and not (tmp_path / "t.yaml").exists()

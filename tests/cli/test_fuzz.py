@@ -160,12 +160,13 @@ def mutated_scenes(draw) -> str:
 def test_mutated_scenes_fail_cleanly_or_run(text, tmp_path_factory, monkeypatch, capsys):
     d = tmp_path_factory.mktemp("fuzz-bad")
     monkeypatch.setenv("CAMPLACE_CACHE", str(d / "cache"))
-    # input handling is under test here, not the HTML report (tests/test_report_html.py): skip its cost
+    # input handling is under test here, not the HTML report (tests/outputs/test_report_html.py) nor the
+    # plan set (tests/outputs/test_handover.py): skip their cost (the report below, the plan set by --no-plan)
     monkeypatch.setattr("camplace.outputs.report_html.write_report", lambda *a, **k: {})
     path = d / "scene.yaml"
     path.write_text(text)
     out = d / "out"
-    code, msg = run_cli(["-q", "run", path, "--out", out, "--no-cache"], monkeypatch, capsys)
+    code, msg = run_cli(["-q", "run", path, "--out", out, "--no-cache", "--no-plan"], monkeypatch, capsys)
     assert "Traceback" not in msg and "internal error" not in msg, msg
     assert code in (0, 2), msg
     if code == 2:
@@ -206,7 +207,7 @@ def test_random_placement_files_fail_cleanly_or_evaluate(text, ext, tmp_path_fac
     scene.write_text(yaml.safe_dump(BASE))
     pfile = d / f"p{ext}"
     pfile.write_text(text)
-    code, msg = run_cli(["-q", "evaluate", scene, pfile, "--out", d / "out"], monkeypatch, capsys)
+    code, msg = run_cli(["-q", "evaluate", scene, pfile, "--out", d / "out", "--no-plan"], monkeypatch, capsys)
     assert "Traceback" not in msg and "internal error" not in msg, msg
     assert code in (0, 2), msg
     assert (code == 0) == (d / "out" / "placement.json").is_file()

@@ -112,7 +112,7 @@ def _mutate(raw: bytes, name: str, kind: str, at: float, junk: bytes) -> bytes:
     return _huge_counts(raw, name, b"1000000000000" if junk[:1] < b"\x80" else b"4294967295")
 
 
-@settings(max_examples=400, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@settings(max_examples=200, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
 @given(name=st.sampled_from(sorted(WRITERS)), kind=st.sampled_from(["truncate", "flip", "insert", "huge"]),
        at=st.floats(0.0, 1.0), junk=st.binary(min_size=1, max_size=24))
 def test_mutated_files_load_or_fail_in_one_line(valid, tmp_path_factory, name, kind, at, junk):

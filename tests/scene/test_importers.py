@@ -219,7 +219,8 @@ def test_cli_run_and_import_dxf(tmp_path, monkeypatch, capsys):
     assert [z["name"] for z in data["zones"]] == ["Office", "Lab"]
     scene = _scene_of(data)
     out = tmp_path / "run"
-    code, text = run_cli(["--quiet", "run", plan, "--out", out, "--budget", "6", "--grid-only"], monkeypatch, capsys)
+    code, text = run_cli(["--quiet", "run", plan, "--out", out, "--budget", "6", "--grid-only", "--no-plan"],
+                         monkeypatch, capsys)
     assert code == 0, text
     cams = np.array([c["position"] for c in json.loads((out / "placement.json").read_text())["cameras"]], float)
     assert len(cams) > 0 and not scene.occupancy.is_occupied(cams).any()
@@ -353,8 +354,8 @@ def test_cli_run_png(tmp_path, monkeypatch, capsys):
 
     plan = draw_png(tmp_path / "plan.png")
     out = tmp_path / "run"
-    code, text = run_cli(["--quiet", "run", plan, "--scale", PX, "--out", out, "--budget", "6", "--grid-only"],
-                         monkeypatch, capsys)
+    code, text = run_cli(["--quiet", "run", plan, "--scale", PX, "--out", out, "--budget", "6", "--grid-only",
+                          "--no-plan"], monkeypatch, capsys)
     assert code == 0, text
     scene = _scene_of(import_plan(plan, scale=PX))
     cams = np.array([c["position"] for c in json.loads((out / "placement.json").read_text())["cameras"]], float)
@@ -395,7 +396,7 @@ def test_run_on_the_imported_yaml_reproduces_the_run_on_the_dxf(tmp_path, monkey
     for name, src in (("dxf", plan), ("yaml", site)):
         outs[name] = tmp_path / name
         code, text = run_cli(["--quiet", "run", src, "--out", outs[name], "--budget", "4", "--grid-only",
-                              "--repeatable"], monkeypatch, capsys)
+                              "--repeatable", "--no-plan"], monkeypatch, capsys)
         assert code == 0, text
 
     def v_hash(folder):

@@ -65,7 +65,8 @@ def test_cli_workers_process_pool_equals_local(tmp_path, monkeypatch):
     from camplace.workflows.run import prepare
 
     monkeypatch.delenv(SCHEDULER_ENV, raising=False)
-    r = CliRunner().invoke(app, ["run", "demo", "--grid-only", "--out", str(tmp_path / "o"), "--workers", "2", "--no-cache"])
+    r = CliRunner().invoke(app, ["run", "demo", "--grid-only", "--out", str(tmp_path / "o"), "--workers", "2",
+                                 "--no-cache", "--no-plan"])
     assert r.exit_code == 0, r.output
     assert "process-pool" in r.output
     with np.load(tmp_path / "o" / "visibility.npz") as z:

@@ -109,7 +109,7 @@ def test_zones_run_resumes_from_its_checkpoint_under_the_cache(tmp_path):
     run loads every V block and starts from the last finished sweep."""
     from camplace.workflows.run import run
 
-    opts = {"solver": "zones", "cache_dir": tmp_path, "tile_time_s": 20.0, "bound_time_s": 1.0,
+    opts = {"solver": "zones", "cache_dir": tmp_path, "tile_time_s": 20.0, "bound_time_s": 0.2,
             "tile_m": 6.0}  # small tiles, each MIP well inside its limit; the smallest warehouse: several tiles
     first = run("warehouse:200", max_sweeps=1, **opts)
     assert list((tmp_path / "zones").glob("*.json"))

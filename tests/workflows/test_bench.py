@@ -71,9 +71,11 @@ def test_bad_options_are_input_errors():
     assert np.all(np.array(parse_budgets("5")) == 5)
 
 
-def test_cli_bench_writes_the_three_files(tmp_path):
+def test_cli_bench_writes_the_three_files(tmp_path, monkeypatch, capsys):
     import subprocess
     import sys
+
+    from conftest import run_cli
 
     out = tmp_path / "b"
     r = subprocess.run([sys.executable, "-m", "camplace.cli.app", "bench", "demo", "--budgets", "2,4", "--methods",
@@ -81,9 +83,8 @@ def test_cli_bench_writes_the_three_files(tmp_path):
     assert r.returncode == 0, r.stderr
     assert "| Proposed Greedy |" in r.stdout
     assert {p.name for p in out.iterdir()} >= {"bench.csv", "bench.md", "bench.png"}
-    bad = subprocess.run([sys.executable, "-m", "camplace.cli.app", "bench", "demo", "--budgets", "x"],
-                         capture_output=True, text=True, timeout=60)
-    assert bad.returncode == 2 and "--budgets" in bad.stderr
+    code, text = run_cli(["bench", "demo", "--budgets", "x"], monkeypatch, capsys)  # in-process: no 2nd start-up
+    assert code == 2 and "--budgets" in text and "Traceback" not in text
 
 
 def test_bench_certify_adds_a_row_with_a_proven_bound():
@@ -98,12 +99,11 @@ def test_bench_certify_adds_a_row_with_a_proven_bound():
     assert err.value.option == "certify_s"
 
 
-def test_cli_bench_certify_bad_value_is_a_one_line_error(tmp_path):
-    import subprocess
-    import sys
+def test_cli_bench_certify_bad_value_is_a_one_line_error(tmp_path, monkeypatch, capsys):
+    from conftest import run_cli
 
-    r = subprocess.run([sys.executable, "-m", "camplace.cli.app", "bench", "demo", "--budgets", "2", "--methods", "greedy",
-                        "--certify", "-1", "--out", str(tmp_path / "b")], capture_output=True, text=True, timeout=120)
-    assert r.returncode == 2
-    assert "--certify" in r.stderr and "Traceback" not in r.stderr
+    code, text = run_cli(["bench", "demo", "--budgets", "2", "--methods", "greedy", "--certify", "-1", "--out",
+                          tmp_path / "b"], monkeypatch, capsys)
+    assert code == 2
+    assert "--certify" in text and "Traceback" not in text
     assert not (tmp_path / "b").exists()

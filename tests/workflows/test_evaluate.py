@@ -158,9 +158,11 @@ def test_json_rotation_and_angles_must_agree(demo_out, tmp_path):
         read_placement(tmp_path / "bad.json")
 
 
-def test_cli_evaluate_json_summary(demo_out, tmp_path):
+def test_cli_evaluate_json_summary(demo_out, tmp_path, monkeypatch, capsys):
+    from conftest import run_cli
+
     proc = subprocess.run([sys.executable, "-m", "camplace.cli.app", "--json", "evaluate", "demo",
-                           str(demo_out / "placement.csv"), "--out", str(tmp_path / "ev")],
+                           str(demo_out / "placement.csv"), "--out", str(tmp_path / "ev"), "--no-plan"],
                           capture_output=True, text=True, timeout=300)
     assert proc.returncode == 0, proc.stderr
     summary = json.loads(proc.stdout)
@@ -169,9 +171,8 @@ def test_cli_evaluate_json_summary(demo_out, tmp_path):
     assert summary["coverage_gap"] == m["coverage_gap"] and summary["regions"] == m["regions"]
     for f in ("placement.json", "metrics.json", "visibility.npz", "placement.csv", "report.html"):
         assert (tmp_path / "ev" / f).exists() and f in summary["files"]
-    bad = subprocess.run([sys.executable, "-m", "camplace.cli.app", "evaluate", "demo", str(tmp_path / "nope.csv")],
-                         capture_output=True, text=True, timeout=300)
-    assert bad.returncode == 2 and "placement file not found" in bad.stderr and "Traceback" not in bad.stderr
+    code, text = run_cli(["evaluate", "demo", tmp_path / "nope.csv"], monkeypatch, capsys)  # in-process
+    assert code == 2 and "placement file not found" in text and "Traceback" not in text
 
 
 def test_cli_run_quiet_verbose_json(tmp_path):
@@ -188,9 +189,9 @@ def test_cli_run_quiet_verbose_json(tmp_path):
     m = json.loads((out / "metrics.json").read_text())
     assert summary["cost"] == m["cost"] and summary["n_cameras"] == summary["budget"] == 6
     assert summary["files"]["report.html"] == str(out / "report.html") and "report" in summary["timings_s"]
-    res = runner.invoke(app, ["--quiet", "run", "demo", "--out", str(out), "--no-cache"])
+    res = runner.invoke(app, ["--quiet", "run", "demo", "--out", str(out), "--no-cache", "--no-plan"])
     assert res.exit_code == 0 and res.stdout.strip() == str(out)
-    res = runner.invoke(app, ["--verbose", "run", "demo", "--out", str(out), "--no-cache"])
+    res = runner.invoke(app, ["--verbose", "run", "demo", "--out", str(out), "--no-cache", "--no-plan"])
     assert res.exit_code == 0
     assert "report.html" in res.output and "opencv" in res.output
 

@@ -170,7 +170,7 @@ def test_a_camera_given_in_the_file_frame_comes_back_at_the_same_pose(scanned, t
     scene = scanned / "room.yaml"
     for name in ("cams.json", "cams.csv"):
         out = tmp_path / f"out-{name}"
-        _invoke(["evaluate", scene, tmp_path / name, "--frame", "input", "--out", out])
+        _invoke(["evaluate", scene, tmp_path / name, "--frame", "input", "--out", out, "--no-plan"])
         p = json.loads((out / "placement.json").read_text())
         assert p["frame"] == "input"
         cam = p["cameras"][0]
@@ -183,7 +183,7 @@ def test_a_camera_given_in_the_file_frame_comes_back_at_the_same_pose(scanned, t
     spos, srot = map_poses(invert(T), [pos], rot[None])
     (tmp_path / "scene.json").write_text(json.dumps([{"position": spos[0].tolist(), "rotation": srot[0].tolist(),
                                                       "camera": "wide"}]))
-    _invoke(["evaluate", scene, tmp_path / "scene.json", "--out", tmp_path / "out-scene"])
+    _invoke(["evaluate", scene, tmp_path / "scene.json", "--out", tmp_path / "out-scene", "--no-plan"])
     ps = json.loads((tmp_path / "out-scene" / "placement.json").read_text())
     assert ps["frame"] == "scene" and np.allclose(ps["input_from_scene"], T, atol=0)
     back, back_rot = map_poses(T, [ps["cameras"][0]["position"]], np.asarray([ps["cameras"][0]["rotation"]]))
@@ -239,7 +239,7 @@ def test_a_bad_frame_is_refused_before_any_work(cmd, tmp_path, monkeypatch, caps
 
 
 def test_box_scenes_write_the_identity(tmp_path):
-    _invoke(["run", "demo", "--budget", "2", "--frame", "input", "--out", tmp_path / "o", "--no-cache"])
+    _invoke(["run", "demo", "--budget", "2", "--frame", "input", "--out", tmp_path / "o", "--no-cache", "--no-plan"])
     p = json.loads((tmp_path / "o" / "placement.json").read_text())
     assert p["frame"] == "input" and p["input_from_scene"] == np.eye(4).tolist()
     _contract_holds(tmp_path / "o")

@@ -19,7 +19,7 @@ import pytest
 
 from conftest import run_cli
 
-FILES = ("placement.json", "metrics.json", "placement.csv")
+FILES = ("placement.json", "metrics.json", "placement.csv")  # the same bytes with and without --no-plan
 
 
 def _bytes(out: Path) -> dict[str, bytes]:
@@ -66,7 +66,7 @@ def test_cached_visibility_gives_the_same_bytes(tmp_path, monkeypatch, capsys, s
     monkeypatch.setenv("CAMPLACE_CACHE", str(tmp_path / "cache"))
     for k in range(2):  # a cold then a warm cache
         out = tmp_path / f"out{k}"
-        code, text = run_cli(["run", "demo", "--out", out, "--repeatable"], monkeypatch, capsys)
+        code, text = run_cli(["run", "demo", "--out", out, "--repeatable", "--no-plan"], monkeypatch, capsys)
         assert code == 0, text
         assert _bytes(out) == _bytes(subprocess_run)
 
@@ -74,7 +74,7 @@ def test_cached_visibility_gives_the_same_bytes(tmp_path, monkeypatch, capsys, s
 def test_without_repeatable_only_timings_differ(tmp_path, monkeypatch, capsys, subprocess_run):
     monkeypatch.setenv("CAMPLACE_CACHE", str(tmp_path / "cache"))
     out = tmp_path / "out"
-    code, text = run_cli(["run", "demo", "--out", out, "--no-cache"], monkeypatch, capsys)
+    code, text = run_cli(["run", "demo", "--out", out, "--no-cache", "--no-plan"], monkeypatch, capsys)
     assert code == 0, text
     a, b = _bytes(out), _bytes(subprocess_run)
     # refined (the CLI's default) and not --repeatable: placement.json holds no timing at all
@@ -90,7 +90,7 @@ def test_repeatable_env_variable(tmp_path, monkeypatch, capsys, subprocess_run):
     monkeypatch.setenv("CAMPLACE_CACHE", str(tmp_path / "cache"))
     monkeypatch.setenv("CAMPLACE_REPEATABLE", "1")
     out = tmp_path / "out"
-    code, text = run_cli(["run", "demo", "--out", out, "--no-cache"], monkeypatch, capsys)
+    code, text = run_cli(["run", "demo", "--out", out, "--no-cache", "--no-plan"], monkeypatch, capsys)
     assert code == 0, text
     assert _bytes(out) == _bytes(subprocess_run)
 

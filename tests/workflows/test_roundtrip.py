@@ -17,11 +17,10 @@ from camplace.workflows.scan import evaluate_selection, export_mesh, export_octo
 
 
 @pytest.fixture(scope="module")
-def demo():
+def demo(demo_run):
     spec, base, src = resolve_scene("demo")
     box = build_scene(spec, base, src)
-    direct = run("demo")
-    return spec, box, direct
+    return spec, box, demo_run  # demo_run: run("demo"), once per session (conftest)
 
 
 def test_evaluate_selection_reproduces_the_direct_gap(demo):
@@ -52,7 +51,7 @@ def test_cli_run_from_a_cloud(tmp_path, demo):
     _, box, _ = demo
     cloud = scan_scene(box, step_deg=0.6, noise=0.005)
     write_point_cloud(tmp_path / "room.pcd", cloud.points, cloud.viewpoints)
-    r = CliRunner().invoke(app, ["run", "--cloud", str(tmp_path / "room.pcd"), "--budget", "4",
+    r = CliRunner().invoke(app, ["run", "--cloud", str(tmp_path / "room.pcd"), "--budget", "4", "--no-plan",
                                  "--save-scene", str(tmp_path / "room.yaml"), "--out", str(tmp_path / "out")])
     assert r.exit_code == 0, r.output
     assert (tmp_path / "out" / "placement.json").is_file()
@@ -84,10 +83,11 @@ def test_cli_round_trip_scored_with_camplace_evaluate(tmp_path, demo):
     assert r.exit_code == 0, r.output
     rs = roundtrip_spec(spec, "point_cloud", "demo.ply")  # relative to the scene file
     (tmp_path / "scan.yaml").write_text(yaml.safe_dump(rs.model_dump(mode="json", exclude_defaults=True)))
-    r = cli.invoke(app, ["-q", "run", str(tmp_path / "scan.yaml"), "--grid-only", "--out", str(tmp_path / "run")])
+    r = cli.invoke(app, ["-q", "run", str(tmp_path / "scan.yaml"), "--grid-only", "--no-plan",
+                         "--out", str(tmp_path / "run")])
     assert r.exit_code == 0, r.output
     r = cli.invoke(app, ["-q", "evaluate", "demo", str(tmp_path / "run" / "placement.json"),
-                         "--out", str(tmp_path / "eval")])
+                         "--out", str(tmp_path / "eval"), "--no-plan"])
     assert r.exit_code == 0, r.output
     gap = json.loads((tmp_path / "eval" / "metrics.json").read_text())["coverage_gap"]
     assert abs(gap - direct.metrics.coverage_gap) <= 0.02

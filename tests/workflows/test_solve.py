@@ -40,9 +40,11 @@ def test_certify_keys_in_placement_json(tmp_path):
     assert pj["objective"] == problem.cost(np.array([c["candidate_id"] for c in pj["cameras"]]))
 
 
-def test_cli_solve_writes_contract_files(tmp_path):
+def test_cli_solve_writes_contract_files(tmp_path, monkeypatch, capsys):
     import subprocess
     import sys
+
+    from conftest import run_cli
 
     p = random_problem(8, n_g=25, n_p=30, budget=3, n_loc=9)
     path = save_problem_npz(tmp_path / "visibility.npz", p)
@@ -54,6 +56,5 @@ def test_cli_solve_writes_contract_files(tmp_path):
     pj = json.loads((out / "placement.json").read_text())
     assert summary["cost"] == pj["objective"] and pj["solver"] == "certify"
     assert pj["bound"] <= pj["objective"]
-    bad = subprocess.run([sys.executable, "-m", "camplace.cli.app", "solve", str(tmp_path / "missing.npz"), "--budget",
-                          "3"], capture_output=True, text=True)
-    assert bad.returncode == 2 and "not found" in bad.stderr and "Traceback" not in bad.stderr
+    code, text = run_cli(["solve", tmp_path / "missing.npz", "--budget", "3"], monkeypatch, capsys)  # in-process
+    assert code == 2 and "not found" in text and "Traceback" not in text
