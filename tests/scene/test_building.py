@@ -160,3 +160,29 @@ def test_building_scene_from_imported_storeys_keeps_levels_apart():
     assert data["storeys"]["Upper"]["floor_openings"] == [VOID]
     spec = parse_scene(data, "imported")
     assert spec.storey_names == ["Ground", "Upper"]
+
+
+def test_an_ifc_atrium_is_seen_from_the_floor_above(tmp_path):
+    """A generated IFC (ifcopenshell.api): the first floor's slab covers only the first
+    column of rooms, the ground floor's last room is a two-storey atrium. Imported as one
+    building, cameras of the first floor see ground-floor targets, all of them in the
+    atrium, and none through the slab."""
+    pytest.importorskip("ifcopenshell")
+    from camplace.cli.building import building_spec
+    from camplace.cli.space import ImportOptions
+    from camplace.scene.importers.ifc_build import GridBuilding
+    from camplace.scene.importers.ifc_build_cases import write_open_floors
+
+    b = GridBuilding(names=("Office", "Atrium"))
+    path = write_open_floors(tmp_path / "atrium.ifc", b, atrium=True)
+    spec, _, data = building_spec([str(path)], ImportOptions(storey="all"), 4, None, {})
+    assert data["storeys"]["First Floor"].get("floor_openings")
+    result = run(spec, solver="greedy", refine=False)
+    vis = result.visibility
+    up = b.height + b.slab
+    cams, tg = vis.candidates.positions, vis.targets.positions
+    V = vis.V.tocsr()[np.flatnonzero(cams[:, 2] > up)][:, np.flatnonzero(tg[:, 2] < up)]
+    seen = tg[np.flatnonzero(tg[:, 2] < up)][np.unique(V.indices)]
+    assert len(seen) > 0
+    lo, hi = b.space_boxes()[b.nx * b.ny - 1]  # the atrium's clear inside (plan)
+    assert np.all((seen[:, 0] > lo[0] - 0.3) & (seen[:, 0] < hi[0] + 0.3))

@@ -267,14 +267,24 @@ def read_storeys(path: str | Path, *, storey: str | None = None, doors: str = "o
                 others=[x.name for x in s.storeys if rooms.get(x.key, StoreyRooms([], 0)).elements],
                 spaces=[(e, levels.get(where[e.eid], float("nan"))) for e in spaces],
                 model_m2=_plan_extent(elements + spaces))
-    out = []
+    out, failed = [], []
     for st in chosen:
         own = [e for e in spaces if where[e.eid] == st.key]
-        got = _storey(m, st, own, elements, kinds, labels, Counter(skipped), opts)
+        try:
+            got = _storey(m, st, own, elements, kinds, labels, Counter(skipped), opts)
+        except InputError as err:  # a building ('all'): one storey that cannot be read is left out, said
+            if storey != "all" or len(chosen) == 1:
+                raise
+            failed.append((st.name, err))
+            continue
         got.storeys = [{"name": x.name, "elevation_m": round(x.elevation, 4), "chosen": x.key == st.key,
                         "rooms": [[n, round(a, 2)] for n, a, _ in rooms.get(x.key, StoreyRooms([], 0)).rooms]}
                        for x in s.storeys]
         out.append((st.name, got))
+    if failed and not out:
+        raise failed[0][1]
+    for _, got in out:
+        got.notes.extend(f"storey '{n}' left out of the building: {err}" for n, err in failed)
     return out
 
 
