@@ -39,7 +39,10 @@ from camplace.problem.crowd import sample_coverage
 from camplace.solvers import solve
 from camplace.spec.crowd import CrowdSpec
 from camplace.targets.crowd import SCORE, sample_crowds
-from camplace.visibility.crowd import crowd_rows
+from camplace.targets.people import people_targets, person_coverage
+from camplace.visibility.crowd import crowd_rows, people_grid
+from camplace.visibility.people import people_rows
+from camplace.visibility.registry import engine_of
 from camplace.visibility.engine import compute_visibility
 from camplace.visibility.voxel import VoxelEngine
 from camplace.workflows.crowd import crowd_problem, score_in_crowd
@@ -60,13 +63,28 @@ def per_sample(sc, vis, selected, crowd: CrowdSpec) -> dict[str, np.ndarray]:
     cov = sample_coverage(rows, held.n_samples, np.arange(len(sel)))
     t = vis.targets
     figs = [sample_figures(t.gamma, t.weights, c) for c in cov]
-    return {k: np.array([f[k] for f in figs]) for k in figs[0]}
+    return {**{k: np.array([f[k] for f in figs]) for k in figs[0]}, **people_per_sample(sc, vis, selected, crowd)}
+
+
+def people_per_sample(sc, vis, selected, crowd: CrowdSpec) -> dict[str, np.ndarray]:
+    """% of the persons of each held-out crowd seen by ≥ 2 / ≥ Γ^p cameras: name -> (S,)."""
+    held = sample_crowds(sc, crowd, SCORE)
+    people = people_targets(held, vis.targets, crowd.people_heights, crowd.people_gamma)
+    fp = np.asarray(sc.footprint, float)
+    seen = people_rows(engine_of(vis), sc.occupancy, people, vis.candidates.subset(np.asarray(selected, np.int64)),
+                       people_grid(held, fp.min(0), fp.max(0)))
+    cov = person_coverage(np.asarray(seen.sum(axis=0)).ravel(), people.n_heights)
+    who = np.repeat(np.arange(held.n_samples), held.counts)
+    n = np.maximum(held.counts, 1)
+    return {f"people_seen_by_{k}_pct": 100.0 * np.bincount(who, weights=(cov >= g), minlength=held.n_samples) / n
+            for k, g in (("2", 2), ("gamma", crowd.people_gamma))}
 
 
 def paired(a: dict, b: dict) -> dict:
     """b − a per held-out crowd (the same crowds): mean, standard error, crowds where b is better."""
     out = {}
-    for k, better in (("coverage_gap", -1), ("triangulatable_pct", 1), ("seen_by_gamma_pct", 1)):
+    for k, better in (("coverage_gap", -1), ("triangulatable_pct", 1), ("seen_by_gamma_pct", 1),
+                      ("people_seen_by_2_pct", 1), ("people_seen_by_gamma_pct", 1)):
         d = b[k] - a[k]
         out[k] = {"mean": float(d.mean()), "stderr": float(d.std(ddof=1) / np.sqrt(len(d))),
                   "better_in": int(np.sum(better * d > 0)), "of": int(len(d))}
@@ -76,6 +94,7 @@ def paired(a: dict, b: dict) -> dict:
 def scores(sc, vis, problem, selected, crowd: CrowdSpec) -> dict:
     m = score_in_crowd(sc, vis, selected, crowd).summary
     out = {k: m[k] for k in ("coverage_gap", "seen_by_gamma_pct", "triangulatable_pct")}
+    out.update({f"people_{k}": m["people"][k] for k in ("seen_by_2_pct", "seen_by_gamma_pct")})
     out["selected"] = [int(i) for i in selected]
     cov = problem.coverage(selected)
     out["empty_store_gap"] = problem.cost(selected) / problem.normalizer
@@ -90,12 +109,13 @@ def refined(a, solver: str, opts: dict, crowd: CrowdSpec) -> dict:
     got, per = {}, {}
     for name, aware in (("empty-store", False), ("crowd-aware", True)):
         keys = {"density": crowd.density, "samples": crowd.samples, "score_samples": crowd.score_samples,
-                "seed": crowd.seed, "optimise": aware or None}
+                "seed": crowd.seed, "optimise": aware or None, "people_weight": crowd.people_weight}
         r, t = timed(run, a.scene, a.budget, solver, refine=True, refine_time_s=a.refine, crowd=keys, **opts)
         c = r.metrics.crowd.to_dict()
         cov = r.problem.coverage(r.placement.selected)
         got[name] = {"solve_seconds": r.timings_s["solve"] + r.timings_s.get("refine", 0.0), "run_seconds": t,
                      **{k: c[k] for k in ("coverage_gap", "seen_by_gamma_pct", "triangulatable_pct")},
+                     **{f"people_{k}": c["people"][k] for k in ("seen_by_2_pct", "seen_by_gamma_pct")},
                      "in_sample_gap": float("nan") if not aware else c["optimisation"]["coverage_gap"],
                      "empty_store_gap": r.metrics.coverage_gap,
                      "empty_store_triangulatable_pct": 100.0 * float(np.mean(cov >= 2))}
@@ -119,11 +139,18 @@ def main() -> None:
     ap.add_argument("--scheduler", default=None)
     ap.add_argument("--timing-only", action="store_true")
     ap.add_argument("--refine", type=float, default=None)
+    ap.add_argument("--people-weight", type=float, default=None)
+    ap.add_argument("--no-steep", action="store_true", help="no steep candidate pitches for the crowd-aware placement")
     a = ap.parse_args()
     from camplace.core.executors import make_executor
 
     sc, vis = prepare(a.scene, workers=a.workers, scheduler=a.scheduler)
     p = problem_from_visibility(vis, a.budget)
+    steep = () if a.no_steep else tuple(CrowdSpec(density=1.0, optimise=True).offers_steep())
+    # the crowd-aware placement chooses among the same poses and the steep views a crowd-aware run offers
+    sc2, vis2 = (sc, vis) if not steep else prepare(a.scene, workers=a.workers, scheduler=a.scheduler,
+                                                      extra_pitches=steep)
+    p2 = problem_from_visibility(vis2, a.budget)
     V = vis.V
     v_s = [timed(compute_visibility, VoxelEngine(), sc.occupancy, vis.targets, vis.candidates)[1] for _ in range(2)]
     res = {"scene": a.scene, "budget": a.budget, "V": list(V.shape), "nnz": int(V.nnz), "V_seconds": v_s,
@@ -131,7 +158,8 @@ def main() -> None:
            "score_samples": a.score_samples, "time_limit_s": a.time_limit, "densities": {}}
     rows = []
     for d in (float(x) for x in a.densities.split(",")):
-        crowd = CrowdSpec(density=d, samples=a.samples, score_samples=a.score_samples, seed=a.seed)
+        pw = {} if a.people_weight is None else {"people_weight": a.people_weight}
+        crowd = CrowdSpec(density=d, samples=a.samples, score_samples=a.score_samples, seed=a.seed, **pw)
         crowds = sample_crowds(sc, crowd)
         per = []
         with make_executor(a.workers, a.scheduler) as ex:
@@ -145,7 +173,7 @@ def main() -> None:
             print(f"density {d:g}: V {min(v_s):.2f} s, V_s {min(per):.3f} s per sample ({a.workers} workers)",
                   file=sys.stderr, flush=True)
             continue
-        cp, t_build = timed(crowd_problem, sc, vis, p, crowd)
+        cp, t_build = timed(crowd_problem, sc2, vis2, p2, crowd)
         entry = {"persons": float(np.mean(crowds.counts)), "kept_pct": 100.0 * out.nnz / (V.nnz * crowds.n_samples),
                  "V_s_seconds_per_sample": per, "crowd_problem_seconds": t_build,
                  "stacked": [int(v) for v in cp.problem.V.shape], "stacked_nnz": int(cp.problem.V.nnz), "solvers": {}}
@@ -158,19 +186,25 @@ def main() -> None:
                 c, tc = timed(solve, cp.problem, solver, **opts)
                 got = {"empty-store": {"solve_seconds": te, **scores(sc, vis, p, e.selected, crowd)},
                        "crowd-aware": {"solve_seconds": tc, "in_sample_gap": c.objective / cp.problem.normalizer,
-                                       **scores(sc, vis, p, c.selected, crowd)}}
-                got["empty-store"]["in_sample_gap"] = cp.problem.cost(e.selected) / cp.problem.normalizer
-                got["paired"] = paired(per_sample(sc, vis, e.selected, crowd), per_sample(sc, vis, c.selected, crowd))
+                                       **scores(sc2, vis2, p2, c.selected, crowd)}}
+                ce = crowd_problem(sc, vis, p, crowd).problem
+                got["empty-store"]["in_sample_gap"] = ce.cost(e.selected) / ce.normalizer
+                got["paired"] = paired(per_sample(sc, vis, e.selected, crowd),
+                                       per_sample(sc2, vis2, c.selected, crowd))
             entry["solvers"][solver] = got
             for name in ("empty-store", "crowd-aware"):
                 g = got[name]
-                rows.append(f"| {d:g} | {solver} | {name} | {g['coverage_gap']['mean']:.4f} ± "
+                rows.append(f"| {a.scene} | {d:g} | {solver} | {name} | {g['people_seen_by_2_pct']['mean']:.1f} ± "
+                            f"{g['people_seen_by_2_pct']['std']:.1f} | {g['people_seen_by_gamma_pct']['mean']:.1f} | "
+                            f"{g['coverage_gap']['mean']:.4f} ± "
                             f"{g['coverage_gap']['std']:.4f} | {g['triangulatable_pct']['mean']:.2f} | "
                             f"{g['seen_by_gamma_pct']['mean']:.2f} | {g['in_sample_gap']:.4f} | "
                             f"{g['empty_store_gap']:.4f} | {g['empty_store_triangulatable_pct']:.2f} | "
                             f"{g['solve_seconds']:.1f} |")
             pr = got["paired"]
-            print(rows[-2], rows[-1], f"paired (crowd-aware − empty-store): gap {pr['coverage_gap']['mean']:+.4f} ± "
+            print(rows[-2], rows[-1], f"paired (crowd-aware − empty-store): people seen by ≥ 2 "
+                  f"{pr['people_seen_by_2_pct']['mean']:+.2f} ± {pr['people_seen_by_2_pct']['stderr']:.2f} (better "
+                  f"in {pr['people_seen_by_2_pct']['better_in']}/{pr['people_seen_by_2_pct']['of']}), gap {pr['coverage_gap']['mean']:+.4f} ± "
                   f"{pr['coverage_gap']['stderr']:.4f} (better in {pr['coverage_gap']['better_in']}/"
                   f"{pr['coverage_gap']['of']}), triangulatable {pr['triangulatable_pct']['mean']:+.2f} ± "
                   f"{pr['triangulatable_pct']['stderr']:.2f} (better in {pr['triangulatable_pct']['better_in']})",
@@ -182,7 +216,8 @@ def main() -> None:
     if a.out:
         with open(a.out, "w") as f:
             f.write(text + "\n")
-    print("| density /m² | solver | placement | held-out crowd gap (mean ± std) | triangulatable in crowd % | "
+    print("| scene | density /m² | solver | placement | people seen by ≥ 2 % (mean ± std) | people seen by ≥ Γ^p % | "
+          "held-out crowd gap (mean ± std) | triangulatable in crowd % | "
           "seen ≥ Γ in crowd % | crowd gap on its own crowds | empty-store gap | empty-store triangulatable % | "
           "solve s |", file=sys.stderr)
     print("\n".join(rows), file=sys.stderr)

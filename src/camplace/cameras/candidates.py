@@ -245,10 +245,13 @@ def focal_models(cameras: tuple[CameraModel, ...], camera_ids: np.ndarray,
     return cams, ids
 
 
-def build_candidates(scene: Scene, cameras: dict[str, CameraModel]) -> Candidates:
+def build_candidates(scene: Scene, cameras: dict[str, CameraModel],
+                     extra_pitches: tuple[float, ...] = ()) -> Candidates:
     """Every mount of the scene expanded into poses, each pose with every focal setting of
     each camera type the mount carries; poses inside an obstacle or closer than
-    ``mount_rules.clearance`` to one are dropped (counted per pose in ``info``)."""
+    ``mount_rules.clearance`` to one are dropped (counted per pose in ``info``).
+    ``extra_pitches`` (degrees down) join every mount's own pitches (a crowd-aware run's
+    steep views, camplace.spec.crowd.CrowdSpec.steep_pitches)."""
     cam_list, cam_index = lens_settings(cameras)
     pos, ang, cid = [], [], []
     rules = scene.spec.mount_rules
@@ -256,6 +259,8 @@ def build_candidates(scene: Scene, cameras: dict[str, CameraModel]) -> Candidate
     ruled_out = n_all = n_inside = n_close = 0
     for mount in scene.spec.mounts:
         yaws, pitches, rolls = (angle_values(a) for a in (mount.yaw_deg, mount.pitch_deg, mount.roll_deg))
+        if extra_pitches:
+            pitches = sorted(set(pitches) | {float(v) for v in extra_pitches})
         yy, pp, rr = np.meshgrid(yaws, pitches, rolls, indexing="ij")
         a = np.c_[yy.ravel(), pp.ravel(), rr.ravel()]
         ks = [k for name in mount.camera_names for k in cam_index[name]]  # camera types x focal settings

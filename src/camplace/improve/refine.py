@@ -46,10 +46,10 @@ Progress = Callable[[str, int, int], None]
 # A pose guard: (poses (K, 6) x, y, z, yaw, pitch, roll; camera ids (K,)) -> (K,) bool, True = allowed
 # (camplace.visibility.privacy.PrivacyGuard: the pose sees no privacy point)
 PoseGuard = Callable[[np.ndarray, np.ndarray], np.ndarray]
-# A row map: (camera positions (K, 3) m, raycast V rows (K, N_p)) -> the problem's rows of those
-# poses (K, N_p') (None: the raycast rows themselves; a crowd-aware run: the rows thinned by
-# the same crowd samples and stacked, camplace.workflows.crowd)
-RowMap = Callable[[np.ndarray, sp.csr_matrix], sp.csr_matrix]
+# A row map: (the poses as Candidates (K), raycast V rows (K, N_p)) -> the problem's rows of those
+# poses (K, N_p') (None: the raycast rows themselves; a crowd-aware run: the rows with the
+# poses' views of the people in the same crowd samples, camplace.workflows.crowd)
+RowMap = Callable[[Candidates, sp.csr_matrix], sp.csr_matrix]
 HALF = 0.499  # stay strictly inside half a step so neighbouring grid points never meet
 FOCAL = 6  # column of the focal length (mm) in a refined pose (x, y, z, yaw, pitch, roll, focal_mm); issue 27
 
@@ -187,7 +187,8 @@ def extend_problem(problem: PlacementProblem, vis: Visibility, row_map: RowMap |
     V = vis.V
     if row_map is not None:
         n = problem.n_candidates
-        V = sp.vstack([problem.V, row_map(vis.candidates.positions[n:], vis.V[n:])], format="csr")
+        new = vis.candidates.subset(np.arange(n, vis.V.shape[0]))
+        V = sp.vstack([problem.V, row_map(new, vis.V[n:])], format="csr")
     costs = np.array([vis.candidates.cameras[c].cost for c in vis.candidates.camera_ids], np.float64)
     types = None if problem.type_ids is None else type_ids_of(vis.candidates.camera_ids,
                                                                [c.name for c in vis.candidates.cameras])
@@ -367,8 +368,9 @@ def _trial_rows(engine: VisibilityEngine, scene: Scene, vis: Visibility, cid: in
                 row_map: RowMap | None) -> sp.csr_matrix:
     """The problem's rows of trial poses (K, 7) of camera type ``cid``: raycast by ``engine``, then
     (with ``row_map``) scored as the problem's rows (e.g. on the same crowd samples)."""
-    R = raycast_poses(engine, scene.occupancy, vis.targets, vis.candidates, cid, trial)
-    return R if row_map is None else row_map(trial[:, :3], R)
+    cands = single_pose_candidates(vis.candidates, cid, trial)
+    R = raycast_rows(engine, scene.occupancy, vis.targets, cands)
+    return R if row_map is None else row_map(cands, R)
 
 
 def _guarded(guard: PoseGuard, cands: Candidates, cid: int, trial: np.ndarray) -> np.ndarray:

@@ -9,6 +9,10 @@ and per target region:
 - ``seen_by_gamma_pct``: % of targets seen by at least Γ_j cameras;
 - ``triangulatable_pct``: % of targets still seen by at least 2 cameras.
 
+and of the people themselves (issue 36, ``people``): % of the persons in each held-out crowd
+seen by ≥ 2 and by ≥ Γ^p cameras (a person's coverage is the least coverage among its
+points, camplace.targets.people), mean and spread over the crowds, overall and per zone.
+
 Per target: the share of samples in which it is seen by ≥ 2 cameras and by ≥ Γ_j (drawn
 by report.html), and one sampled crowd to show.
 """
@@ -45,6 +49,33 @@ def sample_figures(gamma: np.ndarray, weights: np.ndarray, coverage: np.ndarray)
 def _summary(gamma: np.ndarray, weights: np.ndarray, cov: np.ndarray) -> dict:
     per = [sample_figures(gamma, weights, c) for c in cov]
     return {k: spread(np.array([p[k] for p in per])) for k in FIGURES}
+
+
+def _people_pct(cov: np.ndarray, sample: np.ndarray, n_samples: int, need: int) -> np.ndarray:
+    """(S',) % of the persons of each sample that has anyone with coverage ≥ need (samples without persons left out)."""
+    n = np.bincount(sample, minlength=n_samples)
+    ok = np.bincount(sample, weights=(cov >= need).astype(np.float64), minlength=n_samples)
+    has = n > 0
+    return 100.0 * ok[has] / n[has]
+
+
+def people_metrics(person_cov: np.ndarray, sample: np.ndarray, n_samples: int, region: np.ndarray, region_names,
+                   gamma: int, heights) -> dict:
+    """metrics.json ``crowd.people``: person_cov (P,) coverage of each person of the held-out
+    crowds (sample (P,) its crowd, region (P,) its zone index into region_names), Γ^p
+    ``gamma``, the points' ``heights`` (m)."""
+    cov = np.asarray(person_cov, np.int64)
+    smp = np.asarray(sample, np.int64)
+    reg = np.asarray(region, np.int64)
+
+    def figs(m: np.ndarray) -> dict:
+        return {"persons": spread(np.bincount(smp[m], minlength=n_samples)),
+                "seen_by_2_pct": spread(_people_pct(cov[m], smp[m], n_samples, 2)),
+                "seen_by_gamma_pct": spread(_people_pct(cov[m], smp[m], n_samples, int(gamma)))}
+
+    out = {"heights": [float(z) for z in heights], "gamma": int(gamma), **figs(np.ones(len(cov), bool))}
+    out["regions"] = {str(name): figs(reg == r) for r, name in enumerate(region_names) if np.any(reg == r)}
+    return out
 
 
 @dataclass(frozen=True)
@@ -89,4 +120,4 @@ def crowd_metrics(gamma: np.ndarray, weights: np.ndarray, coverage: np.ndarray, 
                         report_height)
 
 
-__all__ = ["CrowdMetrics", "FIGURES", "crowd_metrics", "sample_figures", "spread"]
+__all__ = ["CrowdMetrics", "FIGURES", "crowd_metrics", "people_metrics", "sample_figures", "spread"]
