@@ -286,6 +286,8 @@ def build_candidates(scene: Scene, cameras: dict[str, CameraModel],
     rot = rotation_from_ypr(angles[:, 0], angles[:, 1], angles[:, 2])
     info = {"generated": n_all, "dropped_inside_obstacle": n_inside, "dropped_clearance": n_close,
             "clearance_m": float(rules.clearance)}
+    if extra_pitches:  # the refinement's pitch steps count them too (camplace.improve.refine.pose_box)
+        info["extra_pitches"] = [float(v) for v in extra_pitches]
     if rules.active:
         info.update(mount_positions_ruled_out=ruled_out, explicit_points=None if points is None else len(points))
     return Candidates(positions, rot, angles, camera_ids, location_ids_of(positions), cam_list, info)

@@ -93,7 +93,8 @@ def mount_of(spec: SceneSpec, camera_name: str, z: float) -> Mount | None:
 def pose_box(scene: Scene, candidates: Candidates, i: int, fraction: float = HALF) -> PoseBox:
     """The search box of candidate i: ``fraction`` of its mount's grid spacing and angle
     steps around it. Wall-mount cameras stay at their wall point and only turn; a pose
-    not from any mount may only turn, by 15° / 7.5°."""
+    not from any mount may only turn, by 15° / 7.5°. The pitch steps are those of the mount's
+    pitches and of the candidates' ``info['extra_pitches']`` (a crowd-aware run's steep views)."""
     cam = candidates.cameras[int(candidates.camera_ids[i])]
     p = candidates.positions[i]
     m = mount_of(scene.spec, cam.name, float(p[2]))
@@ -103,7 +104,8 @@ def pose_box(scene: Scene, candidates: Candidates, i: int, fraction: float = HAL
         region = scene.polygon
     else:
         s = 0.0 if getattr(m, "kind", "ceiling_grid") == "wall" else float(m.spacing)  # wall cameras only turn
-        half = np.array([s, s, 0.0, angle_step(m.yaw_deg), angle_step(m.pitch_deg), angle_step(m.roll_deg)]) * fraction
+        pitches = angle_values(m.pitch_deg) + list(candidates.info.get("extra_pitches", []))  # + a crowd's steep views
+        half = np.array([s, s, 0.0, angle_step(m.yaw_deg), angle_step(pitches), angle_step(m.roll_deg)]) * fraction
         region = scene.polygon.buffer(-m.wall_clearance) if m.wall_clearance > 0 else scene.polygon
     rules = scene.spec.mount_rules
     if rules.active:  # mount rules bound the search (camplace.cameras.mount_rules): explicit points only turn

@@ -81,7 +81,9 @@ def people_metrics(person_cov: np.ndarray, sample: np.ndarray, n_samples: int, r
 @dataclass(frozen=True)
 class CrowdMetrics:
     """summary: metrics.json ``crowd``; p_triangulatable / p_seen: (N_p,) share of samples
-    in which each target is seen by ≥ 2 / ≥ Γ_j cameras; shown: (n, 2) m the people of one
+    in which each target is seen by ≥ 2 / ≥ Γ_j cameras; p_person: (N_p,) at the volume
+    targets of report_height, the share of the crowds in which a person standing at the
+    target's (x, y) is seen by ≥ 2 cameras (NaN elsewhere; issue 36); shown: (n, 2) m the people of one
     sample (for the report's 3D view); radius, height: m; report_height: m, the target
     height the report draws."""
 
@@ -93,6 +95,7 @@ class CrowdMetrics:
     height: float
     report_height: float | None = None
     extra: dict = field(default_factory=dict)
+    p_person: np.ndarray | None = None  # (N_p,) chance a person standing there is seen by ≥ 2 (NaN: not drawn)
 
     def to_dict(self) -> dict:
         return {**self.summary, **self.extra}

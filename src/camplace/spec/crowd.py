@@ -35,7 +35,7 @@ class CrowdSpec(_Strict):
     radius: PositiveFloat = 0.25
     height: PositiveFloat = 1.75
     zones: dict[str, Density] = {}  # zone name -> its own density
-    samples: Count = 16  # crowds the crowd-aware optimisation averages over
+    samples: Count = 64  # crowds the crowd-aware optimisation averages over (people: 16 overfit, issue 36)
     score_samples: Count = 32  # held-out crowds the metrics average over
     seed: Annotated[int, Field(ge=0, strict=True)] = 0
     optimise: StrictBool = False  # optimise the sample-average crowd cost (a crowd-aware run)
@@ -48,8 +48,9 @@ class CrowdSpec(_Strict):
 
     def offers_steep(self) -> tuple[float, ...]:
         """The extra candidate pitches of a run with this crowd: ``steep_pitches`` when it
-        optimises for a crowd with anybody in it (some density > 0), else none."""
-        if self.optimise and any(rho > 0 for _, rho in self.densities()):
+        optimises for a crowd with anybody in it (some density > 0) who counts
+        (``people_weight`` > 0), else none."""
+        if self.optimise and self.people_weight > 0 and any(rho > 0 for _, rho in self.densities()):
             return tuple(float(v) for v in self.steep_pitches)
         return ()
 

@@ -40,7 +40,7 @@ from camplace.targets.build import Targets
 from camplace.targets.crowd import OPTIMISE, SCORE, Crowds, sample_crowds
 from camplace.targets.people import People, people_targets, person_coverage
 from camplace.visibility.crowd import PeopleGrid, crowd_rows, people_grid
-from camplace.visibility.engine import Visibility, VisibilityEngine
+from camplace.visibility.engine import Visibility, VisibilityEngine, raycast_rows
 from camplace.visibility.people import people_rows
 from camplace.visibility.registry import engine_of
 
@@ -85,13 +85,37 @@ def score_in_crowd(sc: Scene, vis: Visibility, selected: np.ndarray, crowd: Crow
     m = crowd_metrics(t.gamma, t.weights, cov, t.region_ids, t.region_names, crowds.sample(0), crowd.radius,
                       crowd.height, info, report_height(t, crowd.report_height))
     people = people_targets(crowds, t, crowd.people_heights, crowd.people_gamma)
-    seen = people_rows(engine_of(vis), sc.occupancy, people, vis.candidates.subset(sel), _grid(sc, crowds))
+    grid = _grid(sc, crowds)
+    seen = people_rows(engine_of(vis), sc.occupancy, people, vis.candidates.subset(sel), grid)
     pcov = person_coverage(np.asarray(seen.sum(axis=0)).ravel(), people.n_heights)
     who = np.repeat(np.arange(crowds.n_samples, dtype=np.int64), crowds.counts)
     summary = dict(m.summary, people=people_metrics(pcov, who, crowds.n_samples,
                                                     people.targets.region_ids[::people.n_heights], t.region_names,
                                                     crowd.people_gamma, crowd.people_heights))
-    return replace(m, summary=summary, extra={"optimised": False, **(extra or {})})
+    chance = person_chance(sc, vis, sel, crowds, grid, crowd, m.report_height)
+    return replace(m, summary=summary, extra={"optimised": False, **(extra or {})}, p_person=chance)
+
+
+def person_chance(sc: Scene, vis: Visibility, selected: np.ndarray, crowds: Crowds, grid: PeopleGrid,
+                  crowd: CrowdSpec, height: float | None) -> np.ndarray | None:
+    """(N_p,) for each volume target at ``height`` (m): the share of ``crowds`` in which a
+    person standing at its (x, y) (points at ``crowd.people_heights``) is seen by ≥ 2 of the
+    ``selected`` cameras past the shelves and the crowd (a crowd person whose disc holds the
+    spot is taken to be that person); NaN at every other target. None without such targets."""
+    t = vis.targets
+    spots = np.flatnonzero(~t.is_surface & (np.abs(t.positions[:, 2] - (height or 0.0)) < 1e-6))
+    if height is None or len(spots) == 0:
+        return None
+    test = Crowds(t.positions[spots, :2], np.array([0, len(spots)], np.int64), crowds.radius, crowds.height)
+    people = people_targets(test, t, crowd.people_heights, crowd.people_gamma)
+    sel = np.asarray(selected, np.int64)
+    cams = vis.candidates.subset(sel)
+    V = raycast_rows(engine_of(vis), sc.occupancy, people.targets, cams)
+    rows = crowd_rows(V, cams.positions, people.targets.positions, crowds, grid=grid)
+    cov = person_coverage(sample_coverage(rows, crowds.n_samples, np.arange(len(sel))), people.n_heights)
+    out = np.full(len(t), np.nan)
+    out[spots] = np.mean(cov >= 2, axis=0) if crowds.n_samples else 0.0
+    return out
 
 
 @dataclass
