@@ -20,6 +20,11 @@ JSON object to stdout (``--out FILE``: also to FILE) and a markdown table to std
 ``--refine SECONDS``: the CLI's default path instead — ``camplace.run`` with the solver and
 then the refinement off the grid (``SECONDS`` each; the crowd-aware one scores its trial
 poses on its crowds), both placements scored the same way.
+Issue 36: the placements are also scored on the people themselves (% of the held-out
+crowds' people seen by ≥ 2 / ≥ Γ^p cameras, camplace.workflows.crowd), the crowd-aware
+one is the people-aware problem (camplace.problem.people; ``--people-weight``, default the
+scene's) over the candidates plus the steep pitches a crowd-aware run offers
+(``--no-steep``: without them); ``--no-timing`` skips timing V and V_s.
 ``--timing-only``: V and V_s times only (no placements), e.g. on a site-scale scene
 (``--scene warehouse:5000``) with V_s on a process pool (``--workers 2``) or a Dask cluster.
 """
@@ -140,6 +145,7 @@ def main() -> None:
     ap.add_argument("--timing-only", action="store_true")
     ap.add_argument("--refine", type=float, default=None)
     ap.add_argument("--people-weight", type=float, default=None)
+    ap.add_argument("--no-timing", action="store_true", help="skip timing V and V_s (placements only)")
     ap.add_argument("--no-steep", action="store_true", help="no steep candidate pitches for the crowd-aware placement")
     a = ap.parse_args()
     from camplace.core.executors import make_executor
@@ -152,7 +158,8 @@ def main() -> None:
                                                       extra_pitches=steep)
     p2 = problem_from_visibility(vis2, a.budget)
     V = vis.V
-    v_s = [timed(compute_visibility, VoxelEngine(), sc.occupancy, vis.targets, vis.candidates)[1] for _ in range(2)]
+    v_s = [] if a.no_timing else [timed(compute_visibility, VoxelEngine(), sc.occupancy, vis.targets,
+                                         vis.candidates)[1] for _ in range(2)]
     res = {"scene": a.scene, "budget": a.budget, "V": list(V.shape), "nnz": int(V.nnz), "V_seconds": v_s,
            "load_average": os.getloadavg(), "cpus": os.cpu_count(), "samples": a.samples,
            "score_samples": a.score_samples, "time_limit_s": a.time_limit, "densities": {}}
@@ -163,7 +170,7 @@ def main() -> None:
         crowds = sample_crowds(sc, crowd)
         per = []
         with make_executor(a.workers, a.scheduler) as ex:
-            for _ in range(2):
+            for _ in range(0 if a.no_timing else 2):
                 out, t = timed(crowd_rows, V, vis.candidates.positions, vis.targets.positions, crowds, executor=ex)
                 per.append(t / crowds.n_samples)
         if a.timing_only:
@@ -174,7 +181,8 @@ def main() -> None:
                   file=sys.stderr, flush=True)
             continue
         cp, t_build = timed(crowd_problem, sc2, vis2, p2, crowd)
-        entry = {"persons": float(np.mean(crowds.counts)), "kept_pct": 100.0 * out.nnz / (V.nnz * crowds.n_samples),
+        entry = {"persons": float(np.mean(crowds.counts)),
+                 "kept_pct": None if a.no_timing else 100.0 * out.nnz / (V.nnz * crowds.n_samples),
                  "V_s_seconds_per_sample": per, "crowd_problem_seconds": t_build,
                  "stacked": [int(v) for v in cp.problem.V.shape], "stacked_nnz": int(cp.problem.V.nnz), "solvers": {}}
         for solver in a.solvers.split(","):
