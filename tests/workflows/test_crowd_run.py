@@ -57,6 +57,23 @@ def test_density_0_equals_the_run_without_a_crowd(empty_store):
                                                                   empty_store.placement.bound)
 
 
+def test_density_0_with_refinement_equals_the_run_without_a_crowd():
+    """The golden check of issue 36: a crowd-aware run at density 0 offers no steep views,
+    builds no people problem and refines the same poses as the run without a crowd."""
+    d = copy.deepcopy(SCENE)
+    del d["crowd"]
+    plain = run(parse_scene(d), solver="greedy", refine=True, refine_time_s=60.0)
+    zero = run(spec(density=0.0, optimise=True), solver="greedy", refine=True, refine_time_s=60.0)
+    assert plain.placement.info["refine"]["stopped"] == "converged"  # not cut by the clock: comparable
+    assert np.array_equal(plain.placement.selected, zero.placement.selected)
+    assert plain.placement.objective == zero.placement.objective
+    assert np.array_equal(plain.visibility.candidates.positions, zero.visibility.candidates.positions)
+    assert np.array_equal(plain.visibility.candidates.angles_deg, zero.visibility.candidates.angles_deg)
+    assert (plain.visibility.V != zero.visibility.V).nnz == 0
+    c = zero.metrics.crowd.to_dict()["people"]
+    assert c["persons"]["max"] == 0 and c["seen_by_2_pct"]["mean"] == 0.0
+
+
 def test_crowd_aware_is_optimal_on_its_own_crowds(empty_store):
     from camplace.workflows.crowd import crowd_problem
 
