@@ -114,7 +114,8 @@ def refined(a, solver: str, opts: dict, crowd: CrowdSpec) -> dict:
     got, per = {}, {}
     for name, aware in (("empty-store", False), ("crowd-aware", True)):
         keys = {"density": crowd.density, "samples": crowd.samples, "score_samples": crowd.score_samples,
-                "seed": crowd.seed, "optimise": aware or None, "people_weight": crowd.people_weight}
+                "seed": crowd.seed, "optimise": aware or None, "people_weight": crowd.people_weight,
+                "people_gamma": crowd.people_gamma}
         r, t = timed(run, a.scene, a.budget, solver, refine=True, refine_time_s=a.refine, crowd=keys, **opts)
         c = r.metrics.crowd.to_dict()
         cov = r.problem.coverage(r.placement.selected)
@@ -145,6 +146,7 @@ def main() -> None:
     ap.add_argument("--timing-only", action="store_true")
     ap.add_argument("--refine", type=float, default=None)
     ap.add_argument("--people-weight", type=float, default=None)
+    ap.add_argument("--people-gamma", type=int, default=None)
     ap.add_argument("--no-timing", action="store_true", help="skip timing V and V_s (placements only)")
     ap.add_argument("--no-steep", action="store_true", help="no steep candidate pitches for the crowd-aware placement")
     a = ap.parse_args()
@@ -166,6 +168,8 @@ def main() -> None:
     rows = []
     for d in (float(x) for x in a.densities.split(",")):
         pw = {} if a.people_weight is None else {"people_weight": a.people_weight}
+        if a.people_gamma is not None:
+            pw["people_gamma"] = a.people_gamma
         crowd = CrowdSpec(density=d, samples=a.samples, score_samples=a.score_samples, seed=a.seed, **pw)
         crowds = sample_crowds(sc, crowd)
         per = []

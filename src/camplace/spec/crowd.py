@@ -105,7 +105,7 @@ def check_people_heights(c: CrowdSpec, error) -> None:
                                                 f"points on the person, at most {c.height} m")
 
 
-CROWD_OPTIONS = ("density", "samples", "score_samples", "seed", "optimise", "people_weight")  # run() / evaluate() overrides
+CROWD_OPTIONS = ("density", "samples", "score_samples", "seed", "optimise", "people_weight", "people_gamma")  # run() / evaluate() overrides
 
 
 def crowd_with(spec_crowd: CrowdSpec | None, overrides: dict[str, Any] | None) -> CrowdSpec | None:
