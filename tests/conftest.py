@@ -30,6 +30,25 @@ def box_room(obstacles=(), targets=None, mounts=None, footprint=None, height=3.0
     })
 
 
+def two_storeys(upper: float = 3.5):
+    """A generated two-storey building (issue 33): Ground 8 m x 6 m, 'Level 1' 6 m x 6 m at
+    ``upper`` m with a 1 m x 1 m floor opening at (2..3, 2..3) and a desk box; both 3 m tall,
+    2 cameras each (storey budgets), one layer of 0.5 m targets at 1 m, occupancy 0.1 m."""
+    cam = [{"name": "cam", "resolution": [640, 480], "fov_deg": [90, 70], "max_range": 10.0}]
+    return parse_scene({
+        "name": "two-storeys", "voxel_size": 0.5, "occupancy_resolution": 0.1, "cameras": cam,
+        "targets": [{"name": "floor", "kind": "volume", "heights": [1.0], "coverage": 1}],
+        "mounts": [{"kind": "ceiling_grid", "camera": "cam", "spacing": 2.0, "yaw_deg": [0, 180], "pitch_deg": [45]}],
+        "storeys": {
+            "Ground": {"elevation": 0.0, "room": {"footprint": [[0, 0], [8, 0], [8, 6], [0, 6]], "height": 3.0},
+                       "budget": 2},
+            "Level 1": {"elevation": upper, "room": {"footprint": [[0, 0], [6, 0], [6, 6], [0, 6]], "height": 3.0},
+                        "floor_openings": [[[2, 2], [3, 2], [3, 3], [2, 3]]], "budget": 2,
+                        "obstacles": [{"name": "desk", "box": {"min": [4, 4, 0], "max": [5, 5, 1.0]}}]},
+        },
+    })
+
+
 def builtin_inputs(name: str):
     """(scene, targets, candidates) of a built-in scene, before visibility."""
     from camplace.spec.builtin import resolve_scene
@@ -152,6 +171,32 @@ def run_cli(args, monkeypatch, capsys) -> tuple[int, str]:
     return code, cap.out + cap.err
 
 
+
+
+def import_and_evaluate(plan: Path, placement: Path, folder: Path, monkeypatch, capsys) -> Path:
+    """camplace scene import PLAN, then camplace evaluate of ``placement`` on that scene (no
+    plan set) into ``folder``/ev; both must succeed -> the evaluation's folder."""
+    scene = folder / f"{plan.stem}.yaml"
+    for args in (["scene", "import", plan, "--out", scene],
+                 ["evaluate", scene, placement, "--out", folder / "ev", "--no-plan"]):
+        code, text = run_cli(args, monkeypatch, capsys)
+        assert code == 0, text
+    return folder / "ev"
+
+
+def plugin_dist(root: Path, name: str, groups: dict[str, dict[str, str]], modules: dict[str, str]) -> None:
+    """A distribution ``name`` installed in ``root`` (a dist-info with entry_points.txt:
+    group -> {entry point: 'module:attr'}) with ``modules`` (module name -> source text);
+    put ``root`` on sys.path and reload the registries to see it."""
+    import textwrap
+
+    info = root / f"{name.replace('-', '_')}-0.1.dist-info"
+    info.mkdir(parents=True)
+    (info / "METADATA").write_text(f"Metadata-Version: 2.1\nName: {name}\nVersion: 0.1\n")
+    text = "".join(f"[{g}]\n" + "".join(f"{k} = {v}\n" for k, v in eps.items()) for g, eps in groups.items())
+    (info / "entry_points.txt").write_text(text)
+    for mod, src in modules.items():
+        (root / f"{mod}.py").write_text(textwrap.dedent(src))
 
 
 def read_or_one_line(read, path):

@@ -1,5 +1,7 @@
-"""--storey all (issue 18): a two-storey IFC building (ifcopenshell.api) planned storey by
-storey by camplace run, and written as one scene per storey by camplace scene import."""
+"""Buildings from the command line (issue 33): a two-storey IFC building (ifcopenshell.api)
+planned as one building by camplace run --storey all (one folder, one budget, cameras
+on both storeys in building z), and written as one scene with storeys: by camplace
+scene import; the errors of the building options."""
 
 from __future__ import annotations
 
@@ -40,48 +42,65 @@ def test_slugs_are_folder_safe_and_unique():
         "ground-floor", "ground-floor-2", "tage-1-2", "storey-4"]
 
 
-def test_run_storey_all_plans_each_storey_into_its_own_folder(building, tmp_path, monkeypatch, capsys):
+def test_run_storey_all_plans_the_building_in_one_run(building, tmp_path, monkeypatch, capsys):
     out = tmp_path / "out"
-    code, text = run_cli(["run", building, "--storey", "all", "--out", out, "--budget", "3", "--grid-only",
+    code, text = run_cli(["run", building, "--storey", "all", "--out", out, "--budget", "4", "--grid-only",
                           "--repeatable", "--no-plan", "--no-cache"], monkeypatch, capsys)
     assert code == 0, text
-    summary = json.loads((out / "storeys.json").read_text())
-    rows = summary["storeys"]
-    assert summary["source"] == "building.ifc" and [r["storey"] for r in rows] == list(FLOORS)  # no 'Roof' (no rooms)
-    assert [r["folder"] for r in rows] == ["ground-floor", "first-floor"]
-    assert [r["elevation_m"] for r in rows] == pytest.approx([0.0, B.height + B.slab])
-    check = _check_run()
-    for r in rows:
-        folder = out / r["folder"]
-        assert check(folder) == [], r
-        placement = json.loads((folder / "placement.json").read_text())
-        metrics = json.loads((folder / "metrics.json").read_text())
-        assert r["cameras"] == len(placement["cameras"]) == 3 and r["budget"] == 3
-        assert r["coverage_gap"] == pytest.approx(metrics["coverage_gap"]) and r["coverage_gap"] < 1
-        z = np.array([c["position"][2] for c in placement["cameras"]])
-        assert ((z > 0) & (z < r["height_m"])).all()  # scene frame: the storey's floor is z = 0
-        building_z = r["elevation_m"] + z  # within that storey's slice of the building, not the other's
-        assert ((building_z > r["elevation_m"]) & (building_z < r["elevation_m"] + r["height_m"])).all()
-        assert set(metrics["regions"]) >= {"Office", "Lab"}
-        svg = (folder / "preview.svg").read_text()  # issue 25: each storey's picture names its rooms
-        assert (folder / "preview.png").stat().st_size > 0 and "Office" in svg and "Lab" in svg
+    assert _check_run()(out) == []
+    placement = json.loads((out / "placement.json").read_text())
+    metrics = json.loads((out / "metrics.json").read_text())
+    assert [s["name"] for s in placement["storeys"]] == list(FLOORS)  # no 'Roof' (no rooms)
+    elev = {s["name"]: s["elevation_m"] for s in placement["storeys"]}
+    assert elev["First Floor"] == pytest.approx(B.height + B.slab) and elev["Ground Floor"] == 0.0
+    cams = placement["cameras"]
+    assert len(cams) == 4 and placement["budget"] == 4  # one budget for the building
+    for c in cams:  # building z: between the floor and the ceiling of the storey the camera names
+        top = {s["name"]: s["top_m"] for s in placement["storeys"]}[c["storey"]]
+        assert elev[c["storey"]] < c["position"][2] < top
+    assert {s["storey"] for s in metrics["storeys"]} == set(FLOORS)
+    assert sum(s["cameras"] for s in metrics["storeys"]) == 4
+    assert {"Ground Floor/Office", "First Floor/Lab"} <= set(metrics["regions"])
 
 
-def test_scene_import_storey_all_writes_one_scene_per_storey(building, tmp_path, monkeypatch, capsys):
+def test_storey_budget_and_subset(building, tmp_path, monkeypatch, capsys):
+    out = tmp_path / "out"
+    code, text = run_cli(["run", building, "--storey", "First Floor,Ground Floor", "--out", out, "--budget", "4",
+                          "--storey-budget", "Ground Floor=1", "--grid-only", "--no-plan", "--no-cache"],
+                         monkeypatch, capsys)
+    assert code == 0, text
+    cams = json.loads((out / "placement.json").read_text())["cameras"]
+    assert sum(c["storey"] == "Ground Floor" for c in cams) <= 1 and len(cams) <= 4
+    code, text = run_cli(["run", building, "--storey", "Ground Floor,Attic", "--out", out], monkeypatch, capsys)
+    assert code == 2 and "--storey: no storey 'Attic'" in text and "Traceback" not in text
+    code, text = run_cli(["run", building, "--storey", "all", "--storey-budget", "Cellar=2", "--out", out],
+                         monkeypatch, capsys)
+    assert code == 2 and "--storey-budget: no storey 'Cellar'" in text
+    code, text = run_cli(["run", building, "--storey-budget", "oops", "--out", out], monkeypatch, capsys)
+    assert code == 2 and "--storey-budget: expected NAME=K" in text
+
+
+def test_scene_import_storey_all_writes_one_building_scene(building, tmp_path, monkeypatch, capsys):
     out = tmp_path / "site.yaml"
     code, text = run_cli(["scene", "import", building, "--storey", "all", "--out", out], monkeypatch, capsys)
     assert code == 0, text
-    text = text.replace("\n", "")  # the console wraps long lines
-    assert sorted(p.name for p in tmp_path.iterdir()) == sorted(
-        f"site-{slug}{ext}" for slug in ("first-floor", "ground-floor") for ext in (".yaml", ".preview.png",
-                                                                                    ".preview.svg"))
-    for slug, floor in (("ground-floor", "Ground Floor"), ("first-floor", "First Floor")):
-        assert f"site-{slug}.yaml" in text and floor in text
-        assert "Office" in (tmp_path / f"site-{slug}.preview.svg").read_text()
-        data = yaml.safe_load((tmp_path / f"site-{slug}.yaml").read_text())
-        assert [z["name"] for z in data["zones"]] == ["Office", "Lab"] and data["name"].endswith(floor)
-        zs = np.array([o["prism"]["z"] for o in data["obstacles"]])
-        assert zs.min() >= -1e-6 and zs.max() <= data["room"]["height"] + 1e-6
+    data = yaml.safe_load(out.read_text())
+    assert list(data["storeys"]) == list(FLOORS)
+    assert data["storeys"]["First Floor"]["elevation"] == pytest.approx(B.height + B.slab)
+    for slug in ("ground-floor", "first-floor"):
+        assert "Office" in (tmp_path / f"site.{slug}.preview.svg").read_text()
+    code, text = run_cli(["run", out, "--budget", "2", "--grid-only", "--no-plan", "--no-cache", "--out",
+                          tmp_path / "o"], monkeypatch, capsys)
+    assert code == 0, text
+    assert len(json.loads((tmp_path / "o" / "placement.json").read_text())["cameras"]) == 2
+
+
+def test_several_plan_files_need_elevations(building, tmp_path, monkeypatch, capsys):
+    code, text = run_cli(["run", building, building, "--out", tmp_path / "o"], monkeypatch, capsys)
+    assert code == 2 and "--elevations" in text and "Traceback" not in text
+    code, text = run_cli(["run", building, building, "--elevations", "0", "--out", tmp_path / "o"], monkeypatch,
+                         capsys)
+    assert code == 2 and "--elevations: 1 value(s) for 2 plan file(s)" in text
 
 
 @pytest.mark.parametrize("cmd", [["run", "{ifc}", "--out", "{tmp}/out"], ["scene", "import", "{ifc}", "--out",
@@ -93,11 +112,18 @@ def test_unknown_storey_is_one_line_exit_2_nothing_written(building, tmp_path, m
     assert len(text.strip().splitlines()) == 1 and list(tmp_path.iterdir()) == []
 
 
-def test_storey_all_on_a_dxf_plan_is_refused(tmp_path, monkeypatch, capsys):
+def test_storey_all_on_a_dxf_plan_gives_its_plans(tmp_path, monkeypatch, capsys):
+    """A DXF sheet's plans are its storeys (issue 33): one plan, one scene file; a plan it
+    does not draw is refused in one line naming the ones it has."""
     from tests.scene.plan_drawings import draw_grid_dxf
 
     dxf = draw_grid_dxf(tmp_path / "plan.dxf", B)
-    code, text = run_cli(["scene", "import", dxf, "--storey", "all", "--out", tmp_path / "site.yaml"], monkeypatch,
+    code, text = run_cli(["--quiet", "scene", "import", dxf, "--storey", "all", "--out", tmp_path / "site.yaml"],
+                         monkeypatch, capsys)
+    assert code == 0, text
+    assert sorted(p.name for p in tmp_path.iterdir() if p.suffix == ".yaml") == ["site.yaml"]
+    assert list(yaml.safe_load((tmp_path / "site.yaml").read_text())["storeys"]) == ["plan-1"]
+    code, text = run_cli(["scene", "import", dxf, "--storey", "plan-2", "--out", tmp_path / "two.yaml"], monkeypatch,
                          capsys)
-    assert code == 2 and "all" in text and "IFC" in text and "--storey" in text
-    assert sorted(p.name for p in tmp_path.iterdir()) == ["plan.dxf"]
+    assert code == 2 and "--storey" in text and "it has plan-1" in text and len(text.strip().splitlines()) == 1
+    assert not (tmp_path / "two.yaml").exists()

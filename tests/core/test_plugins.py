@@ -11,6 +11,7 @@ import warnings
 import pytest
 
 from camplace.core.plugins import PluginWarning, Registry, source_entry_points
+from conftest import plugin_dist
 from camplace.solvers.registry import check_plugin
 
 GROUP = "camplace.test-plugins"
@@ -45,14 +46,8 @@ CATCHALL = make_solver("catchall", solve_catchall)   # a contract mistake: fails
 
 
 def dist(root, name: str, entry_points: dict[str, str], modules: dict[str, str]) -> None:
-    """A distribution ``name`` installed in ``root`` (dist-info with entry_points.txt) with ``modules``."""
-    info = root / f"{name.replace('-', '_')}-0.1.dist-info"
-    info.mkdir()
-    (info / "METADATA").write_text(f"Metadata-Version: 2.1\nName: {name}\nVersion: 0.1\n")
-    lines = "".join(f"{k} = {v}\n" for k, v in entry_points.items())
-    (info / "entry_points.txt").write_text(f"[{GROUP}]\n{lines}")
-    for mod, text in modules.items():
-        (root / f"{mod}.py").write_text(textwrap.dedent(text))
+    """A distribution ``name`` installed in ``root`` with entry points of GROUP and ``modules``."""
+    plugin_dist(root, name, {GROUP: entry_points}, modules)
 
 
 @pytest.fixture()

@@ -1,7 +1,10 @@
-"""The example plugin package (examples/camplace-example-plugin: the solver 'random-restarts'
-and the engine 'frustum') installed with pip into a folder on the path: it shows up in
-``camplace solvers``, passes both conformance suites and runs from the command line with its
-own options, from the CLI and from a scene file; bad values get one line naming the option."""
+"""The example plugin package (examples/camplace-example-plugin: the solver 'random-restarts',
+the engine 'frustum', GeoJSON plans and camera_coverage.csv) installed with pip into a folder
+on the path: it shows up in ``camplace solvers``, passes both conformance suites and runs from
+the command line with its own options, from the CLI and from a scene file; bad values get one
+line naming the option; ``camplace run plan.geojson`` makes its rooms zones, and run and
+evaluate write camera_coverage.csv, linked from report.html (docs/design.md "How to add a
+plan format", "How to add an output")."""
 
 from __future__ import annotations
 
@@ -13,7 +16,7 @@ from pathlib import Path
 import pytest
 import yaml
 
-from conftest import BASE, box_room, run_cli
+from conftest import BASE, box_room, import_and_evaluate, run_cli
 
 PLUGIN = Path(__file__).resolve().parents[2] / "examples" / "camplace-example-plugin"
 
@@ -35,20 +38,23 @@ def pip_install(src: Path, target: Path) -> None:
 def plugin(tmp_path_factory):
     """The example plugin installed into a fresh folder put on sys.path; the registries read
     the entry points again, and again after it is gone."""
+    from camplace.outputs.writers import OUTPUTS
+    from camplace.scene.formats import IMPORTERS
     from camplace.solvers import SOLVERS
     from camplace.visibility import ENGINES
 
+    registries = (SOLVERS, ENGINES, IMPORTERS, OUTPUTS)
     target = tmp_path_factory.mktemp("plugin") / "site"
     pip_install(PLUGIN, target)
     sys.path.insert(0, str(target))
-    SOLVERS.reload()
-    ENGINES.reload()
+    for registry in registries:
+        registry.reload()
     yield target
     sys.path.remove(str(target))
     for name in [m for m in sys.modules if m.startswith("camplace_example_plugin")]:
         del sys.modules[name]
-    SOLVERS.reload()
-    ENGINES.reload()
+    for registry in registries:
+        registry.reload()
 
 
 def test_the_plugin_shows_up_in_camplace_solvers(plugin, monkeypatch, capsys):
@@ -138,3 +144,42 @@ def test_python_refuses_bad_plugin_options_alike(plugin):
         solve(random_problem(0), "random-restarts", restarts="many")
     assert err.value.option == "restarts"
     assert solve(random_problem(0), "random-restarts", restarts="4").info["restarts"] == 4
+
+
+GEOJSON = {"type": "FeatureCollection", "features": [
+    {"type": "Feature", "properties": {"kind": "room", "name": "Office"},
+     "geometry": {"type": "Polygon", "coordinates": [[[0, 0], [3, 0], [3, 4], [0, 4], [0, 0]]]}},
+    {"type": "Feature", "properties": {"kind": "room", "name": "Lab"},
+     "geometry": {"type": "Polygon", "coordinates": [[[3, 0], [6, 0], [6, 4], [3, 4], [3, 0]]]}},
+    {"type": "Feature", "properties": {"kind": "wall"},  # between the rooms, a 1 m doorway at y 3..4
+     "geometry": {"type": "Polygon", "coordinates": [[[2.95, 0], [3.05, 0], [3.05, 3], [2.95, 3], [2.95, 0]]]}},
+]}
+
+
+def test_the_plugin_plan_format_and_output_file_through_the_cli(plugin, tmp_path, monkeypatch, capsys):
+    """docs/design.md "How to add a plan format" and "How to add an output", step by step."""
+    import json
+
+    from camplace.outputs.writers import OUTPUTS
+    from camplace.scene.formats import IMPORTERS
+
+    assert IMPORTERS.distribution("geojson") == OUTPUTS.distribution("camera-coverage") == "camplace-example-plugin"
+    plan = tmp_path / "plan.geojson"
+    plan.write_text(json.dumps(GEOJSON))
+    run = tmp_path / "run"
+    code, text = run_cli(["run", plan, "--solver", "random-restarts", "--budget", "3", "--out", run, "--no-plan",
+                          "--no-cache", "--grid-only"], monkeypatch, capsys)
+    assert code == 0, text
+    assert "2 rooms, 24.0 m²" in text and "geojson (plugin importer)" in text  # the import summary
+    placed = json.loads((run / "placement.json").read_text())
+    assert placed["solver"] == "random-restarts" and placed["solver_info"]["restarts"] == 20
+    assert {"Office", "Lab"} <= set(json.loads((run / "metrics.json").read_text())["regions"])  # rooms: zones
+    rows = (run / "camera_coverage.csv").read_text().splitlines()
+    assert rows[0] == "id,camera,targets_seen,seen_only_by_it" and len(rows) == 1 + len(placed["cameras"])
+    assert "<a href='camera_coverage.csv'>camera_coverage.csv</a>" in (run / "report.html").read_text()
+    ev = import_and_evaluate(plan, run / "placement.json", tmp_path, monkeypatch, capsys)
+    assert (ev / "camera_coverage.csv").read_text() == (run / "camera_coverage.csv").read_text()
+    code, text = run_cli(["evaluate", plan, run / "placement.json", "--out", tmp_path / "ev2", "--no-plan"],
+                         monkeypatch, capsys)  # the plan itself as the scene, as camplace run reads it
+    assert code == 0, text
+    assert (tmp_path / "ev2" / "camera_coverage.csv").read_text() == (run / "camera_coverage.csv").read_text()

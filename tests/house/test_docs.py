@@ -11,7 +11,7 @@ import pytest
 
 REPO = Path(__file__).resolve().parents[2]
 DOCS = sorted((REPO / "docs").glob("*.md")) + [REPO / "README.md"]
-ENTRY_POINT_GROUPS = {"camplace.solvers", "camplace.engines"}  # plugin groups (pyproject.toml), not modules
+ENTRY_POINT_GROUPS = {"camplace.solvers", "camplace.engines", "camplace.importers", "camplace.outputs"}  # plugin groups (pyproject.toml), not modules
 NAME = re.compile(r"(camplace(?:\.[A-Za-z_][A-Za-z0-9_]*)+)")
 
 
@@ -54,3 +54,17 @@ def test_every_registered_solver_and_engine_is_documented():
     assert not missing, f"solvers not named in docs/solvers.md and docs/scene-file.md: {missing}"
     missing = [m for m in ENGINES if ENGINES.distribution(m) == "camplace" and f"`{m}`" not in engines_md]
     assert not missing, f"engines not named in docs/engines.md: {missing}"
+
+
+def test_every_registered_plan_format_and_output_is_documented():
+    """camplace's own importers are rows of docs/plans.md's formats table, its own output
+    writers are named in docs/output-contract.md (issue 35)."""
+    from camplace.outputs.writers import OUTPUTS
+    from camplace.scene.formats import IMPORTERS
+
+    plans_md = (REPO / "docs" / "plans.md").read_text()
+    contract_md = (REPO / "docs" / "output-contract.md").read_text()
+    missing = [n for n in IMPORTERS if IMPORTERS.distribution(n) == "camplace" and f"| `{n}` |" not in plans_md]
+    assert not missing, f"plan formats not in docs/plans.md's table: {missing}"
+    missing = [n for n in OUTPUTS if OUTPUTS.distribution(n) == "camplace" and f"`{n}`" not in contract_md]
+    assert not missing, f"output writers not named in docs/output-contract.md: {missing}"

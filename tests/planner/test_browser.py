@@ -48,15 +48,22 @@ def run_dir(tmp_path_factory, demo_out) -> Path:
 @pytest.fixture(scope="module")
 def server(run_dir):
     """The planner app on a free 127.0.0.1 port, served by uvicorn in a thread."""
+    from camplace.planner.opening import open_start
+
+    yield from serve(open_start, run_dir)
+
+
+def serve(open_start, *args, **kw):
+    """Yield the start URL of a planner on ``open_start(*args, **kw)`` (uvicorn in a thread),
+    stopping it after."""
     import uvicorn
 
     from camplace.planner.app import create_app
-    from camplace.planner.opening import open_start
     from camplace.planner.session import Session
 
     _need_browser()
     port = _free_port()
-    app = create_app(Session(open_start(run_dir)), TOKEN, port=port)
+    app = create_app(Session(open_start(*args, **kw)), TOKEN, port=port)
     srv = uvicorn.Server(uvicorn.Config(app, host="127.0.0.1", port=port, log_level="warning", lifespan="off"))
     th = threading.Thread(target=srv.run, daemon=True)
     th.start()

@@ -189,12 +189,21 @@ def test_wall_like_layer_besides_the_named_ones_gets_a_note(files, tmp_path):
 
 
 def test_declared_units_that_make_no_sense_get_a_note(files, tmp_path):
+    """Inches declared for a drawing in cm: without area texts to prove the unit, a note
+    on the doors' size; with the room stamps' areas (issue 34), read in cm with a note."""
     import ezdxf
 
     doc = ezdxf.readfile(files["fm"])
     doc.header["$INSUNITS"] = 1  # inches, for a drawing in cm
     doc.saveas(tmp_path / "inches.dxf")
     got = read_plan(tmp_path / "inches.dxf")
+    assert got.used["units"].startswith("cm (from its area texts") and _area(got) == pytest.approx(
+        dd.FM_OUTLINE_M2, rel=0.03)
+    assert any(n.startswith("read in cm, not in the file's unit (in ($INSUNITS 1))") for n in got.notes), got.notes
+    for e in list(doc.modelspace().query("INSERT[layer=='Z21_RAUMSTEMPEL']")):
+        doc.modelspace().delete_entity(e)
+    doc.saveas(tmp_path / "inches-no-stamps.dxf")
+    got = read_plan(tmp_path / "inches-no-stamps.dxf")
     assert any("the doors measure 2.29 m" in n and "cm: 0.90 m" in n for n in got.notes), got.notes
 
 

@@ -93,6 +93,23 @@ def test_duplex_storey_all_gives_both_floors(got, duplex_all):
     assert got[("duplex", "Roof")].scene["zones"][0]["name"] == "Roof"
 
 
+def test_duplex_level_2_is_open_over_the_two_stairs_of_level_1(got):
+    """Issue 33: the Duplex's Level 2 floor is open where the stairs of Level 1 rise to it
+    (each about 1.0 x 3.5 m, over Level 1's two stair spaces, which are two storeys high);
+    Level 1 is closed over T/FDN; the summaries say so and name no other walls or ceiling."""
+    l1, l2 = got[("duplex", "Level 1")], got[("duplex", "Level 2")]
+    assert l1.floor_openings == [] and l1.used["floor openings"] == "0 open to the storey below"
+    assert l2.used["floor openings"] == "2 open to the storey below (stair voids 2, atria 2)"
+    stairs = [Polygon(z["polygon"]) for z in l1.scene["zones"] if z["name"] in ("Stair", "Room")]
+    for ring in l2.floor_openings:
+        hole = Polygon(ring)
+        assert hole.area == pytest.approx(3.55, abs=0.1)
+        assert max(hole.intersection(q).area for q in stairs) > 0.95 * hole.area
+    for key in (("duplex", "Level 1"), ("duplex", "Level 2"), ("whale", None), ("pavilion", None)):
+        assert "shaped like walls" not in got[key].used["walls"], key  # the stairs' stringers are no walls
+    assert got[("duplex", "Level 1")].used["ceiling"] == "2.60 m (IfcCovering underside over the rooms)"
+
+
 def test_bim_whale_two_blocks_eight_rooms_no_trees(got):
     g = got[("whale", None)]
     zones = {z["name"]: Polygon(z["polygon"]).area for z in g.scene["zones"]}

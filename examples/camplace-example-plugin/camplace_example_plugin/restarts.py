@@ -13,8 +13,7 @@ import time
 import numpy as np
 
 from camplace.problem.gains import target_gains
-from camplace.solvers import Placement
-from camplace.solvers.contract import Tags, make_solver
+from camplace.solvers import Placement, Tags, make_solver
 
 
 def random_fill(problem, order: np.ndarray, out_of_time) -> tuple[list[int], bool]:

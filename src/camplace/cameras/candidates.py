@@ -245,13 +245,54 @@ def focal_models(cameras: tuple[CameraModel, ...], camera_ids: np.ndarray,
     return cams, ids
 
 
+def stack_candidates(scene: Scene, cameras: dict[str, CameraModel],
+                     extra_pitches: tuple[float, ...] = ()) -> Candidates:
+    """A building's candidates: each storey's (its own mounts and rules, floor at z = 0)
+    raised to its elevation, as one set in building z; poses that would hang in the open
+    slab under the next storey's floor openings (within OPENING_REACH_M of that storey's
+    ceiling) are dropped. A storey with no pose in free space is left out (counted in
+    ``info['storeys_without_mounts']``); none at all is an InputError."""
+    parts, empty, dropped = [], [], 0
+    for k, st in enumerate(scene.storeys):
+        try:
+            c = build_candidates(st.scene, cameras, extra_pitches)
+        except InputError:
+            empty.append(st.name)
+            continue
+        keep = np.ones(len(c), bool)
+        above = scene.storeys[k + 1].openings if k + 1 < len(scene.storeys) else ()
+        near_ceiling = c.positions[:, 2] > st.top - st.elevation - OPENING_REACH_M
+        for hole in above:
+            keep &= ~(near_ceiling & shapely.contains_xy(hole, c.positions[:, 0], c.positions[:, 1]))
+        dropped += int((~keep).sum())
+        c = c.subset(keep)
+        parts.append((c, st.elevation))
+    if not parts:
+        raise InputError(f"scene '{scene.name}': mounts: no candidate pose lies in free space on any storey")
+    first = parts[0][0]
+    positions = np.concatenate([c.positions + [0.0, 0.0, e] for c, e in parts])
+    info = {key: sum(int(c.info.get(key) or 0) for c, _ in parts) for key in
+            ("generated", "dropped_inside_obstacle", "dropped_clearance")}
+    info.update(clearance_m=first.info.get("clearance_m", 0.0), dropped_under_openings=dropped,
+                storeys_without_mounts=empty)
+    return Candidates(positions, np.concatenate([c.rotations for c, _ in parts]),
+                      np.concatenate([c.angles_deg for c, _ in parts]),
+                      np.concatenate([c.camera_ids for c, _ in parts]), location_ids_of(positions), first.cameras,
+                      info)
+
+
+OPENING_REACH_M = 0.5  # a ceiling pose this close below an opening in the floor above has nothing to hang from
+
+
 def build_candidates(scene: Scene, cameras: dict[str, CameraModel],
                      extra_pitches: tuple[float, ...] = ()) -> Candidates:
     """Every mount of the scene expanded into poses, each pose with every focal setting of
     each camera type the mount carries; poses inside an obstacle or closer than
-    ``mount_rules.clearance`` to one are dropped (counted per pose in ``info``).
-    ``extra_pitches`` (degrees down) join every mount's own pitches (a crowd-aware run's
-    steep views, camplace.spec.crowd.CrowdSpec.steep_pitches)."""
+    ``mount_rules.clearance`` to one are dropped (counted per pose in ``info``). A building:
+    every storey's (stack_candidates). ``extra_pitches`` (degrees down) join every mount's
+    own pitches (a crowd-aware run's steep views, camplace.spec.crowd.CrowdSpec.steep_pitches)."""
+    if scene.storeys:
+        return stack_candidates(scene, cameras, extra_pitches)
     cam_list, cam_index = lens_settings(cameras)
     pos, ang, cid = [], [], []
     rules = scene.spec.mount_rules

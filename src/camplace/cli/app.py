@@ -66,6 +66,10 @@ def _plugin_warnings_as_lines() -> None:
 def main() -> None:
     """Entry point: run the app, turning CamplaceError into one line + exit code."""
     _plugin_warnings_as_lines()
+    from camplace.cli.scene_import import import_cmd
+    from camplace.cli.space import with_plan_formats
+
+    with_plan_formats(run.run_cmd, import_cmd)  # the help lists the registered plan formats
     # at exit, Python then skips sweeping every object for cycles (numba, scipy, matplotlib: ~1 s after a
     # run, once every file is written); once per process (tests call main() many times)
     atexit.unregister(gc.freeze)

@@ -40,7 +40,8 @@ FLAGS = {
     "viewpoints": "--viewpoint", "out": "--out", "frame": "--frame", "paper": "--paper",
     "cloud": "",  # the space file: the message names it already
     "units": "--units", "wall_height": "--wall-height", "ceiling_height": "--ceiling-height", "scale": "--scale",
-    "ref": "--ref", "storey": "--storey", "wall_layers": "--wall-layers", "furniture_heights": "--layer-height",
+    "ref": "--ref", "storey": "--storey", "wall_layers": "--wall-layers", "wall_classes": "--wall-classes",
+    "furniture_heights": "--layer-height",
     "doors": "--doors", "glass": "--glass", "threshold": "--threshold", "max_opening": "--max-opening",
     "min_room_area": "--min-room-area", "ocr": "--no-ocr", "page": "--page",
     **CROWD_FLAGS,
@@ -67,20 +68,33 @@ def word_error(err: CamplaceError) -> str:
     """The error's line for the command line. With ``err.option`` set, the library's
     leading 'param:' (or '(param)') becomes the flag, else the flag is put in front
     (an option of "" - the command's argument - only drops 'param: '); 'param=value'
-    advice and the quoted 'param' in the message are worded as flags too."""
+    advice and the quoted 'param' in the message are worded as flags too; a message that
+    names its fix as '(param=value)' keeps no prefix (the user may not have given it)."""
     msg = str(err)
     opt = getattr(err, "option", None)
     if opt is None or opt not in FLAGS:
         return f"--option {msg}" if opt and msg.startswith(f"{opt}:") and _solver_option(opt, msg) else msg
     flag = FLAGS[opt]
-    msg = _PARAM_VALUE.sub(_flag_for, msg)
+    msg = _TAKES.sub(_flags_taken, _PARAM_VALUE.sub(_flag_for, msg))
     if flag:
         msg = msg.replace(f"'{opt}'", f"'{flag}'")  # "takes no option 'coverage_gap'"
     if msg.startswith(f"{opt}:"):
         return flag + msg[len(opt):] if flag else msg[len(opt) + 1:].lstrip()
     if f"({opt})" in msg:
         return msg.replace(f"({opt})", f"({flag})") if flag else msg
+    if flag and re.search(rf"\({re.escape(flag)} [^)\s]+\)", msg):  # ends in the fix, '(--units m)': no prefix
+        return msg
     return f"{flag}: {msg}" if flag else msg
+
+
+_TAKES = re.compile(r"\(it takes ([a-z][a-z_]*(?:, [a-z][a-z_]*)*)\)")
+
+
+def _flags_taken(match: re.Match) -> str:
+    """'(it takes name, units, heights)' -> '(it takes --units, --heights)': the parameters
+    listed as the flags that give them (one without a flag cannot be given on the command line)."""
+    flags = [FLAGS[x] for x in match.group(1).split(", ") if FLAGS.get(x)]
+    return f"(it takes {', '.join(flags)})" if flags else "(it takes none of the command's options)"
 
 
 _PAREN_OPTION = re.compile(r"\(([a-z][a-z_]*)\)")

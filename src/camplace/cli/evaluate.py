@@ -10,10 +10,12 @@ import typer
 from camplace.cli import crowd
 from camplace.cli.common import (FRAME_OPT, MAX_MEMORY_OPT, NO_PLAN_OPT, PAPER_OPT, REPEATABLE_OPT, SCHEDULER_OPT,
                                  WORKERS_OPT, RichProgress, check_options, memory_bytes, progress_bars, repeatable_requested)
+from camplace.cli.space import ImportOptions, scene_data_from_file, space_kind
 from camplace.cli.summary import write_and_summarise
 
 
-def evaluate_cmd(scene: str = typer.Argument(..., help="Scene YAML file or built-in name."),
+def evaluate_cmd(scene: str = typer.Argument(..., help="Scene YAML file, built-in name or a space file (scan, "
+                                             "mesh, OctoMap or plan, read with the defaults of camplace run)."),
                  placement: Path = typer.Argument(..., help="placement.json, or a mount-list CSV with header "
                                                   "id,x,y,z,yaw,pitch,roll,lens (by camplace, by hand or another tool)."),
                  out: Optional[Path] = typer.Option(None, "--out", help="Output folder (default "
@@ -45,6 +47,10 @@ def evaluate_cmd(scene: str = typer.Argument(..., help="Scene YAML file or built
     check_options(None, None, max_memory_gb, out)
     paper = check_paper(paper)
     repeatable = repeatable_requested(repeatable)
+    if space_kind(scene) is not None:  # a scan, mesh, OctoMap or plan: the scene camplace run FILE makes of it
+        from camplace.spec.loading import parse_scene
+
+        scene = parse_scene(scene_data_from_file(Path(scene), ImportOptions(), None)[0], scene)
     with progress_bars() as prog:
         result = evaluate(scene, placement, progress=RichProgress(prog), workers=workers, scheduler=scheduler or None,
                           max_memory_bytes=memory_bytes(max_memory_gb), frame=frame,

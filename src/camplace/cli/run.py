@@ -13,17 +13,18 @@ import typer
 from rich.markup import escape
 
 from camplace.cli import crowd
+from camplace.cli.building import ELEVATIONS_OPT, STOREY_BUDGET_OPT, is_building, storey_budgets
 from camplace.cli.common import (CACHE_OPT, FRAME_OPT, MAX_MEMORY_OPT, NO_CACHE_OPT, NO_PLAN_OPT, OPTION_OPT,
                                  PAPER_OPT, REPEATABLE_OPT, SCHEDULER_OPT, SEED_OPT, solver_option_values,
                                  TIME_LIMIT_OPT, WORKERS_OPT, RichProgress, StopFlag, certify_solver, check_options,
                                  console, memory_bytes, progress_bars, repeatable_requested, scale_options, state)
-from camplace.cli.space import (CEILING_OPT, REF_OPT, SCALE_OPT, STOREY_OPT, UNITS_OPT, WALL_HEIGHT_OPT,
+from camplace.cli.space import (PLAN_FORMATS, CEILING_OPT, REF_OPT, SCALE_OPT, STOREY_OPT, UNITS_OPT, WALL_HEIGHT_OPT,
                                  DOORS_OPT, GLASS_OPT, LAYER_HEIGHT_OPT, MAX_OPENING_OPT, MIN_ROOM_OPT, NO_OCR_OPT,
                                  PAGE_OPT,
-                                 THRESHOLD_OPT, WALL_LAYERS_OPT,
+                                 THRESHOLD_OPT, WALL_CLASSES_OPT, WALL_LAYERS_OPT,
                                  ImportOptions, describe_import, plan_import_options, scene_data_from_file, scene_yaml,
                                  space_kind)
-from camplace.cli.plan_preview import preview_of, run_extra, show_summary
+from camplace.cli.plan_preview import preview_of, run_extra
 from camplace.cli.summary import write_and_summarise
 from camplace.core.errors import InputError
 
@@ -31,7 +32,8 @@ from camplace.core.errors import InputError
 def run_pipeline(scene, budget: Optional[int], solver: Optional[str], out: Optional[Path],
                  time_limit: Optional[float] = None, require_feasible: bool = False,
                  max_memory_gb: Optional[float] = None, repeatable: bool = False, frame: str = "scene",
-                 plan: bool = True, paper: str = "A3", preview=None, leave: bool = True, **options) -> None:
+                 plan: bool = True, paper: str = "A3", preview=None, leave: bool = True, source: dict | None = None,
+                 **options) -> None:
     """camplace.workflows.run.run with progress bars and Ctrl-C handling; writes the outputs
     into ``out`` (default camplace-out/<scene>, poses in ``frame``; a plan's ``preview``
     as preview.png / preview.svg) and prints the summary. Interrupted: exit 130 at once
@@ -62,6 +64,14 @@ def run_pipeline(scene, budget: Optional[int], solver: Optional[str], out: Optio
         finally:
             warm.stop(warming)
         out_dir = out or Path("camplace-out") / result.scene.name
+        if source:  # an IFC input: cameras.ifc is a copy of it with the cameras (camplace.outputs.cameras_ifc)
+            result.scene.info["source"] = {k: v for k, v in source.items() if k != "building"}
+        if source and source.get("building"):  # the building as a scene file: edit it, run it, reopen the run
+            from camplace.core.files import atomic_write_text
+
+            out_dir.mkdir(parents=True, exist_ok=True)
+            atomic_write_text(out_dir / "building.yaml", scene_yaml(source["building"], "camplace run: the building "
+                                                                                       "this run planned"))
         write_and_summarise(result, out_dir, repeatable, frame, plan, paper, extra=run_extra(preview, out_dir),
                             stop=stop)
     if stop():
@@ -136,10 +146,11 @@ def beyond_grid_options(refine: bool, refine_time: float, adaptive: int, robust:
     return out
 
 
-def run_cmd(scene: Optional[str] = typer.Argument(None, help="Scene YAML file, built-in name (demo, standard-store, "
+def run_cmd(scene: Optional[list[str]] = typer.Argument(None, help="Scene YAML file, built-in name (demo, standard-store, "
                                                   "store-a, warehouse[:AREA_M2]) or a space file: a scan (PLY, PCD, "
                                                   "XYZ/CSV, LAS/LAZ), a mesh (OBJ, PLY with faces, STL, GLB), an "
-                                                  "OctoMap (.bt/.ot) or a plan (DXF, PNG/JPG/TIFF image, IFC)."),
+                                                  "OctoMap (.bt/.ot) or a plan: " + PLAN_FORMATS + "; several plan files "
+                                                  "with --elevations: one building."),
             budget: Optional[int] = typer.Option(None, "--budget", help="Number of cameras N_s (default: the scene's)."),
             solver: Optional[str] = typer.Option(None, "--solver", help="Solver (default: the scene's); "
                                                  "camplace solvers lists them with their options."),
@@ -184,11 +195,13 @@ def run_cmd(scene: Optional[str] = typer.Argument(None, help="Scene YAML file, b
             units: Optional[str] = UNITS_OPT, wall_height: Optional[float] = WALL_HEIGHT_OPT,
             ceiling_height: Optional[float] = CEILING_OPT, scale: Optional[str] = SCALE_OPT,
             ref: Optional[str] = REF_OPT, storey: Optional[str] = STOREY_OPT,
-            wall_layers: Optional[str] = WALL_LAYERS_OPT, layer_height: Optional[list[str]] = LAYER_HEIGHT_OPT,
+            wall_layers: Optional[str] = WALL_LAYERS_OPT, wall_classes: Optional[str] = WALL_CLASSES_OPT,
+            layer_height: Optional[list[str]] = LAYER_HEIGHT_OPT,
             doors: Optional[str] = DOORS_OPT, glass: Optional[str] = GLASS_OPT,
             threshold: Optional[float] = THRESHOLD_OPT, max_opening: Optional[float] = MAX_OPENING_OPT,
             min_room_area: Optional[float] = MIN_ROOM_OPT, no_ocr: bool = NO_OCR_OPT,
-            page: Optional[int] = PAGE_OPT,
+            page: Optional[int] = PAGE_OPT, elevations: Optional[str] = ELEVATIONS_OPT,
+            storey_budget: Optional[list[str]] = STOREY_BUDGET_OPT,
             crowd_density: Optional[float] = crowd.DENSITY_OPT, crowd_samples: Optional[int] = crowd.SAMPLES_OPT,
             crowd_score_samples: Optional[int] = crowd.SCORE_SAMPLES_OPT, crowd_seed: Optional[int] = crowd.SEED_OPT,
             crowd_aware: bool = crowd.AWARE_OPT,
@@ -206,34 +219,49 @@ def run_cmd(scene: Optional[str] = typer.Argument(None, help="Scene YAML file, b
     camplace scene import: floor levelled to z = 0, ceiling and footprint detected,
     walkable volume targets, a 1 m ceiling grid, the default camera
     (docs/scan-to-mount-list.md). To adjust those, write the scene with
-    camplace scene import FILE --out scene.yaml, edit it and run that. A plan (DXF,
-    plan image, IFC) gives walls as obstacles and rooms as zones (docs/plans.md)."""
+    camplace scene import FILE --out scene.yaml, edit it and run that. A plan (IFC,
+    DXF, plan image or a plugin's format) gives walls as obstacles and rooms as zones (docs/plans.md)."""
+    files = list(scene or [])
+    building = is_building(files, storey)
+    if len(files) > 1 and not building:
+        raise InputError(f"run: {len(files)} scenes given; several plan files make one building with --elevations")
+    scene = files[0] if len(files) == 1 else None
     if cloud is not None:
         if scene is not None:
             raise InputError("run: give either a scene or --cloud, not both")
         console.print("[yellow]warning: --cloud is deprecated; give the scan as the scene (camplace run SCAN) and "
                       "write the scene with camplace scene import[/yellow]")
         scene, _ = scene_from_space_file(cloud, budget, save_scene)
-    elif scene is None:
+    elif scene is None and not building:
         raise InputError("run: give a scene (YAML file, built-in name or space file)")
     elif save_scene is not None:
         raise InputError("--save-scene: use camplace scene import FILE --out SCENE.yaml")
-    plan = plan_import_options(space_kind(scene) if isinstance(scene, str) else None, units=units,
+    plan = plan_import_options("plan" if building else space_kind(scene) if isinstance(scene, str) else None,
+                               units=units,
                                wall_height=wall_height, ceiling_height=ceiling_height, scale=scale, ref=ref,
-                               storey=storey, wall_layers=wall_layers, layer_height=layer_height, doors=doors,
+                               storey=storey, wall_layers=wall_layers, wall_classes=wall_classes,
+                               layer_height=layer_height, doors=doors,
                                glass=glass, threshold=threshold, max_opening=max_opening, min_room_area=min_room_area,
                                no_ocr=no_ocr, page=page)
-    storeys = preview = None
-    if storey == "all":  # every storey of an IFC file, each into its own folder
-        from camplace.cli.scene_import import storey_scenes
+    preview = source = None
+    budgets = storey_budgets(storey_budget)
+    if building:  # every storey (or those named) of a plan, or one storey per file: one building scene
+        from camplace.cli.building import building_spec
 
-        storeys = (Path(scene), storey_scenes(Path(scene), plan, budget))
-    elif isinstance(scene, str) and space_kind(scene) is not None:
-        scene, preview = scene_from_space_file(Path(scene), budget, opts=plan)
+        scene, imports, building_data = building_spec(files, plan, budget, elevations, budgets)
+        for name, got in imports:
+            preview_of({"plan": got}, f"{Path(files[0]).name if len(files) == 1 else name}, storey '{name}'")
+        source = dict(_ifc_source(files) or {}, building=building_data)
+    else:
+        if budgets or elevations is not None:
+            raise InputError(f"{'--storey-budget' if budgets else '--elevations'}: belongs to buildings "
+                             f"(--storey all, --storey A,B or several plan files)")
+        if isinstance(scene, str) and space_kind(scene) is not None:
+            scene, preview = scene_from_space_file(Path(scene), budget, opts=plan)
+            source = _ifc_source(files, preview)
     refine = refine_default(refine, robust=robust, certify=certify, well_triangulated=well_triangulated)
     solver, time_limit = certify_solver(certify, solver, time_limit)
-    run = run_pipeline if storeys is None else run_storeys(*storeys)
-    run(scene, budget, solver, out, time_limit, require_feasible, max_memory_gb, repeatable, frame,
+    run_pipeline(scene, budget, solver, out, time_limit, require_feasible, max_memory_gb, repeatable, frame,
                  not no_plan, paper, **scale_options(workers, scheduler, cache, no_cache), visibility_mode=visibility,
                  stride=stride,
                  probe=probe, **({"local_search": True} if local_search else {}),
@@ -244,37 +272,18 @@ def run_cmd(scene: Optional[str] = typer.Argument(None, help="Scene YAML file, b
                  **({"keep": keep} if keep is not None else {}), preview=preview,
                  **({"crowd": c} if (c := crowd.crowd_overrides(crowd_density, crowd_samples, crowd_score_samples,
                                                                 crowd_seed, crowd_aware)) else {}),
-                 options=solver_option_values(option, seed))
+                 options=solver_option_values(option, seed), source=source)
 
 
+def _ifc_source(files: list[str], preview=None) -> dict | None:
+    """What cameras.ifc needs of an IFC input: {"file": path, "storey": {name, elevation_m}
+    of a single-storey run} (None for other inputs)."""
+    if len(files) != 1 or Path(files[0]).suffix.lower() not in (".ifc", ".ifczip"):
+        return None
+    out: dict = {"file": str(Path(files[0]).resolve())}
+    for st in (getattr(preview, "summary", None) or {}).get("storeys") or []:
+        if st.get("chosen"):
+            out["storey"] = {"name": st["name"], "elevation_m": float(st.get("elevation_m") or 0.0)}
+    return out
 
-def run_storeys(path: Path, scenes: list):
-    """run_pipeline over every storey of ``scenes`` (cli.scene_import.storey_scenes):
-    DIR/<slug>/ each (DIR: --out, default camplace-out/<file stem>), then DIR/storeys.json."""
-    from camplace.spec.loading import parse_scene
-    from camplace.workflows.storeys import storey_row, storeys_summary
 
-    def run(_scene, budget, solver, out, *args, preview=None, **options) -> None:
-        out_dir = out or Path("camplace-out") / path.stem
-        rows = []
-        for name, slug, data, elev, storey_preview in scenes:
-            if not state["quiet"]:
-                console.print(f"[bold]storey '{escape(name)}'[/bold] (floor at {elev:g} m) -> "
-                              f"{escape(str(out_dir / slug))}")
-            show_summary(storey_preview.summary, f"{path.name}, storey '{name}'")
-            try:
-                run_pipeline(parse_scene(data, f"{path} (storey '{name}')"), budget, solver, out_dir / slug, *args,
-                             preview=storey_preview, leave=False, **options)
-            except typer.Exit:  # interrupted: that storey's best placement is written; summarise the ones done
-                rows.append(storey_row(name, out_dir / slug, elev, data["room"]["height"]))
-                storeys_summary(out_dir, path.name, rows)
-                raise
-            rows.append(storey_row(name, out_dir / slug, elev, data["room"]["height"]))
-        summary = storeys_summary(out_dir, path.name, rows)
-        if state["quiet"]:
-            typer.echo(str(summary))
-        else:
-            console.print(f"wrote {escape(str(summary))}: " + ", ".join(
-                f"{r['storey']} {r['cameras']} cameras, gap {r['coverage_gap']:.4f}" for r in rows))
-
-    return run

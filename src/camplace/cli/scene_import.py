@@ -10,12 +10,13 @@ from typing import Optional
 import typer
 from rich.markup import escape
 
+from camplace.cli.building import ELEVATIONS_OPT, STOREY_BUDGET_OPT, is_building, storey_budgets
 from camplace.cli.common import console, state
-from camplace.cli.plan_preview import json_part, preview_of, show_summary, write_files
-from camplace.cli.space import (CEILING_OPT, REF_OPT, SCALE_OPT, STOREY_OPT, UNITS_OPT, WALL_HEIGHT_OPT,
+from camplace.cli.plan_preview import json_part, preview_of, write_files
+from camplace.cli.space import (PLAN_FORMATS, CEILING_OPT, REF_OPT, SCALE_OPT, STOREY_OPT, UNITS_OPT, WALL_HEIGHT_OPT,
                                  DOORS_OPT, GLASS_OPT, LAYER_HEIGHT_OPT, MAX_OPENING_OPT, MIN_ROOM_OPT, NO_OCR_OPT,
                                  PAGE_OPT,
-                                 THRESHOLD_OPT, WALL_LAYERS_OPT,
+                                 THRESHOLD_OPT, WALL_CLASSES_OPT, WALL_LAYERS_OPT,
                                  ImportOptions, describe_import, scene_data_from_file, scene_yaml)
 from camplace.core.errors import InputError
 
@@ -23,9 +24,10 @@ scene_app = typer.Typer(add_completion=False, no_args_is_help=True, help="Scenes
 
 
 @scene_app.command("import")
-def import_cmd(file: Path = typer.Argument(..., help="A scan (PLY, PCD, XYZ/CSV, LAS/LAZ), a mesh (OBJ, PLY with faces, "
-                                           "STL, GLB), an OctoMap (.bt/.ot) or a plan (DXF, PNG/JPG/TIFF image, "
-                                           "IFC)."),
+def import_cmd(files: list[Path] = typer.Argument(..., help="A scan (PLY, PCD, XYZ/CSV, LAS/LAZ), a mesh (OBJ, PLY "
+                                                  "with faces, STL, GLB), an OctoMap (.bt/.ot) or a plan: "
+                                                  + PLAN_FORMATS + "; several plan files with --elevations: one "
+                                                  "building."),
                out: Path = typer.Option(..., "--out", help="Scene YAML to write (atomically)."),
                up: str = typer.Option("+z", "--up", help="The file's up axis (+z; phone scans are often +y)."),
                no_level_floor: bool = typer.Option(False, "--no-level-floor",
@@ -46,11 +48,13 @@ def import_cmd(file: Path = typer.Argument(..., help="A scan (PLY, PCD, XYZ/CSV,
                units: Optional[str] = UNITS_OPT, wall_height: Optional[float] = WALL_HEIGHT_OPT,
                ceiling_height: Optional[float] = CEILING_OPT, scale: Optional[str] = SCALE_OPT,
                ref: Optional[str] = REF_OPT, storey: Optional[str] = STOREY_OPT,
-               wall_layers: Optional[str] = WALL_LAYERS_OPT, layer_height: Optional[list[str]] = LAYER_HEIGHT_OPT,
+               wall_layers: Optional[str] = WALL_LAYERS_OPT, wall_classes: Optional[str] = WALL_CLASSES_OPT,
+               layer_height: Optional[list[str]] = LAYER_HEIGHT_OPT,
                doors: Optional[str] = DOORS_OPT, glass: Optional[str] = GLASS_OPT,
                threshold: Optional[float] = THRESHOLD_OPT, max_opening: Optional[float] = MAX_OPENING_OPT,
                min_room_area: Optional[float] = MIN_ROOM_OPT, no_ocr: bool = NO_OCR_OPT,
-               page: Optional[int] = PAGE_OPT) -> None:
+               page: Optional[int] = PAGE_OPT, elevations: Optional[str] = ELEVATIONS_OPT,
+               storey_budget: Optional[list[str]] = STOREY_BUDGET_OPT) -> None:
     """Write the scene built from a space file as YAML to edit, then camplace run it.
 
     The floor is levelled to z = 0, ceiling and footprint detected, walkable volume
@@ -65,12 +69,17 @@ def import_cmd(file: Path = typer.Argument(..., help="A scan (PLY, PCD, XYZ/CSV,
     opts = ImportOptions(up=up, level_floor=not no_level_floor, crop=crop, downsample=downsample, heights=heights,
                          coverage=coverage, wall_mounts=wall_mounts, viewpoint=list(viewpoint or []), units=units,
                          wall_height=wall_height, ceiling_height=ceiling_height, scale=scale, ref=ref, storey=storey,
-                         wall_layers=wall_layers, layer_height=layer_height, doors=doors, glass=glass,
-                         threshold=threshold, max_opening=max_opening, min_room_area=min_room_area, no_ocr=no_ocr,
-                         page=page)
-    if storey == "all":
-        _write_storeys(file, opts, budget, out)
+                         wall_layers=wall_layers, wall_classes=wall_classes, layer_height=layer_height, doors=doors,
+                         glass=glass, threshold=threshold, max_opening=max_opening, min_room_area=min_room_area,
+                         no_ocr=no_ocr, page=page)
+    budgets = storey_budgets(storey_budget)
+    if is_building([str(f) for f in files], storey):
+        _write_building(files, opts, budget, out, elevations, budgets)
         return
+    if budgets or elevations is not None:
+        raise InputError(f"{'--storey-budget' if budgets else '--elevations'}: belongs to buildings "
+                         f"(--storey all, --storey A,B or several plan files)")
+    file = files[0]
     data, rep, _ = scene_data_from_file(file, opts, budget)
     preview = preview_of(rep, file.name)  # rendered before anything is written
     if preview is None and not state["quiet"]:
@@ -92,46 +101,32 @@ def preview_base(out: Path) -> Path:
     return out.with_name(f"{out.stem}.preview")
 
 
-def storey_scenes(path: Path, opts: ImportOptions, budget: Optional[int]) -> list[tuple[str, str, dict, float, object]]:
-    """(storey, slug, scene mapping, floor elevation m, preview) of every storey of an IFC
-    plan (--storey all), each checked by the scene schema, each with its preview picture
-    (camplace.outputs.plan_preview.Preview); nothing is written or printed."""
-    from camplace.cli.space import space_kind
-    from camplace.outputs.plan_preview import render_preview
-    from camplace.scene.importers import read_storey_plans, validated
+def _write_building(files: list[Path], opts: ImportOptions, budget: Optional[int], out: Path,
+                    elevations: Optional[str], budgets: dict[str, int]) -> None:
+    """scene import of a building (--storey all / A,B, several files): one scene file with
+    ``storeys:`` at --out and a preview per storey beside it (OUT.<slug>.preview.png/.svg);
+    everything imported and checked before anything is written."""
+    from camplace.cli.building import building_spec
+    from camplace.core.files import atomic_write_text
     from camplace.workflows.storeys import storey_slugs
 
-    if space_kind(path) != "plan":
-        raise InputError(f"--storey: 'all' belongs to IFC files and plan images, not to {path}")
-    if not path.is_file():
-        raise InputError(f"{path}: file not found" if not path.exists() else f"{path}: is a folder, expected a file")
-    found = read_storey_plans(path, **opts.plan_kwargs(budget))
-    slugs = storey_slugs([name for name, _, _ in found])
-    return [(name, slug, validated(got.scene, f"{path} (storey '{name}')"), elev,
-             render_preview(got, f"{path.name}, storey '{name}'")) for (name, got, elev), slug in zip(found, slugs)]
-
-
-def _write_storeys(file: Path, opts: ImportOptions, budget: Optional[int], out: Path) -> None:
-    """scene import --storey all: OUT-<slug>.yaml beside --out, one per storey (all
-    imported before any is written)."""
-    from camplace.core.files import atomic_write_text
-
-    scenes = storey_scenes(file, opts, budget)
-    paths, docs = [], []
-    for name, slug, data, elev, preview in scenes:
-        path = out.with_name(f"{out.stem}-{slug}{out.suffix}")
-        paths.append(atomic_write_text(path, scene_yaml(data, f"camplace scene import {file.name} --storey all: "
-                                                              f"storey '{name}', floor at {elev:g} m")))
-        docs.append({"storey": name, "scene": str(path),
-                     **json_part(preview, write_files(preview, preview_base(path)))})
+    _, imports, data = building_spec([str(f) for f in files], opts, budget, elevations, budgets)
+    names = [n for n, _ in imports]
+    where = files[0].name if len(files) == 1 else ", ".join(f.name for f in files)
+    previews = [preview_of({"plan": got}, f"{where}, storey '{n}'") for n, got in imports]
+    atomic_write_text(out, scene_yaml(data, f"camplace scene import {where}: a building of {len(names)} storeys"))
+    docs = []
+    for (name, _), slug, preview in zip(imports, storey_slugs(names), previews):
+        base = out.with_name(f"{out.stem}.{slug}.preview")
+        docs.append({"storey": name, "elevation_m": data["storeys"][name]["elevation"],
+                     **json_part(preview, write_files(preview, base))})
     if state["json"]:
-        typer.echo(json.dumps({"storeys": docs}, indent=2))
-        return
-    for (name, _, data, elev, preview), path in zip(scenes, paths):
-        show_summary(preview.summary, f"{file.name}, storey '{name}'")
-        if state["quiet"]:
-            typer.echo(str(path))
-        else:
-            console.print(f"wrote {escape(str(path))} and {escape(preview_base(path).name)}.png/.svg: storey "
-                          f"'{escape(name)}' (floor at {elev:g} m = z 0, {len(data['zones'])} rooms, "
-                          f"{len(data['obstacles'])} obstacles)")
+        typer.echo(json.dumps({"scene": str(out), "storeys": docs}, indent=2))
+    elif state["quiet"]:
+        typer.echo(str(out))
+    else:
+        for d in docs:
+            console.print(f"storey '{escape(d['storey'])}': floor at {d['elevation_m']:g} m, "
+                          f"{len(data['storeys'][d['storey']]['zones'])} rooms")
+        console.print(f"wrote {escape(str(out))} (a building: storeys {escape(', '.join(names))}) and a preview per "
+                      f"storey beside it: edit it, then camplace run {escape(str(out))}")

@@ -39,7 +39,7 @@ def solve_cmd(visibility: Path = typer.Argument(..., help="A saved instance: vis
               option: Optional[list[str]] = OPTION_OPT,
               out: Optional[Path] = typer.Option(None, "--out", help="Output folder (default "
                                                  "camplace-out/<instance>-solved).")) -> None:
-    """Re-solve a saved instance with no geometry; writes placement.json and metrics.json."""
+    """Re-solve a saved instance with no geometry; writes the contract files and every registered output."""
     from camplace.solvers import build_options
     from camplace.workflows.solve import instance_name, solve_instance, write_instance_outputs
 
@@ -55,7 +55,7 @@ def solve_cmd(visibility: Path = typer.Argument(..., help="A saved instance: vis
             visibility, budget, solver, progress=bars, on_incumbent=bars.incumbent, should_stop=stop, **opts)
     name = instance_name(visibility)
     out_dir = out or Path("camplace-out") / f"{name}-solved"
-    paths = write_instance_outputs(out_dir, name, problem, placement, metrics, arrays, timings)
+    paths = write_instance_outputs(out_dir, name, problem, placement, metrics, arrays, timings, visibility)
     p = placement
     if state["json"]:
         typer.echo(json.dumps({"instance": str(visibility), "solver": p.solver, "status": p.status,

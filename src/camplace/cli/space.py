@@ -24,6 +24,35 @@ MESH_SAMPLES = (20_000, 3_000_000)  # at least / at most
 OCTOMAP_LATTICE = 8  # at most this many points per axis in one occupied leaf
 
 
+PLAN_FORMATS = "{plan formats}"  # in a help text: replaced by the registered plan formats (with_plan_formats)
+
+
+def with_plan_formats(*commands) -> None:
+    """Put the registered plan formats (camplace.scene.formats.formats_text: every
+    ``camplace.importers`` entry point) into the help of the commands' arguments whose help
+    holds PLAN_FORMATS; called by camplace.cli.app.main, once plugin warnings are lines."""
+    import inspect
+
+    from camplace.scene.formats import formats_text
+
+    text = None
+    for fn in commands:
+        for param in inspect.signature(fn).parameters.values():
+            info = param.default
+            template = getattr(info, "camplace_help", None) or getattr(info, "help", None)
+            if isinstance(template, str) and PLAN_FORMATS in template:
+                text = formats_text() if text is None else text
+                info.camplace_help = template
+                info.help = template.replace(PLAN_FORMATS, text)
+
+
+def plan_names() -> str:
+    """The registered plan formats' names for a message: 'ifc, dxf, image, geojson'."""
+    from camplace.scene.formats import IMPORTERS
+
+    return ", ".join(IMPORTERS)
+
+
 # the options of plans (DXF, plan images, IFC), shared by camplace run and camplace scene import
 UNITS_OPT = typer.Option(None, "--units", help="Plan units mm|cm|m|in|ft (default: the file's - DXF $INSUNITS, IFC "
                          "length unit; a DXF that says none is read in the unit its geometry suggests, with a note).")
@@ -36,13 +65,17 @@ PAGE_OPT = typer.Option(None, "--page", help="PDF plans: the page to read (1-bas
 REF_OPT = typer.Option(None, "--ref", help="Plan images: two points 'x1,y1,x2,y2,DIST' (pixels, metres) for the scale.")
 STOREY_OPT = typer.Option(None, "--storey", help="IFC: the IfcBuildingStorey name (default: the storey a user plans, "
                           "most rooms, never a roof or foundation level); plan images: plan-N, the N-th plan on a "
-                          "sheet of several side by side (default: the one with most rooms); 'all': every storey "
-                          "or plan with rooms (run: DIR/<storey>/ each and DIR/storeys.json; scene import: "
-                          "OUT-<storey>.yaml each).")
+                          "sheet of several side by side (default: the one with most rooms); DXF: plan-N or the "
+                          "level a title names, e.g. 'First floor' (default: the plan with most walls); 'all' or "
+                          "'A,B': every storey with rooms, or those named, as one building (one budget, one run; "
+                          "scene import: one scene with storeys:).")
 WALL_LAYERS_OPT = typer.Option(None, "--wall-layers", help="DXF: wall layer patterns, comma-separated fnmatch, "
                                "case-insensitive, replacing the defaults (default: layers named like walls in the "
                                "common conventions and languages - A-WALL, WALL, WAND, MUR, MURO, PARED, ... - else "
                                "the layers whose lines pair like wall faces; the summary says which were taken).")
+WALL_CLASSES_OPT = typer.Option(None, "--wall-classes", help="IFC: classes whose elements are walls, comma-separated "
+                                "(e.g. IfcBeam,IfcPlate), beside IfcWall and the elements shaped like walls (tall, "
+                                "thin, standing on the floor, closing rooms); the summary says which were taken.")
 LAYER_HEIGHT_OPT = typer.Option(None, "--layer-height", help="DXF: LAYER=M, the height (m) of the furniture blocks on "
                                 "layers matching LAYER; repeat for several.")
 DOORS_OPT = typer.Option(None, "--doors", help="IFC, DXF: open (default; doors do not occlude) or closed.")
@@ -56,7 +89,8 @@ MIN_ROOM_OPT = typer.Option(None, "--min-room-area", help="Plan images: the smal
 NO_OCR_OPT = typer.Option(False, "--no-ocr", help="Plan images: no OCR (rooms named room-1..n; give --scale or --ref).")
 PLAN_FLAGS = {"units": "--units", "wall_height": "--wall-height", "ceiling_height": "--ceiling-height",
               "scale": "--scale", "ref": "--ref", "storey": "--storey", "wall_layers": "--wall-layers",
-              "layer_height": "--layer-height", "doors": "--doors", "glass": "--glass", "threshold": "--threshold",
+              "wall_classes": "--wall-classes", "layer_height": "--layer-height", "doors": "--doors",
+              "glass": "--glass", "threshold": "--threshold",
               "max_opening": "--max-opening", "min_room_area": "--min-room-area", "no_ocr": "--no-ocr",
               "page": "--page"}
 
@@ -80,6 +114,7 @@ class ImportOptions:
     ref: str | None = None
     storey: str | None = None
     wall_layers: str | None = None
+    wall_classes: str | None = None
     layer_height: list[str] | None = None
     doors: str | None = None
     glass: str | None = None
@@ -99,7 +134,8 @@ class ImportOptions:
                     ref=floats(self.ref, "--ref", 5) if self.ref else None, storey=self.storey, page=self.page,
                     heights=floats(self.heights, "--heights"), coverage=self.coverage, budget=budget,
                     wall_layers=tuple(p.strip() for p in self.wall_layers.split(",") if p.strip())
-                    if self.wall_layers else None, furniture_heights=layer_heights(self.layer_height),
+                    if self.wall_layers else None, wall_classes=self.wall_classes or None,
+                    furniture_heights=layer_heights(self.layer_height),
                     doors=self.doors, glass=self.glass, threshold=self.threshold, max_opening=self.max_opening,
                     min_room_area=self.min_room_area, ocr=False if self.no_ocr else None)
 
@@ -136,7 +172,7 @@ def plan_import_options(kind: str | None, **given) -> ImportOptions:
     for anything but a plan."""
     for k, v in given.items():
         if v and kind != "plan":
-            raise InputError(f"{PLAN_FLAGS[k]}: belongs to plans (DXF, plan image, IFC)")
+            raise InputError(f"{PLAN_FLAGS[k]}: belongs to plans ({plan_names()})")
     return ImportOptions(**given)
 
 
@@ -154,10 +190,10 @@ def _ply_has_faces(path: Path) -> bool:
 
 
 def space_kind(path: str | Path) -> str | None:
-    """'point_cloud', 'mesh', 'octomap' or 'plan' (DXF, plan image, IFC) by the file's
+    """'point_cloud', 'mesh', 'octomap' or 'plan' (a registered plan format) by the file's
     suffix (a .ply with faces is a mesh); None for anything else (a scene file or a
     built-in name)."""
-    from camplace.scene.importers import plan_kind
+    from camplace.scene.formats import plan_kind
 
     p = Path(path)
     suf = p.suffix.lower()
@@ -246,9 +282,11 @@ def scene_data_from_file(path: str | Path, opts: ImportOptions, budget: int | No
     p = Path(path)
     kind = space_kind(p)
     if kind is None:
+        from camplace.scene.formats import formats_text
+
         raise InputError(f"{p}: not a space file; expected a scan ({', '.join(POINT_CLOUD_SUFFIXES)}), a mesh "
-                         f"({', '.join(MESH_SUFFIXES)}), an OctoMap ({', '.join(OCTOMAP_SUFFIXES)}) or a plan "
-                         "(.dxf, .png/.jpg/.tif/.webp/.bmp/.gif, .pdf, .ifc/.ifczip)")
+                         f"({', '.join(MESH_SUFFIXES)}), an OctoMap ({', '.join(OCTOMAP_SUFFIXES)}) or a plan: "
+                         f"{formats_text()}")
     if not p.is_file():
         raise InputError(f"{p}: file not found" if not p.exists() else f"{p}: is a folder, expected a file")
     if kind == "plan":

@@ -13,6 +13,7 @@ from rich.markup import escape
 from rich.table import Table
 
 from camplace.cli.common import console, state
+from camplace.outputs.writers import file_list
 
 
 def json_summary(result, out_dir: Path, paths: dict, plan: dict | None = None) -> dict:
@@ -68,6 +69,7 @@ def _table(result, out_dir: Path, paths: dict, skipped: list[str] = ()) -> Table
         t.add_row(label, value)
     t.add_row("timings (s)", ", ".join(f"{k} {v:.2f}" for k, v in result.timings_s.items()))
     t.add_row("outputs", str(out_dir))
+    t.add_row("files", ", ".join(file_list(paths)))  # what the writers returned (camplace.outputs.writers)
     if "report.html" in paths:
         t.add_row("report", str(paths["report.html"]))
     if "preview.png" in paths:
@@ -121,7 +123,7 @@ def write_and_summarise(result, out_dir: Path, repeatable: bool = False, frame: 
                                      "deadline": stop.report_deadline, "skipped": skipped}
     paths = write_outputs(out_dir, result.scene.name, result.visibility, p, result.problem.budget, result.metrics,
                           result.timings_s, repeatable=repeatable, scene=result.scene, frame=frame, plan=plan,
-                          paper=paper, **watch)
+                          paper=paper, problem=result.problem, **watch)
     if stop is not None:
         stop.finished()
     result.timings_s["report"] = time.perf_counter() - t0

@@ -13,6 +13,7 @@ import contextlib
 import json
 import os
 import secrets
+import shutil
 import stat
 import weakref
 from pathlib import Path
@@ -43,6 +44,17 @@ def atomic_write_text(path: str | Path, text: str) -> Path:
 
 def atomic_write_json(path: str | Path, obj: object) -> Path:
     return atomic_write_text(path, json.dumps(obj, indent=2, sort_keys=False) + "\n")
+
+
+def atomic_copy(src: str | Path, path: str | Path) -> Path:
+    """Copy the file ``src`` to ``path`` atomically (a temporary copy beside path, renamed)."""
+    path = Path(path)
+
+    def copy(f) -> None:
+        with open(src, "rb") as s:
+            shutil.copyfileobj(s, f, 1 << 20)
+
+    return _commit(_write_temp(path, copy), path)
 
 
 def atomic_savez(path: str | Path, *, compressed: bool = True, **arrays: np.ndarray) -> Path:

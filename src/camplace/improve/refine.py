@@ -36,7 +36,7 @@ from camplace.cameras.mount_rules import CEILING_BACK, occupied_distance, restri
 from camplace.spec.schema import Mount, SceneSpec, angle_values
 from camplace.problem import gains
 from camplace.problem.model import PlacementProblem, type_ids_of
-from camplace.scene.build import OccupancyGrid, Scene
+from camplace.scene.build import OccupancyGrid, Scene, storey_index
 from camplace.solvers.base import Placement
 from camplace.targets.build import Targets
 from camplace.visibility.engine import Visibility, VisibilityEngine, raycast_rows
@@ -97,8 +97,12 @@ def pose_box(scene: Scene, candidates: Candidates, i: int, fraction: float = HAL
     pitches and of the candidates' ``info['extra_pitches']`` (a crowd-aware run's steep views)."""
     cam = candidates.cameras[int(candidates.camera_ids[i])]
     p = candidates.positions[i]
-    m = mount_of(scene.spec, cam.name, float(p[2]))
     centre = np.r_[p, candidates.angles_deg[i]]
+    if scene.storeys:  # a building: the mounts and rules of the storey the camera hangs in
+        scene = scene.storeys[int(storey_index(scene.storeys, p[2:3])[0])]
+        p = p - [0.0, 0.0, scene.elevation]
+        scene = scene.scene
+    m = mount_of(scene.spec, cam.name, float(p[2]))
     if m is None:
         half = np.array([0, 0, 0, 30.0, 15.0, 0.0]) * fraction
         region = scene.polygon
@@ -192,9 +196,26 @@ def extend_problem(problem: PlacementProblem, vis: Visibility, row_map: RowMap |
         new = vis.candidates.subset(np.arange(n, vis.V.shape[0]))
         V = sp.vstack([problem.V, row_map(new, vis.V[n:])], format="csr")
     costs = np.array([vis.candidates.cameras[c].cost for c in vis.candidates.camera_ids], np.float64)
-    types = None if problem.type_ids is None else type_ids_of(vis.candidates.camera_ids,
-                                                               [c.name for c in vis.candidates.cameras])
+    types = None if problem.type_ids is None else _appended_groups(problem, vis.candidates)
     return replace(problem, V=V, location_ids=vis.candidates.location_ids, camera_costs=costs, type_ids=types)
+
+
+def _appended_groups(problem: PlacementProblem, cands: Candidates) -> np.ndarray:
+    """(N_g',) int64 limit group of every row of the extended candidates: the problem's for
+    its rows; an appended pose takes the group of the nearest original pose of its camera
+    type (refined and adaptive poses stay near their origin, on its storey; issue 33)."""
+    from scipy.spatial import cKDTree
+
+    n = problem.n_candidates
+    old = np.asarray(problem.type_ids, np.int64)
+    out = np.r_[old, np.full(len(cands) - n, -1, np.int64)]
+    types = type_ids_of(cands.camera_ids, [c.name for c in cands.cameras])
+    for t in np.unique(types[n:]):
+        src = np.flatnonzero(types[:n] == t)
+        new = n + np.flatnonzero(types[n:] == t)
+        if len(src):
+            out[new] = old[src[cKDTree(cands.positions[src]).query(cands.positions[new])[1]]]
+    return out
 
 
 def target_gains(problem: PlacementProblem, cov_other: np.ndarray) -> np.ndarray:

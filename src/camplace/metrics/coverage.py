@@ -27,6 +27,7 @@ class Metrics:
     existing: dict | None = None  # existing / kept cameras (camplace.workflows.sites)
     grid_cost: float | None = None  # a refined / adaptive run's cost of its grid placement (issue 17)
     crowd: Any = None  # camplace.metrics.crowd.CrowdMetrics: the placement in held-out crowds (issue 28)
+    storeys: list[dict] | None = None  # a building: per-storey figures (camplace.workflows.building, issue 33)
 
     def to_dict(self) -> dict:
         out = {"cost": self.cost, **({} if self.grid_cost is None else {"grid_cost": self.grid_cost}),
@@ -39,6 +40,8 @@ class Metrics:
         for key in ("privacy", "existing"):  # issue 17: only when the scene has privacy zones / existing cameras
             if getattr(self, key) is not None:
                 out[key] = getattr(self, key)
+        if self.storeys is not None:  # issue 33: only for buildings
+            out["storeys"] = self.storeys
         if self.crowd is not None:  # issue 28: only when the scene has a crowd
             out["crowd"] = self.crowd.to_dict()
         return out

@@ -103,3 +103,14 @@ def write_bom(out_dir, cameras: list[dict], prices: list[float]) -> dict:
         paths["bom_existing.csv"] = atomic_write_text(out / "bom_existing.csv",
                                                       bom_csv(bom_rows(cameras, prices, existing=True)))
     return paths
+
+
+def bom_writer(out_dir, result) -> list[Path]:
+    """The registered output writer ``bom`` (entry point of ``camplace.outputs``;
+    camplace.outputs.writers): bom.csv and bom_existing.csv of a result with candidates
+    (nothing for ``camplace solve``, which has no camera types)."""
+    vis = result.visibility
+    if vis is None:
+        return []
+    prices = [m.cost for m in selected_models(vis.candidates, result.solution.selected)]
+    return list(write_bom(out_dir, result.placement["cameras"], prices).values())

@@ -15,9 +15,10 @@ from pathlib import Path
 from camplace.core.files import atomic_write_text
 from camplace.outputs.plan_data import SCHEDULE_HEAD, PlanData, check_paper, plan_data  # noqa: F401 (re-exported)
 from camplace.outputs.plan_bom import bom_figure
-from camplace.outputs.plan_dxf import write_plan_dxf
+from camplace.outputs.plan_dxf import write_building_dxf, write_plan_dxf
 from camplace.outputs.plan_pdf import plan_figure, plan_svg, write_plan_pdf
-from camplace.outputs.scene_glb import write_scene_glb
+from camplace.outputs.plan_storeys import building_plans, is_building, write_building_pdf
+from camplace.outputs.scene_glb import write_building_glb, write_scene_glb
 from camplace.visibility.viewshed import WORKING_HEIGHT
 
 FILES = ("plan.pdf", "plan.svg", "plan.dxf", "scene.glb")
@@ -38,7 +39,7 @@ def write_handover(out_dir: str | Path, data: PlanData) -> tuple[dict[str, Path]
 def svg_with_tooltips(svg: str, data: PlanData) -> str:
     """The plan SVG cut to its <svg> element, each camera's symbol group given a <title>
     (its schedule row), so a browser shows the row when the pointer rests on the camera."""
-    rows = {r[0]: "; ".join(f"{h}: {v}" for h, v in zip(SCHEDULE_HEAD, r)) for r in data.schedule_rows()}
+    rows = {r[0]: "; ".join(f"{h}: {v}" for h, v in zip(data.schedule_head, r)) for r in data.schedule_rows()}
     body = svg[svg.index("<svg"):]
     # inline in HTML5 the parser gives <svg> its namespace: drop the xmlns declarations and the
     # RDF metadata, so the page names no URL at all
@@ -62,6 +63,34 @@ def plan_section(data: PlanData, svg: str) -> str:
             f"Hand-over files: {links}.</p><div class='plan' style='max-width:1500px'>{svg_with_tooltips(svg, data)}</div></section>")
 
 
+def write_building_handover(out_dir: str | Path, scene, whole: PlanData, storeys: list[PlanData]
+                            ) -> tuple[dict[str, Path], list[str]]:
+    """FILES of a building (camplace.outputs.plan_storeys: ``whole`` and one PlanData per storey):
+    plan.pdf with each storey's sheets, plan.svg the first storey's floor plan, plan.dxf one
+    layer set per storey at its elevation, scene.glb stacked. Returns (paths, each storey's
+    floor plan as SVG text)."""
+    out = Path(out_dir)
+    figs = [plan_figure(d) for d in storeys]
+    svgs = [plan_svg(d, fig) for d, fig in zip(storeys, figs)]
+    paths = {"plan.pdf": write_building_pdf(out / "plan.pdf", whole, storeys, figs),
+             "plan.svg": atomic_write_text(out / "plan.svg", svgs[0]),
+             "plan.dxf": write_building_dxf(out / "plan.dxf", storeys),
+             "scene.glb": write_building_glb(out / "scene.glb", scene, storeys)}
+    return paths, svgs
+
+
+def building_plan_section(whole: PlanData, storeys: list[PlanData], svgs: list[str]) -> str:
+    """report.html's plan section of a building: each storey's floor plan (hover rows from the
+    whole building's schedule)."""
+    links = " \u00b7 ".join(f"<a href='{f}'>{f}</a>" for f in FILES)
+    plans = "".join(f"<h3>{html.escape(str(d.storey))}</h3><div class='plan' style='max-width:1500px'>"
+                    f"{svg_with_tooltips(svg, whole)}</div>" for d, svg in zip(storeys, svgs))
+    return (f"<section><h2>Plan, storey by storey</h2><p class=note>The floor plans of plan.pdf, one per storey: each "
+            f"camera's viewshed at {whole.height:.2f} m above its storey's floor, filled by the best DORI level any "
+            f"camera of that storey reaches there. Rest the pointer on a camera for its row of the schedule. "
+            f"Hand-over files: {links} (plan.svg: the first storey).</p>{plans}</section>")
+
+
 def write_plan_set(out_dir: str | Path, scene, vis, placement: dict, metrics: dict, selected, *, paper: str = "A3",
                    height: float = WORKING_HEIGHT, repeatable: bool = False, input_from_scene=None,
                    people: tuple | None = None) -> tuple[dict[str, Path], str, tuple[list[dict], int]]:
@@ -75,6 +104,11 @@ def write_plan_set(out_dir: str | Path, scene, vis, placement: dict, metrics: di
     from camplace.outputs.report_html import VIEW_BUDGET_S, camera_views
 
     views = camera_views(scene, vis, selected, budget_s=float("inf") if repeatable else VIEW_BUDGET_S, people=people)
+    if is_building(scene):  # issue 33: one plan sheet per storey
+        whole, storeys = building_plans(scene, vis, placement, metrics, selected, height=height, paper=paper,
+                                        repeatable=repeatable, views=views[0], input_from_scene=input_from_scene)
+        paths, svgs = write_building_handover(out_dir, scene, whole, storeys)
+        return paths, building_plan_section(whole, storeys, svgs), views
     data = plan_data(scene, vis, placement, metrics, selected, height=height, paper=paper, repeatable=repeatable,
                      views=views[0], input_from_scene=input_from_scene)
     paths, svg = write_handover(out_dir, data)

@@ -77,5 +77,5 @@ def _bom_figure(data: PlanData):
     lines = [f"total price of the new cameras: {total:g} ({sum(int(r[4]) for r in new)} cameras)",
              *recording_lines(data.placement.get("recording"))]
     fig.text(MARGIN_MM / w, top, "\n".join(lines), fontsize=8, va="top", linespacing=1.6)
-    _title_block(fig, data, "sheet 5: bill of materials")
+    _title_block(fig, data, data.sheet(5, "bill of materials"))
     return fig

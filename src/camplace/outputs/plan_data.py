@@ -58,6 +58,21 @@ class PlanData:
     views: list[dict] = field(default_factory=list)  # report_html.camera_views cards (may be fewer than cameras)
     input_from_scene: np.ndarray | None = None  # 4x4: plan.dxf drawn in the input file's frame; None: scene frame
     models: list = field(default_factory=list)  # camplace.cameras.models.CameraModel per camera (issue 27: BOM sheet)
+    storey: str | None = None  # a building's storey (issue 33): its sheets carry the name; None: the whole scene
+    sheet_offset: int = 0  # added to the sheet numbers (a building: the storey sheets come first)
+    openings: tuple = ()  # a storey's floor openings (shapely polygons, m): drawn as open to the storey below
+
+    def sheet(self, n: int, what: str) -> str:
+        """The title block's sheet label: 'sheet n: what' (numbers moved by sheet_offset; a
+        storey's sheets end with its name)."""
+        return f"sheet {n + self.sheet_offset}: {what}" + (f", {self.storey}" if self.storey else "")
+
+    @property
+    def schedule_head(self) -> tuple[str, ...]:
+        """SCHEDULE_HEAD, with a 'storey' column after 'id' when the cameras name their storey."""
+        if not any("storey" in c for c in self.cameras):
+            return SCHEDULE_HEAD
+        return (*SCHEDULE_HEAD[:2], "storey", *SCHEDULE_HEAD[2:])
 
     @property
     def skipped(self) -> int:
@@ -75,27 +90,37 @@ class PlanData:
         p, m = self.placement, self.metrics
         bound = p.get("bound")
         out = [("scene", str(p.get("scene", self.scene.name))), ("solver", f"{p.get('solver')} ({p.get('status')})"),
-               ("cameras", f"{len(self.cameras)} (budget {p.get('budget')})"),
+               ("cameras", f"{len(self.cameras)}" + (f" here, {len(p.get('cameras', []))} in all" if self.storey else "")
+                + f" (budget {p.get('budget')})"),
                ("cost", f"{float(m.get('cost', p.get('objective', 0.0))):.6g}"),
                ("coverage gap", f"{float(m.get('coverage_gap', 0.0)):.4f}"),
                ("bound", "\u2013" if bound is None else f"{float(bound):.6g}"),
                ("working height", f"{self.height:.2f} m")]
+        if self.storey:
+            floor = {st.get("name"): st.get("elevation_m") for st in p.get("storeys", [])}.get(self.storey)
+            out.insert(1, ("storey", self.storey + ("" if floor is None else f" (floor at {float(floor):.2f} m)")))
+        elif p.get("storeys"):
+            out.insert(1, ("storeys", ", ".join(str(st.get("name")) for st in p["storeys"])))
         if self.dated:
             out.append(("date", self.dated))
         return out
 
     def schedule_rows(self) -> list[tuple[str, ...]]:
-        """One row of SCHEDULE_HEAD per camera (strings)."""
+        """One row of schedule_head per camera (strings); a building's heights are above the
+        camera's storey floor (placement.json ``storeys``), its storey in its own column."""
         rows = []
+        floors = {st.get("name"): float(st.get("elevation_m", 0.0)) for st in self.placement.get("storeys", [])}
         for c, mark, d, price, served in zip(self.cameras, self.marks, self.dori, self.price, self.served):
             x, y, z = c["position"]
+            z -= floors.get(c.get("storey"), 0.0) if self.storey is None else 0.0  # a storey's own cameras: local z
             k = c.get("intrinsics", {})
             lens = f"{k.get('model', '')} {k.get('width', '')}x{k.get('height', '')} f {float(k.get('fx', 0)):.0f}"
             if c.get("focal_mm") is not None:  # a lens as sold (issue 27): the focal length it is set to
                 lens += f" ({float(c['focal_mm']):.1f} mm)"
             dori = "/".join(f"{d[n]:.1f}" for n, _ in reversed(DORI_LEVELS))
             serves = ", ".join(f"{r} ({n})" for r, n in served.items()) or "\u2013"
-            rows.append((mark, camera_id(c), f"{x:.2f}", f"{y:.2f}", f"{z:.2f}",
+            storey = (str(c["storey"]),) if "storey" in c else ()
+            rows.append((mark, camera_id(c), *storey, f"{x:.2f}", f"{y:.2f}", f"{z:.2f}",
                          f"{c['yaw_deg']:.1f}", f"{c['pitch_deg']:.1f}", f"{c['roll_deg']:.1f}", str(c["camera"]),
                          lens, f"{price:g}", dori, serves, "existing" if c.get("existing") else "new"))
         return rows
@@ -138,11 +163,12 @@ def free_floor(scene, height: float):
 def plan_data(scene, vis, placement: dict, metrics: dict, selected: np.ndarray, *, height: float = WORKING_HEIGHT,
               paper: str = "A3", repeatable: bool = False, views: list[dict] | None = None,
               step: float = STEP, budget_s: float = VIEWSHED_BUDGET_S,
-              input_from_scene: np.ndarray | None = None) -> PlanData:
+              input_from_scene: np.ndarray | None = None, shed: list[Viewshed] | None = None) -> PlanData:
     """PlanData of a placement: ``vis`` (camplace.visibility.engine.Visibility) and
     ``selected`` (rows of vis.V, the cameras of placement['cameras'] in the same order).
     Viewsheds are computed for ``budget_s`` seconds (no limit when ``repeatable``);
-    ``input_from_scene`` (4x4) draws plan.dxf in that frame."""
+    ``input_from_scene`` (4x4) draws plan.dxf in that frame; ``shed``: the viewsheds when
+    already computed (a building's, per storey: camplace.outputs.plan_storeys)."""
     if not (np.isfinite(height) and 0.0 <= height <= scene.height):
         raise InputError(f"working height: expected 0..{scene.height:g} m (the room's height), got {height!r}",
                          option="height")
@@ -157,6 +183,7 @@ def plan_data(scene, vis, placement: dict, metrics: dict, selected: np.ndarray, 
         served.append({str(t.region_names[r]): int(n[r]) for r in np.nonzero(n)[0]})
     cov = np.bincount(V[sel].indices, minlength=V.shape[1]).astype(np.int64) if len(sel) else np.zeros(V.shape[1], int)
     return PlanData(scene, placement, metrics, list(placement.get("cameras", [])), [f"C{k + 1}" for k in range(len(sel))],
+                    shed if shed is not None else
                     viewsheds(scene.occupancy, c, sel, height, step, free_floor(scene, height),
                               budget_s=float("inf") if repeatable else budget_s),
                     [per_model[id(cam)] for cam in cams], [float(cam.cost) for cam in cams], served, t, cov,

@@ -93,28 +93,46 @@ def _camera_block(doc) -> None:
 def plan_dxf(data: PlanData) -> str:
     """The DXF document (R2010) as text; repeatable runs (data.dated None) carry ezdxf's fixed
     dates and GUIDs, so identical inputs give identical files."""
+    return dxf_text(_plan_doc, data, data.dated is None)
+
+
+def dxf_text(make_doc, data, fixed_meta: bool) -> str:
+    """The text of the DXF document ``make_doc(data)``; ``fixed_meta``: ezdxf's fixed dates
+    and GUIDs (repeatable runs)."""
     import ezdxf
 
     fixed = ezdxf.options.write_fixed_meta_data_for_testing
-    ezdxf.options.write_fixed_meta_data_for_testing = data.dated is None
+    ezdxf.options.write_fixed_meta_data_for_testing = fixed_meta
     try:
         buf = io.StringIO()
-        _plan_doc(data).write(buf)
+        make_doc(data).write(buf)
         return buf.getvalue()
     finally:
         ezdxf.options.write_fixed_meta_data_for_testing = fixed
 
 
-def _plan_doc(data: PlanData):
+def new_doc(data: PlanData, layers: dict[str, int]):
+    """(an R2010 document with ``layers`` (name -> colour) and the camera block, its
+    PlanFrame); units metres unless the frame scales."""
     import ezdxf
 
     doc = ezdxf.new("R2010", setup=False)
     f = PlanFrame(data.input_from_scene, data.height)
     doc.units = ezdxf.units.M if abs(f.k - 1.0) < 1e-9 else 0
-    for name, colour in LAYERS.items():
+    for name, colour in layers.items():
         doc.layers.add(name, color=colour)
     _camera_block(doc)
-    msp = doc.modelspace()
+    return doc, f
+
+
+def _plan_doc(data: PlanData):
+    doc, f = new_doc(data, LAYERS)
+    draw_plan(doc.modelspace(), f, data)
+    return doc
+
+
+def draw_plan(msp, f: PlanFrame, data: PlanData) -> None:
+    """Every entity of the plan of ``data`` into the modelspace ``msp`` (on the LAYERS)."""
     walls = {"layer": "CAMPLACE-WALLS"}
     msp.add_lwpolyline(f.xy(data.scene.footprint), close=True, dxfattribs=walls)
     for name, (b0, b1) in data.scene.boxes.items():
@@ -141,7 +159,6 @@ def _plan_doc(data: PlanData):
                               "YAW": f"{yaw:.2f}", "PITCH": f"{pitch:.2f}",
                               "STATUS": "existing" if c.get("existing") else "new"})
         _text(msp, f, mark, (c["position"][0] - 0.45, c["position"][1] + 0.2), 0.2, {"layer": layer})
-    return doc
 
 
 def _walls(msp, f: PlanFrame, data: PlanData) -> None:
@@ -182,8 +199,8 @@ def _zones(msp, f: PlanFrame, data: PlanData) -> None:
     half = float(data.scene.spec.voxel_size) / 2
     for r, name in enumerate(t.region_names):
         m = vol & (t.region_ids == r)
-        if not m.any() or str(name) in drawn:
-            continue
+        if not m.any() or str(name) in drawn or (data.storey and str(name).removeprefix(f"{data.storey}/") in drawn):
+            continue  # a storey's region 'Level 1/Kitchen' is its zone 'Kitchen', drawn above
         zs = np.unique(np.round(t.positions[m, 2], 6))
         z = zs[np.argmin(np.abs(zs - data.height))]
         p = t.positions[m & (np.abs(t.positions[:, 2] - z) < 1e-6)]
@@ -196,3 +213,43 @@ def _zones(msp, f: PlanFrame, data: PlanData) -> None:
 
 def write_plan_dxf(path: str | Path, data: PlanData) -> Path:
     return atomic_write_bytes(Path(path), plan_dxf(data).encode("utf-8"))
+
+
+def storey_layer(storey: str, layer: str) -> str:
+    """A storey's name for one of LAYERS: 'CAMPLACE-CAMERAS' on storey 'Level 1' is
+    'Level 1-CAMERAS' (characters a DXF layer name cannot hold become '_')."""
+    safe = "".join("_" if ch in '<>/\\":;?*|=`,' else ch for ch in storey).strip() or "storey"
+    return f"{safe}-{layer.removeprefix('CAMPLACE-')}"
+
+
+def building_dxf(storeys: list[PlanData]) -> str:
+    """plan.dxf of a building: each storey's plan (PlanData of camplace.outputs.plan_storeys,
+    local z) on its own layer set (storey_layer) and drawn at its elevation: every entity's
+    z is the storey floor's, cameras at their building z (in the drawing's frame)."""
+    return dxf_text(_building_doc, storeys, storeys[0].dated is None)
+
+
+def _building_doc(storeys: list[PlanData]):
+    floors = {st["name"]: float(st["elevation_m"]) for st in storeys[0].placement.get("storeys", [])}
+    layers = {storey_layer(d.storey, name): colour for d in storeys for name, colour in LAYERS.items()}
+    doc, f0 = new_doc(storeys[0], layers)
+    msp = doc.modelspace()
+    for data in storeys:
+        lift = np.eye(4)
+        lift[2, 3] = floors.get(data.storey, 0.0)
+        f = PlanFrame(f0.T @ lift, data.height)  # the storey's local z up to the building's
+        z_floor = float((f.T @ [0.0, 0.0, 0.0, 1.0])[2])
+        start = len(msp)
+        draw_plan(msp, f, data)
+        for e in list(msp)[start:]:
+            e.dxf.layer = storey_layer(data.storey, e.dxf.layer)
+            if e.dxftype() == "INSERT":  # placed at the camera's own z already
+                for a in e.attribs:
+                    a.dxf.layer = e.dxf.layer
+            else:
+                e.translate(0.0, 0.0, z_floor)
+    return doc
+
+
+def write_building_dxf(path: str | Path, storeys: list[PlanData]) -> Path:
+    return atomic_write_bytes(Path(path), building_dxf(storeys).encode("utf-8"))

@@ -22,7 +22,7 @@ import numpy as np
 
 from camplace.core.files import atomic_write_bytes
 from camplace.outputs.figures import AREA_STYLES, COVERAGE_CLASSES, SceneView, coverage_slices
-from camplace.outputs.plan_data import DORI_COLOURS, PAPERS_MM, SCHEDULE_HEAD, PlanData
+from camplace.outputs.plan_data import DORI_COLOURS, PAPERS_MM, PlanData
 from camplace.outputs.walls import label_colours, mpl_path, plan_cut, scene_walls
 from camplace.visibility.viewshed import DORI_LEVELS
 
@@ -36,9 +36,10 @@ OUTLINE = "#1f4fd1"  # viewshed outlines and new cameras
 EXISTING = "#7b3294"  # existing cameras
 # zones (outline + name), privacy zones (hatched), forbidden / allowed mount areas (dashed / dash-dot)
 PLAN_AREAS = {"zone": {"edgecolor": "#1b7837", "linewidth": 1.0}, **AREA_STYLES,
-              "allow": {"edgecolor": "#1b7837", "linestyle": "-.", "linewidth": 1.2}}
+              "allow": {"edgecolor": "#1b7837", "linestyle": "-.", "linewidth": 1.2},
+              "opening": {"edgecolor": "#444444", "linestyle": "--", "linewidth": 0.9}}
 AREA_LABELS = {"zone": "zone (name)", "privacy": "privacy zone (never seen)", "forbid": "no camera mounted here",
-               "allow": "cameras mounted only here"}
+               "allow": "cameras mounted only here", "opening": "floor open to the storey below"}
 # text stays text; fixed SVG ids (hash salt) so repeatable runs give identical files
 RC = {"pdf.fonttype": 3, "svg.fonttype": "none", "svg.hashsalt": "camplace", "font.size": 7.0, "hatch.linewidth": 0.4}
 
@@ -236,6 +237,20 @@ def _draw_areas(ax, data: PlanData) -> list[str]:
     return kinds
 
 
+def _draw_openings(ax, data: PlanData) -> list[str]:
+    """A storey's floor openings (open to the storey below): dashed, crossed, labelled."""
+    from matplotlib.patches import PathPatch
+
+    for geom in data.openings:
+        ax.add_patch(PathPatch(mpl_path(geom), fill=False, zorder=3, **PLAN_AREAS["opening"]))
+        (x0, y0, x1, y1), (cx, cy) = geom.bounds, geom.representative_point().coords[0]
+        ax.plot([x0, x1], [y0, y1], [x0, x1], [y1, y0], color=PLAN_AREAS["opening"]["edgecolor"], linewidth=0.5,
+                zorder=3)
+        ax.text(cx, cy, "open to below", fontsize=5.5, ha="center", va="center", zorder=6,
+                bbox={"facecolor": "white", "edgecolor": "none", "alpha": 0.7, "pad": 0.4})
+    return ["opening"] if data.openings else []
+
+
 def _legend(fig, data: PlanData, kinds: list[str], walls: dict[str, str] | None = None) -> None:
     from matplotlib.patches import Patch
 
@@ -273,6 +288,7 @@ def _plan_figure(data: PlanData):
     walls = _draw_walls(ax, data)
     _draw_viewsheds(ax, data)
     kinds = _draw_areas(ax, data)
+    kinds += _draw_openings(ax, data)
     _draw_cameras(ax, data, n)
     _scale_bar(ax, n, lo)
     _north_arrow(fig, data)
@@ -282,10 +298,15 @@ def _plan_figure(data: PlanData):
         fig.text((w - MARGIN_MM - SIDE_MM + 6) / w, (MARGIN_MM + 80.0) / h, f"{data.skipped} viewsheds not computed "
                  "within the time budget\n(their cameras are drawn without one).", fontsize=7, color="#b2182b")
     fig.text(MARGIN_MM / page_size_mm(data.paper)[0], 1 - 8.0 / page_size_mm(data.paper)[1],
-             f"{data.placement.get('scene', data.scene.name)}: floor plan, {len(data.cameras)} cameras",
+             f"{data.placement.get('scene', data.scene.name)}{_storey_words(data)}: floor plan, {len(data.cameras)} cameras",
              fontsize=11, weight="bold", va="top")
-    _title_block(fig, data, "sheet 1: floor plan")
+    _title_block(fig, data, data.sheet(1, "floor plan"))
     return fig
+
+
+def _storey_words(data: PlanData) -> str:
+    """', storey NAME' in a storey sheet's heading; '' otherwise."""
+    return f", storey {data.storey}" if data.storey else ""
 
 
 def coverage_figure(data: PlanData):
@@ -326,9 +347,9 @@ def coverage_figure(data: PlanData):
         tax = fig.add_axes(((w - MARGIN_MM - SIDE_MM + 4) / w, 0.62 - tall, (SIDE_MM - 6) / w, tall))
         tax.set_axis_off()
         _column_table(tax, REGION_HEAD, rows, (6, 3, 2, 3, 3, 3), 6.0)
-    fig.text(left, 1 - 8.0 / h, f"{data.placement.get('scene', data.scene.name)}: coverage against \u0393 per target "
-             f"height", fontsize=11, weight="bold", va="top")
-    _title_block(fig, data, "sheet 2: coverage")
+    fig.text(left, 1 - 8.0 / h, f"{data.placement.get('scene', data.scene.name)}{_storey_words(data)}: coverage "
+             f"against \u0393 per target height", fontsize=11, weight="bold", va="top")
+    _title_block(fig, data, data.sheet(2, "coverage"))
     return fig
 
 
@@ -372,11 +393,15 @@ def schedule_figures(data: PlanData) -> list:
         tall = (len(chunk) + 1) * row_mm / h
         ax = fig.add_axes((MARGIN_MM / w, top - tall, 1 - 2 * MARGIN_MM / w, tall))
         ax.set_axis_off()
-        _column_table(ax, SCHEDULE_HEAD, chunk, (3, 3, 3.5, 3.5, 4.5, 3.5, 3.5, 3.5, 5, 11, 3, 8, 20, 4), fs)
+        head = data.schedule_head
+        widths = (3, 3, 3.5, 3.5, 4.5, 3.5, 3.5, 3.5, 5, 11, 3, 8, 20, 4)
+        if len(head) > len(widths):  # a building: the storey column after the id
+            widths = (*widths[:2], 5, *widths[2:-2], 16, 4)
+        _column_table(ax, head, chunk, widths, fs)
         more = f" ({p + 1}/{len(chunks)})" if len(chunks) > 1 else ""
         fig.text(MARGIN_MM / w, 1 - 8.0 / h, f"camera schedule{more}: DORI distances along the optical axis "
                  f"(identify / recognise / observe / detect)", fontsize=11, weight="bold", va="top")
-        _title_block(fig, data, f"sheet 3: camera schedule{more}")
+        _title_block(fig, data, data.sheet(3, f"camera schedule{more}"))
         figs.append(fig)
     return figs
 
@@ -394,7 +419,7 @@ def views_figure(data: PlanData):
     if missing:
         fig.text(MARGIN_MM / w, (MARGIN_MM + 44.0) / h, f"{missing} views not rendered within the time budget "
                  "(camplace render draws any camera).", fontsize=7)
-    _title_block(fig, data, "sheet 4: camera views")
+    _title_block(fig, data, data.sheet(4, "camera views"))
     return fig
 
 
@@ -430,6 +455,13 @@ def write_plan_pdf(path: str | Path, data: PlanData, plan_fig=None, extra_sheets
     """Write plan.pdf (every page above, then ``extra_sheets``, e.g. the bill of materials of
     camplace.outputs.plan_bom; ``plan_fig``: sheet 1 when already drawn by plan_figure);
     repeatable runs (data.dated None) carry no creation date."""
+    return write_pdf_pages(path, data, lambda: [plan_fig or plan_figure(data), coverage_figure(data),
+                                                *schedule_figures(data), views_figure(data), *extra_sheets])
+
+
+def write_pdf_pages(path: str | Path, data: PlanData, pages) -> Path:
+    """Write the figures ``pages()`` makes (under the plan set's rc settings) as one PDF, with
+    ``data``'s title in its metadata (no creation date when data.dated is None)."""
     from matplotlib import rc_context
     from matplotlib.backends.backend_pdf import PdfPages
 
@@ -439,8 +471,7 @@ def write_plan_pdf(path: str | Path, data: PlanData, plan_fig=None, extra_sheets
         meta["CreationDate"] = None
     with rc_context(RC):
         with PdfPages(buf, metadata=meta) as buf_pages:  # pages into the in-memory buffer, written atomically below
-            for fig in [plan_fig or plan_figure(data), coverage_figure(data), *schedule_figures(data),
-                        views_figure(data), *extra_sheets]:
+            for fig in pages():
                 fig.savefig(buf_pages, format="pdf")
     return atomic_write_bytes(Path(path), buf.getvalue())
 

@@ -23,6 +23,7 @@ import numpy as np
 
 from camplace.core.files import atomic_write_text
 from camplace.outputs.figures import COVERAGE_CLASSES, CoverageSlice, SceneView, coverage_class, coverage_slices
+from camplace.outputs.writers import file_list
 from camplace.outputs.report_figures import (MAX_POINTS, frustum_depth, histogram_figure, shown_frusta, slice_figure,
                                              view3d_figure)
 
@@ -184,11 +185,14 @@ def _region_table(metrics: dict, region_kinds: dict, gammas: dict) -> str:
 
 def _mount_table(cameras: list[dict]) -> str:
     src = any("source_id" in c for c in cameras)  # an evaluated file: its own camera ids too
-    head = ("<tr><th>id</th>" + ("<th>id in file</th>" if src else "") + "<th>x (m)</th><th>y (m)</th><th>z (m)</th>"
+    floor = any("storey" in c for c in cameras)  # a building (issue 33): each camera's storey
+    head = ("<tr><th>id</th>" + ("<th>id in file</th>" if src else "") + ("<th>storey</th>" if floor else "")
+            + "<th>x (m)</th><th>y (m)</th><th>z (m)</th>"
             "<th>yaw (\u00b0)</th><th>pitch (\u00b0)</th><th>roll (\u00b0)</th><th>lens</th></tr>")
     body = "".join(
         f"<tr><td>{c.get('candidate_id')}</td>"
         + (f"<td>{html.escape(str(c.get('source_id', '')))}</td>" if src else "")
+        + (f"<td>{html.escape(str(c.get('storey', '')))}</td>" if floor else "")
         + "".join(f"<td class=num>{v:.3f}</td>" for v in c["position"])
         + "".join(f"<td class=num>{c[k]:.2f}</td>" for k in ("yaw_deg", "pitch_deg", "roll_deg"))
         + f"<td>{html.escape(str(c.get('camera', '')))}</td></tr>" for c in cameras)
@@ -204,14 +208,16 @@ def render_report(view: SceneView, placement: dict, metrics: dict, positions: np
                   region_kinds=(), n_candidates: int | None = None, files: list[str] = (),
                   slices: list[CoverageSlice] | None = None, max_points: int = MAX_POINTS,
                   views: list[dict] | None = None, views_skipped: int = 0, dated: bool = True,
-                  extra_html: str = "", extra_figures: dict | None = None, extra_traces: list | None = None) -> str:
+                  extra_html: str = "", extra_figures: dict | None = None, extra_traces: list | None = None,
+                  storey_figures: tuple | None = None) -> str:
     """The report page as one HTML string (plotly.js embedded).
 
     positions: (N_p, 3) m; is_surface, coverage, gamma, region_ids: (N_p,);
     placement / metrics: the placement.json / metrics.json dicts; files: names of
     sibling output files to link; ``dated``: say when the page was written (off for repeatable
     runs, so that the page depends only on the inputs); ``extra_figures``: more plotly specs by the
-    id of a div in ``extra_html``; ``extra_traces``: more 3D-view traces (one sampled crowd)."""
+    id of a div in ``extra_html``; ``extra_traces``: more 3D-view traces (one sampled crowd);
+    ``storey_figures``: a building's 3D view and slices (camplace.outputs.report_storeys)."""
     positions = np.asarray(positions, float)
     coverage = np.asarray(coverage, np.int64)
     cameras = placement.get("cameras", [])
@@ -222,11 +228,15 @@ def render_report(view: SceneView, placement: dict, metrics: dict, positions: np
     gammas = {name: int(np.max(gamma[region_ids == r])) for r, name in enumerate(region_names)
               if np.any(region_ids == r)}
     kinds = dict(zip(region_names, region_kinds))
-    fig3d, shown = view3d_figure(view, positions, coverage, gamma, region_ids, region_names, cameras, max_points)
+    if storey_figures is None:
+        fig3d, shown = view3d_figure(view, positions, coverage, gamma, region_ids, region_names, cameras, max_points)
+        slice_specs = [slice_figure(sl, view, cameras) for sl in slices]
+    else:  # a building (issue 33): storey selector, slices per storey
+        (fig3d, shown), slice_specs = storey_figures
     fig3d["data"].extend(extra_traces or [])
     figs = {"view3d": fig3d}
-    for k, sl in enumerate(slices):
-        figs[f"slice{k}"] = slice_figure(sl, view, cameras)
+    for k, spec in enumerate(slice_specs):
+        figs[f"slice{k}"] = spec
     hists = {name: r.get("coverage_histogram", {}) for name, r in (metrics.get("regions") or {}).items()}
     if not hists:
         hists = {"all targets": metrics.get("coverage_histogram", {})}
@@ -236,7 +246,7 @@ def render_report(view: SceneView, placement: dict, metrics: dict, positions: np
     legend = "".join(f"<span><i style='background:{c}'></i>{html.escape(lab)}</span>" for lab, c in COVERAGE_CLASSES)
     sub = (f"showing {shown} of {len(positions)} targets" if shown < len(positions)
            else f"all {len(positions)} targets shown")
-    slice_divs = "".join(f"<div id='slice{k}' class='plot'></div>" for k in range(len(slices)))
+    slice_divs = "".join(f"<div id='slice{k}' class='plot'></div>" for k in range(len(slice_specs)))
     slice_divs = slice_divs or "<p class=note>no volume targets</p>"
     links = " \u00b7 ".join(f"<a href='{html.escape(f)}'>{html.escape(f)}</a>" for f in files) or "\u2013"
     title = html.escape(str(placement.get("scene", view.name)))
@@ -249,7 +259,7 @@ def render_report(view: SceneView, placement: dict, metrics: dict, positions: np
 <main>
 <div class="top"><section class="summary"><h2>Summary</h2><table>{_rows(_summary_pairs(placement, metrics, len(positions), n_candidates))}</table></section>
 <section class="view"><h2>3D view</h2><p class="legend">{legend}</p>
-<p class="note">Target voxels coloured by how many selected cameras see them ({sub}); camera frusta drawn {frustum_depth(view):.2f} m deep with candidate ids{_frusta_note(len(cameras))}. Drag to rotate, scroll to zoom, click legend entries to hide a class.</p>
+<p class="note">Target voxels coloured by how many selected cameras see them ({sub}); camera frusta drawn {frustum_depth(view):.2f} m deep with candidate ids{_frusta_note(len(cameras))}. Drag to rotate, scroll to zoom, click legend entries to hide a class.{" The buttons above the view show every storey or one storey (its room, targets and cameras)." if storey_figures else ""}</p>
 <div id="view3d" class="plot"></div></section></div>
 <section><h2>Coverage slices per target height</h2><p class="legend">{legend}</p>
 <p class="note">Volume targets at each height; grey boxes: obstacles crossing that height; black dots: cameras (ids).</p>
@@ -320,10 +330,7 @@ def write_report(out_dir: str | Path, targets, coverage: np.ndarray, placement: 
         paths.update(write_figures(out, view, targets.positions, is_surface, coverage, cameras,
                                    hists or {"all targets": metrics.get("coverage_histogram", {})}, gammas, slices))
     if html_report:
-        names = [*written, *paths]
-        files = ["placement.csv", "placement.json", "metrics.json", "visibility.npz",
-                 *sorted({p for p in names if p.endswith(".png")}),
-                 *(["opencv/", "colmap/"] if exports or "colmap/images.txt" in names else [])]
+        files = file_list([*written, *paths])  # every file written before the page, as returned
         views, skipped = rendered_views or (None, 0)
         if rendered_views is None and scene is not None and vis is not None and selected is not None:
             views, skipped = camera_views(scene, vis, selected,
@@ -331,6 +338,16 @@ def write_report(out_dir: str | Path, targets, coverage: np.ndarray, placement: 
         text = render_report(view, placement, metrics, targets.positions, is_surface, coverage, targets.gamma,
                              targets.region_ids, targets.region_names, targets.region_kinds, n_candidates, files,
                              slices, views=views, views_skipped=skipped, dated=not repeatable, extra_html=extra_html,
-                             extra_figures=extra_figures, extra_traces=extra_traces)
+                             extra_figures=extra_figures, extra_traces=extra_traces,
+                             storey_figures=_storey_figures(scene, targets, coverage, cameras))
         paths["report.html"] = atomic_write_text(out / "report.html", text)
     return paths
+
+
+def _storey_figures(scene, targets, coverage: np.ndarray, cameras: list[dict]) -> tuple | None:
+    """A building's 3D view and slices (camplace.outputs.report_storeys); None for one room."""
+    if not getattr(scene, "storeys", ()):
+        return None
+    from camplace.outputs.report_storeys import building_figures
+
+    return building_figures(scene, targets, coverage, cameras)

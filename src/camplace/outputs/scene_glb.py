@@ -29,14 +29,15 @@ def _rgba(hex_colour: str) -> list[int]:
     return [int(hex_colour[1:3], 16), int(hex_colour[3:5], 16), int(hex_colour[5:7], 16), 255]
 
 
-def room_mesh(footprint: np.ndarray, height: float):
-    """The floor (constrained Delaunay triangles of the footprint) and the wall quads."""
+def room_mesh(footprint: np.ndarray, height: float, floor=None):
+    """The floor (constrained Delaunay triangles of the footprint, or of the shapely polygon
+    ``floor``: a storey's slab with its openings) and the wall quads."""
     import shapely
     import trimesh
     from shapely.geometry import Polygon
 
     fp = np.asarray(footprint, float)
-    tris = shapely.constrained_delaunay_triangles(Polygon(fp))
+    tris = shapely.constrained_delaunay_triangles(Polygon(fp) if floor is None else floor)
     floor = [np.asarray(t.exterior.coords)[:3] for t in tris.geoms]
     v, f = [], []
     for t in floor:
@@ -146,3 +147,51 @@ def scene_glb(data: PlanData) -> bytes:
 
 def write_scene_glb(path: str | Path, data: PlanData) -> Path:
     return atomic_write_bytes(Path(path), scene_glb(data))
+
+
+def building_glb(scene, storeys: list[PlanData]) -> bytes:
+    """The binary glTF of a building (camplace.scene.build.Scene with storeys), stacked: per
+    storey (PlanData of camplace.outputs.plan_storeys, local z) the nodes '<storey>/room'
+    (its slab, open where its floor is, and its outer walls from its floor to its ceiling),
+    '<storey>/obstacles' (boxes), '<storey>/walls' (prism obstacles), '<storey>/camera <mark>
+    id <id>' and '<storey>/coverage', all raised to the storey's elevation (building z)."""
+    import shapely
+    import trimesh
+
+    from camplace.outputs.walls import prism_mesh, scene_walls
+
+    out = trimesh.Scene()
+
+    def add(mesh, name: str, e: float, colour) -> None:
+        mesh.apply_translation([0.0, 0.0, e])
+        if colour is not None:
+            mesh.visual.face_colors = colour
+        out.add_geometry(mesh, node_name=name, geom_name=name)
+
+    for st, data in zip(scene.storeys, storeys):
+        sc, e, n = st.scene, float(st.elevation), st.name
+        fp = np.asarray(sc.footprint, float)
+        slab = sc.polygon.difference(shapely.union_all(st.openings)) if st.openings else None
+        add(room_mesh(fp, sc.height, slab), f"{n}/room", e, [205, 205, 200, 255])
+        if sc.boxes:
+            add(boxes_mesh(sc.boxes), f"{n}/obstacles", e, [150, 150, 150, 255])
+        walls = [trimesh.Trimesh(v, t, process=False) for v, t in (prism_mesh(w, sc.height) for w in scene_walls(sc))
+                 if len(t)]
+        if walls:
+            add(trimesh.util.concatenate(walls), f"{n}/walls", e, [120, 120, 120, 255])
+        lo, hi = np.r_[fp.min(0), 0.0], np.r_[fp.max(0), sc.height]
+        for c, mark in zip(data.cameras, data.marks):
+            add(frustum_mesh(c, lo, hi), f"{n}/camera {mark} id {c.get('source_id', c['candidate_id'])}", e,
+                [31, 79, 209, 160])
+        pos = np.asarray(data.targets.positions, float)
+        if len(pos):
+            colours = np.array([_rgba(c) for _, c in COVERAGE_CLASSES], np.uint8)[coverage_class(data.coverage)]
+            out.add_geometry(trimesh.PointCloud(pos + [0.0, 0.0, e], colors=colours), node_name=f"{n}/coverage",
+                             geom_name=f"{n}/coverage")
+    buf = io.BytesIO()
+    out.export(buf, file_type="glb")
+    return buf.getvalue()
+
+
+def write_building_glb(path: str | Path, scene, storeys: list[PlanData]) -> Path:
+    return atomic_write_bytes(Path(path), building_glb(scene, storeys))

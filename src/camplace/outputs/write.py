@@ -18,7 +18,9 @@ from camplace.cameras.candidates import Candidates, ypr_from_rotation
 from camplace.core.errors import InputError, Interrupted
 from camplace.core.files import AtomicBatch, atomic_savez, atomic_write_json, atomic_write_text
 from camplace.metrics.coverage import Metrics
-from camplace.outputs.bom import recording_load, selected_models, write_bom
+from camplace.outputs.storeys import cameras_ifc_wanted, mark_storeys, write_run_cameras_ifc
+from camplace.outputs.bom import recording_load, selected_models
+from camplace.outputs.writers import OutputResult, write_registered
 from camplace.scene.frames import map_poses
 from camplace.solvers.base import Placement
 from camplace.visibility.voxel import Visibility
@@ -96,6 +98,9 @@ def placement_dict(scene_name: str, placement: Placement, budget: int, candidate
         "input_from_scene": [[float(v) for v in row] for row in T],
         "cameras": cameras_in_frame(cameras, T) if frame == "input" else cameras,
     }
+    info = solver_info(placement.info)
+    if info:
+        out["solver_info"] = info
     src = placement.info.get("source_ids")
     if src is not None:  # an evaluated placement (camplace.workflows.evaluate): the ids its file gave the cameras
         for c in out["cameras"]:
@@ -158,12 +163,18 @@ def write_outputs(out_dir: str | Path, scene_name: str, vis: Visibility, placeme
                   repeatable: bool = False, frame: str = "scene", plan: bool = True,
                   paper: str = "A3", compressed: bool = True, on_contract: Callable[[], None] | None = None,
                   deadline: Callable[[], float | None] | None = None,
-                  skipped: list[str] | None = None) -> dict[str, Path]:
+                  skipped: list[str] | None = None, problem=None) -> dict[str, Path]:
     """Write the contract files into out_dir and, with ``report``, the report set
     (report.html, PNG figures, opencv/ and colmap/ exports; camplace.outputs.report_html);
     ``scene`` (camplace.scene.build.Scene) adds the room and obstacles to the pictures;
     ``repeatable`` writes every timing as 0.0 (byte-identical metrics.json for
-    identical runs). Returns name -> path.
+    identical runs). Returns name -> path. ``problem``: the PlacementProblem solved, handed
+    to the output writers.
+
+    The order (the structure every command shares): the contract files; then every
+    registered output writer (``camplace.outputs`` entry points, camplace's own ``bom``
+    first: camplace.outputs.writers.write_registered, given an OutputResult); then the
+    report set, whose report.html links every file written before it.
 
     ``frame``: 'scene' (default) writes the poses of placement.json / .csv and the exports
     in the scene frame; 'input' in the input file's frame (``scene.input_from_scene``,
@@ -193,6 +204,10 @@ def write_outputs(out_dir: str | Path, scene_name: str, vis: Visibility, placeme
     T = getattr(scene, "input_from_scene", None)
     days = getattr(getattr(getattr(scene, "spec", None), "recording", None), "retention_days", None)
     pdict = placement_dict(scene_name, placement, budget, vis.candidates, T, frame, days)
+    mark_storeys(pdict, scene)  # a building: each camera's storey (issue 33)
+    builtin = (getattr(scene, "info", None) or {}).get("builtin")
+    if builtin:  # the built-in scene as named ('warehouse:1000'): camplace serve reopens the run with it
+        pdict = {**dict(list(pdict.items())[:1]), "builtin_scene": str(builtin), **pdict}
     timings = dict(timings)
     # shown in report.html (no "report"); repeatable: 0.0 as in metrics.json, so the page is byte-identical
     report_timings = {k: 0.0 if repeatable else round(float(v), 4) for k, v in timings.items()}
@@ -205,8 +220,13 @@ def write_outputs(out_dir: str | Path, scene_name: str, vis: Visibility, placeme
         }
         timings["report"] = time.perf_counter() - t0
         paths["metrics.json"] = batch.stage_json(out / "metrics.json", _metrics_dict(metrics, timings, repeatable))
-    paths.update(write_bom(out, pdict["cameras"], [m.cost for m in selected_models(vis.candidates,
-                                                                                   placement.selected)]))
+    result = OutputResult(pdict, _metrics_dict(metrics, timings, repeatable), scene_name, placement, metrics,
+                          problem, vis, scene, None, timings, frame, repeatable, dict(paths))
+    paths.update(write_registered(out, result))
+    if cameras_ifc_wanted(scene):  # a building or an IFC input: the cameras back into the BIM model (issue 33)
+        in_scene = pdict if frame == "scene" else placement_dict(scene_name, placement, budget, vis.candidates, T)
+        mark_storeys(in_scene, scene)
+        paths.update(write_run_cameras_ifc(out, in_scene, scene, selected_models(vis.candidates, placement.selected)))
     if not report:
         return paths
     if plan:
@@ -221,8 +241,9 @@ def write_outputs(out_dir: str | Path, scene_name: str, vis: Visibility, placeme
         # the report's pictures and mount table are drawn in the scene frame; exports follow ``frame``
         shown = pdict if frame == "scene" else placement_dict(scene_name, placement, budget, vis.candidates, T,
                                                               retention_days=days)
+        mark_storeys(shown, scene)
         _write_report_set(out, vis, placement, shown, metrics, report_timings, scene, repeatable,
-                          paper if plan else None, T if frame == "input" else None, parts)
+                          paper if plan else None, T if frame == "input" else None, parts, tuple(paths))
         paths.update(parts.paths)
         if frame != "scene" and "colmap/images.txt" in paths:
             from camplace.outputs.exports import write_exports
@@ -282,6 +303,40 @@ class ReportParts:
         self.skipped.extend(n for n in self.planned if n not in self.done and n not in self.skipped)
 
 
+OWN_INFO_KEYS = ("incumbent_method", "bound_method", "refine", "adaptive", "robust",  # written as keys of their own
+                 "source_ids", "existing_ids", "new_budget")  # written into the camera objects and budget
+MAX_INFO_ARRAY = 1000  # a longer array in Placement.info is written as its shape and dtype only
+
+
+def json_safe(value):
+    """``value`` as plain JSON (dict with str keys, list, str, int, float, bool, None):
+    numpy scalars as numbers, arrays up to MAX_INFO_ARRAY elements as lists (longer ones as
+    {"shape", "dtype"}), tuples and sets as lists, non-finite floats as None, anything else
+    as its str()."""
+    if isinstance(value, dict):
+        return {str(k): json_safe(v) for k, v in value.items()}
+    if isinstance(value, np.ndarray):
+        if value.size > MAX_INFO_ARRAY:
+            return {"shape": list(value.shape), "dtype": str(value.dtype)}
+        return json_safe(value.tolist())
+    if isinstance(value, (list, tuple, set, frozenset)):
+        return [json_safe(v) for v in (sorted(value, key=str) if isinstance(value, (set, frozenset)) else value)]
+    if isinstance(value, np.generic):
+        value = value.item()
+    if isinstance(value, float):
+        return value if np.isfinite(value) else None
+    if value is None or isinstance(value, (str, int, bool)):
+        return value
+    return str(value)
+
+
+def solver_info(info: dict) -> dict:
+    """placement.json ``solver_info``: the solver's Placement.info, JSON-safe (json_safe),
+    without wall-clock entries (_timeless) and without the keys placement.json writes on
+    its own (OWN_INFO_KEYS)."""
+    return _timeless(json_safe({k: v for k, v in info.items() if k not in OWN_INFO_KEYS}))
+
+
 def _timeless(value):
     """``value`` without the wall-clock entries of its dicts (nested too): keys ``seconds``
     and ``*_seconds``; placement.json must be byte-identical between identical runs."""
@@ -302,12 +357,13 @@ def _metrics_dict(metrics: Metrics, timings: dict[str, float], repeatable: bool)
 def _write_report_set(out: Path, vis: Visibility, placement: Placement, pdict: dict, metrics: Metrics,
                       timings: dict[str, float], scene, repeatable: bool = False,
                       paper: str | None = None, input_T: np.ndarray | None = None,
-                      parts: ReportParts | None = None) -> dict[str, Path]:
+                      parts: ReportParts | None = None, written: tuple[str, ...] = ()) -> dict[str, Path]:
     """report.html, PNG figures and exports (camplace.outputs.report_html.write_report); with
     ``repeatable`` every camera view is rendered (no time budget), so the page depends only on
     the inputs. ``paper`` (with a scene): the hand-over plan set on that paper (plan.dxf
     in the frame of ``input_T``, 4x4, when given). Written part by part through ``parts``
-    (ReportParts: exports, figures, the plan set, report.html, each while it fits its deadline)."""
+    (ReportParts: exports, figures, the plan set, report.html, each while it fits its deadline).
+    ``written``: names of the files written before the report set (linked from report.html)."""
     from camplace.outputs.figures import SceneView
     from camplace.outputs.report_html import write_report
 
@@ -320,7 +376,7 @@ def _write_report_set(out: Path, vis: Visibility, placement: Placement, pdict: d
     def report(**what) -> dict[str, Path]:
         opts = dict(html_report=False, figures=False, exports=False) | what
         return write_report(out, vis.targets, cov, pdict, m, view, n_candidates=int(vis.V.shape[0]), scene=scene,
-                            vis=vis, selected=sel, repeatable=repeatable, written=tuple(parts.paths), **opts)
+                            vis=vis, selected=sel, repeatable=repeatable, written=(*written, *parts.paths), **opts)
 
     parts.run(EXPORTS, lambda: report(exports=True))
     parts.run(FIGURES, lambda: report(figures=True))

@@ -9,7 +9,7 @@ import math
 from camplace.planner.errors import ApiError
 
 ANGLES = ("yaw_deg", "pitch_deg", "roll_deg")
-CAMERA_KEYS = ("position", *ANGLES, "camera", "locked", "snap")
+CAMERA_KEYS = ("position", *ANGLES, "camera", "locked", "snap", "storey")
 
 
 def parse_json(raw: bytes, empty_ok: bool = True) -> dict:
@@ -59,7 +59,7 @@ def _known(body: dict, keys: tuple[str, ...]) -> None:
 
 
 def camera_change(body: dict) -> dict:
-    """PUT /api/cameras/{id}: any of position, yaw_deg, pitch_deg, roll_deg, camera, locked, snap."""
+    """PUT /api/cameras/{id}: any of position, yaw_deg, pitch_deg, roll_deg, camera, locked, snap, storey."""
     _known(body, CAMERA_KEYS)
     if not body:
         raise ApiError(f"body: expected at least one of {', '.join(CAMERA_KEYS)}", "body")
@@ -78,6 +78,10 @@ def camera_change(body: dict) -> dict:
     for f in ("locked", "snap"):
         if f in body:
             out[f] = boolean(body[f], f)
+    if "storey" in body:  # a building: move the camera to that storey's nearest mount (issue 33)
+        if not isinstance(body["storey"], str):
+            raise ApiError(f"storey: expected a storey name, got {json.dumps(body['storey'])[:40]}", "storey")
+        out["storey"] = body["storey"]
     return out
 
 

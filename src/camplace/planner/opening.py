@@ -40,12 +40,15 @@ class Opened:
 
 def scene_of_run(run_dir: Path, placement: dict, scene: str | Path | None) -> str | Path:
     """The scene a run folder was made from: ``scene`` when given, else the placement's
-    ``scene`` name if it is a built-in, else a *.yaml / *.yml beside the folder (in it or
-    its parent) whose ``name`` is that name."""
+    ``builtin_scene`` (a built-in as the run named it, parameters included:
+    'warehouse:1000'), else its ``scene`` name if it is a built-in, else a *.yaml / *.yml
+    beside the folder (in it or its parent) whose ``name`` is that name."""
     from camplace.spec.builtin import resolve_scene
 
     if scene is not None:
         return scene
+    if isinstance(placement.get("builtin_scene"), str):
+        return placement["builtin_scene"]
     name = str(placement.get("scene", ""))
     try:
         spec, base, _ = resolve_scene(name)

@@ -61,7 +61,8 @@ def save_session(session, name: str | None, *, repeatable: bool = False) -> dict
     result = evaluate(session.opened.scene_ref, poses)
     t0 = time.perf_counter()
     paths = write_outputs(out, result.scene.name, result.visibility, result.placement, result.problem.budget,
-                          result.metrics, result.timings_s, scene=result.scene, repeatable=repeatable)
+                          result.metrics, result.timings_s, scene=result.scene, repeatable=repeatable,
+                          problem=result.problem)
     result.timings_s["report"] = time.perf_counter() - t0
     metrics = result.metrics.to_dict()
     metrics["timings_s"] = {k: round(float(v), 4) for k, v in result.timings_s.items()}

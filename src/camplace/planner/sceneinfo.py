@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from camplace.planner.storeys import storeys_payload
+
 def _poly(points) -> list:
     return np.round(np.asarray(points, float), 4).tolist()
 
@@ -49,4 +51,5 @@ def scene_payload(session) -> dict:
             "coverage_required": int(tg.gamma[session.floor].max()) if len(session.floor) else 0,
             "solvers": budget_solvers(),
             "target_z_m": float(tg.positions[session.floor[0], 2]) if len(session.floor) else None,
-            "target_cell_m": float(sc.spec.voxel_size) * session.floor_step}
+            "target_cell_m": float(sc.spec.voxel_size) * session.floor_step,
+            **storeys_payload(sc, session.height, session.floor, tg, session.mounts)}

@@ -28,6 +28,8 @@ from camplace.cameras.mount_rules import allowed_xy, clear_of_occupied
 from camplace.metrics.coverage import Metrics
 from camplace.planner.errors import ApiError
 from camplace.planner.opening import Opened
+from camplace.planner.storeys import (check_in_storey, floor_z, nearest_layer, same_height, storey_at,
+                                      storey_floor_layer, storey_mounts, storey_names, storeys_of, viewshed_height)
 from camplace.visibility.engine import Visibility, compute_visibility
 from camplace.visibility.registry import get_engine
 
@@ -67,13 +69,7 @@ def _ring(geom) -> list:
 
 def floor_layer(targets, height: float) -> np.ndarray:
     """Indices of the volume targets in the layer nearest ``height`` m (the coverage raster)."""
-    vol = np.flatnonzero(~targets.is_surface)
-    if not len(vol):
-        return vol
-    z = targets.positions[vol, 2]
-    levels = np.unique(np.round(z, 6))
-    best = levels[np.argmin(np.abs(levels - height))]
-    return vol[np.abs(z - best) < 1e-6]
+    return nearest_layer(targets.positions[:, 2], np.flatnonzero(~targets.is_surface), height)
 
 
 class Session:
@@ -94,9 +90,11 @@ class Session:
         self.guard = privacy_guard(self.scene, self.lenses, self.engine)
         self.budget = int(opened.budget)
         self.height = WORKING_HEIGHT
-        self.clip = free_floor(self.scene, WORKING_HEIGHT)
+        # the free floor at the working height, per storey of a building (issue 33)
+        self.clips = [free_floor(st.scene, WORKING_HEIGHT) for st in storeys_of(self.scene)] or [
+            free_floor(self.scene, WORKING_HEIGHT)]
         self.mounts = self._mount_positions()
-        layer = floor_layer(self.targets, WORKING_HEIGHT)
+        layer = storey_floor_layer(self.targets, self.scene, WORKING_HEIGHT)
         self.floor_step = max(1, int(np.ceil(len(layer) / MAX_RASTER_POINTS)))
         self.floor = layer[::self.floor_step]  # the targets of the page's coverage raster
         self.lock = threading.RLock()
@@ -161,8 +159,9 @@ class Session:
     def _viewshed(self, position: np.ndarray, angles: np.ndarray, lens: int) -> list:
         from camplace.visibility.viewshed import viewshed
 
-        vs = viewshed(self.scene.occupancy, self.lenses[lens], position, rotation_from_ypr(*angles)[0], self.height,
-                      clip=self.clip)
+        vs = viewshed(self.scene.occupancy, self.lenses[lens], position, rotation_from_ypr(*angles)[0],
+                      viewshed_height(self.scene, position[2], self.height),
+                      clip=self.clips[int(storey_at(self.scene, position[2])[0])])
         return _ring(vs.polygon)
 
     def _make(self, cid: str, pos: np.ndarray, ang: np.ndarray, lens: int, locked: bool, existing: bool) -> Cam:
@@ -218,11 +217,12 @@ class Session:
 
     # ------------------------------------------------------------------ rules
 
-    def snap(self, position: np.ndarray, taken: np.ndarray | None = None) -> np.ndarray:
+    def snap(self, position: np.ndarray, taken: np.ndarray | None = None, storey: str | None = None) -> np.ndarray:
         """The allowed mount nearest ``position`` in plan (then in height), skipping the
         mounts (to 1 mm) in ``taken`` ((K, 3) m: other cameras' positions; one camera per
-        location). ApiError('position') when every mount is taken."""
-        free = np.ones(len(self.mounts), bool)
+        location); only those of ``storey`` when named (a building). ApiError('position') when
+        every mount is taken."""
+        free = np.ones(len(self.mounts), bool) if storey is None else storey_mounts(self.scene, self.mounts, storey)
         if taken is not None and len(taken):
             d_taken = np.abs(self.mounts[:, None, :] - np.asarray(taken, float)[None, :, :]).max(2)
             free = ~(d_taken <= 1e-3).any(1)
@@ -242,7 +242,9 @@ class Session:
         """ApiError('position') unless the point lies inside the room, inside the mount
         rules' allowed area and in free space."""
         x, y, z = (float(v) for v in position)
-        if not shapely.intersects_xy(self.scene.polygon, x, y):
+        if storeys_of(self.scene):
+            check_in_storey(self.scene, position)
+        elif not shapely.intersects_xy(self.scene.polygon, x, y):
             raise ApiError(f"position: ({x:.3f}, {y:.3f}) is outside the room's footprint", "position")
         if not 0.0 < z < self.scene.height:
             raise ApiError(f"position: height {z:.3f} m is outside the room (0..{self.scene.height:g} m)", "position")
@@ -300,7 +302,7 @@ class Session:
             k = self._index(cid)
             cam = self.cams[k]
             locked = change.get("locked", cam.locked)
-            pose_keys = [f for f in ("position", "yaw_deg", "pitch_deg", "roll_deg", "camera") if f in change]
+            pose_keys = [f for f in ("position", "storey", "yaw_deg", "pitch_deg", "roll_deg", "camera") if f in change]
             if pose_keys and (locked or cam.existing):
                 why = "an existing camera of the site" if cam.existing else "locked; unlock it first"
                 raise ApiError(f"{pose_keys[0]}: camera {cid} is {why}", pose_keys[0], 409)
@@ -308,7 +310,11 @@ class Session:
                 raise ApiError(f"locked: camera {cid} is an existing camera of the site; it stays locked", "locked",
                                409)
             pos = cam.position
-            if "position" in change:
+            if "storey" in change:  # another floor (issue 33): that storey's mount nearest in plan
+                xy = np.asarray(change.get("position", pos), float)[:2]
+                pos = self._place(np.r_[xy, same_height(self.scene, pos[2], change["storey"])], True, cam.id,
+                                  change["storey"])
+            elif "position" in change:
                 pos = self._place(change["position"], change.get("snap", True), cam.id)
             ang = cam.angles.copy()
             for j, f in enumerate(("yaw_deg", "pitch_deg", "roll_deg")):
@@ -324,13 +330,18 @@ class Session:
             new = self._make(cam.id, pos, ang, lens, bool(locked), cam.existing)
             return self._commit(self.cams[:k] + (new,) + self.cams[k + 1:], t0, (cam, new))
 
-    def _place(self, position: np.ndarray, snap: bool, moving: str | None = None) -> np.ndarray:
+    def _place(self, position: np.ndarray, snap: bool, moving: str | None = None,
+               storey: str | None = None) -> np.ndarray:
+        """Where a camera goes: ``position`` snapped to a free allowed mount (a building: of
+        ``storey``, else of the storey at its z) or checked as it is."""
         pos = np.asarray(position, float)
         if len(pos) == 2:
-            pos = np.r_[pos, self.mount_height(pos)]
+            pos = np.r_[pos, self.mount_height(pos) if storey is None else floor_z(self.scene, storey)]
         if snap:
             others = [c.position for c in self.cams if c.id != moving]
-            return self.snap(pos, np.array(others, float).reshape(-1, 3))
+            if storey is None and storeys_of(self.scene):
+                storey = storey_names(self.scene, [pos[2]])[0]
+            return self.snap(pos, np.array(others, float).reshape(-1, 3), storey)
         self.check_position(pos)
         return pos
 
@@ -339,7 +350,7 @@ class Session:
         with self.lock:
             self._idle()
             t0 = time.perf_counter()
-            pos = self._place(body["position"], body.get("snap", True))
+            pos = self._place(body["position"], body.get("snap", True), storey=body.get("storey"))
             ang = np.array([body.get("yaw_deg", 0.0), body.get("pitch_deg", 45.0), body.get("roll_deg", 0.0)], float)
             ang[0] %= 360.0
             lens = self._lens_of(body["camera"], "camera") if "camera" in body else 0
@@ -396,8 +407,11 @@ class Session:
 
         vis, sel = self.visibility()
         out = []
-        for c, obj in zip(self.cams, camera_entries(vis.candidates, sel)):
+        floors = storey_names(self.scene, [c.position[2] for c in self.cams]) if storeys_of(self.scene) else []
+        for k, (c, obj) in enumerate(zip(self.cams, camera_entries(vis.candidates, sel))):
             obj.update(id=c.id, locked=c.locked, existing=c.existing, viewshed=c.shed, targets_seen=int(len(c.row)))
+            if floors:
+                obj["storey"] = floors[k]
             out.append(obj)
         return out
 

@@ -76,6 +76,8 @@ class Scene:
     input_from_scene: np.ndarray = field(default_factory=lambda: np.eye(4))
     # prism obstacles: name -> (polygon (K, 2) m, zmin, zmax) (walls imported from plans)
     prisms: dict[str, tuple[np.ndarray, float, float]] = field(default_factory=dict)
+    # a building (issue 33): its storeys, lowest first; () for a single room
+    storeys: tuple["Storey", ...] = ()
 
     @property
     def polygon(self) -> Polygon:
@@ -84,6 +86,29 @@ class Scene:
     @property
     def floor_area(self) -> float:
         return float(self.polygon.area)
+
+
+@dataclass(frozen=True)
+class Storey:
+    """One storey of a building scene: ``scene`` is the storey on its own (floor at z = 0,
+    plan in building x, y) whose occupancy is a view of the building's grid moved down by
+    ``elevation`` (m), so its targets and mounts see what the building sees; ``top``: its
+    ceiling in building z (m); ``openings``: where its floor opens to the storey below."""
+
+    name: str
+    elevation: float
+    top: float
+    scene: Scene
+    openings: tuple[Polygon, ...] = ()
+    budget: int | None = None
+
+
+def storey_index(storeys: tuple[Storey, ...], z: np.ndarray) -> np.ndarray:
+    """(N,) int64: the storey (index into ``storeys``, lowest first) whose floor is the
+    highest at or below each building z (N,) m; 0 below the lowest floor."""
+    floors = np.array([st.elevation for st in storeys], np.float64)
+    k = np.searchsorted(floors, np.asarray(z, np.float64) + 1e-6, side="right") - 1
+    return np.clip(k, 0, len(storeys) - 1).astype(np.int64)
 
 
 def estimate_grid_bytes(spec: SceneSpec) -> int:
@@ -108,6 +133,8 @@ def build_scene(spec: SceneSpec, base_dir: Path | None = None, source: str = "<s
                 progress=None) -> Scene:
     """Build the occupancy grid of a validated scene spec (file obstacles read through
     camplace.scene.loaders; free space derived when a scan or OctoMap is present)."""
+    if spec.storeys:
+        return build_building(spec, base_dir, source)
     poly = _validate_footprint(spec, source)
     need = estimate_grid_bytes(spec)
     # last guard for direct callers: the pipeline already checked every size against the
@@ -190,3 +217,76 @@ def rasterize_prism(grid: OccupancyGrid, poly: Polygon, zmin: float, zmax: float
     gx, gy = np.meshgrid(xs, ys, indexing="ij")
     inside = shapely.intersects_xy(poly, gx, gy)
     grid.occupied[idx[0], idx[1], idx[2]][inside] = True  # a view: slices only
+
+
+def build_building(spec: SceneSpec, base_dir: Path | None = None, source: str = "<scene>") -> Scene:
+    """Every storey of ``spec.storeys`` stacked at its elevation in one occupancy grid (building
+    x, y, z in m): each storey's room is free between its floor and ceiling inside its
+    footprint; everything else (outside walls, slabs between storeys, below the lowest floor,
+    above the highest ceiling) is occupied, except where a storey's ``floor_openings`` open the
+    slab to the storey below. Obstacles are raised to their storey. Each Storey's scene is that
+    storey alone, with its occupancy a view of the building grid (no copy)."""
+    res = float(spec.occupancy_resolution)
+    names = spec.storey_names
+    subs = [spec.storey_spec(n) for n in names]
+    elev = [float(spec.storeys[n].elevation) for n in names]
+    tops = [e + float(sub.room.height) for e, sub in zip(elev, subs)]
+    polys = [_validate_footprint(sub, f"{source}: storeys.{n}") for n, sub in zip(names, subs)]
+    xy0 = np.min([np.asarray(sub.room.footprint, float).min(0) for sub in subs], axis=0)
+    xy1 = np.max([np.asarray(sub.room.footprint, float).max(0) for sub in subs], axis=0)
+    lo, hi = np.r_[xy0, min(elev)] - res, np.r_[xy1, max(tops)] + res
+    shape = tuple(int(v) for v in np.ceil((hi - lo) / res - 1e-9))
+    need = int(np.prod(shape))
+    check_memory(need, f"{source}: occupancy_resolution: {res} m", "use a coarser resolution",
+                 items=f"{need:.3g} occupancy cells", limit=max(MAX_GRID_BYTES, memory_limit_bytes()))
+    grid = OccupancyGrid(np.ones(shape, dtype=bool), lo, res)
+    xs, ys, zs = (grid.cell_centres(a) for a in range(3))
+    gx, gy = np.meshgrid(xs, ys, indexing="ij")
+    occ = grid.occupied
+    openings = [tuple(Polygon(o) for o in spec.storeys[n].floor_openings) for n in names]
+    for k, (poly, e, top) in enumerate(zip(polys, elev, tops)):
+        band = (zs >= e) & (zs <= top)
+        occ[:, :, band] &= ~shapely.contains_xy(poly, gx, gy)[:, :, None]
+        if k and openings[k]:  # the slab under this storey, open where its floor is
+            slab = (zs > tops[k - 1]) & (zs < e)
+            hole = shapely.contains_xy(shapely.union_all(openings[k]), gx, gy)
+            occ[:, :, slab] &= ~hole[:, :, None]
+    boxes: dict[str, tuple[np.ndarray, np.ndarray]] = {}
+    prisms: dict[str, tuple[np.ndarray, float, float]] = {}
+    for n, sub, e, top in zip(names, subs, elev, tops):
+        for ob in sub.obstacles:
+            key = f"{n}/{ob.name}"
+            if ob.prism is not None:
+                z0, z1 = e + max(ob.prism.z[0], 0.0), e + min(ob.prism.z[1], top - e)
+                prisms[key] = (np.asarray(ob.prism.polygon, float), z0, z1)
+                if ob.occludes and z1 > z0:
+                    rasterize_prism(grid, Polygon(ob.prism.polygon, ob.prism.holes), z0, z1)
+            elif ob.box is not None:
+                bmin = np.asarray(ob.box.min, float) + [0, 0, e]
+                bmax = np.asarray(ob.box.max, float) + [0, 0, e]
+                bmin[2], bmax[2] = max(bmin[2], e), min(bmax[2], top)
+                boxes[key] = (bmin, bmax)
+                if ob.occludes and bmax[2] > bmin[2]:
+                    rasterize_box(grid, bmin, bmax)
+            else:
+                raise InputError(f"{source}: storeys.{n}.obstacles: '{ob.name}' is a file obstacle; a building "
+                                 f"takes boxes and prisms (scans and meshes: one storey a scene)")
+    storeys = []
+    for k, (n, sub, e, top, poly) in enumerate(zip(names, subs, elev, tops, polys)):
+        k0 = max(int(np.floor((e - lo[2]) / res)) - 1, 0)
+        k1 = min(int(np.ceil((top - lo[2]) / res)) + 1, shape[2])
+        view = OccupancyGrid(occ[:, :, k0:k1], np.r_[lo[:2], lo[2] + k0 * res - e], res)
+        local_boxes = {ob.name: (np.asarray(ob.box.min, float), np.asarray(ob.box.max, float))
+                       for ob in sub.obstacles if ob.box is not None}
+        local_prisms = {ob.name: (np.asarray(ob.prism.polygon, float), float(ob.prism.z[0]), float(ob.prism.z[1]))
+                        for ob in sub.obstacles if ob.prism is not None}
+        local = Scene(sub.name, sub, np.asarray(sub.room.footprint, float), float(sub.room.height), local_boxes,
+                      view, base_dir, {"storey": n, "elevation_m": e}, prisms=local_prisms)
+        storeys.append(Storey(n, e, top, local, openings[k], spec.storeys[n].budget))
+    outline = shapely.union_all(polys)
+    hull = outline if isinstance(outline, Polygon) and not outline.interiors else outline.convex_hull
+    fp = np.asarray(hull.exterior.coords[:-1], float)
+    info = {"grid_shape": shape, "grid_cells": need, "occupied_cells": int(occ.sum()), "grid_bytes": need,
+            "storeys": [{"name": n, "elevation_m": e, "top_m": t} for n, e, t in zip(names, elev, tops)]}
+    return Scene(spec.name, spec, fp, float(max(tops)), boxes, grid, base_dir, info, prisms=prisms,
+                 storeys=tuple(storeys))

@@ -10,7 +10,7 @@ from __future__ import annotations
 import math
 from typing import Annotated, Any, Literal, Union
 
-from pydantic import Discriminator, Field, Tag, model_validator
+from pydantic import BaseModel, Discriminator, Field, Tag, ValidationError, model_validator
 
 from camplace.spec.basics import (FACES, Box, Face, Finite, Incidence, Point2, Point3, PositiveFloat,  # noqa: F401
                                   PositiveInt, PxPerM, _no_bool, _Strict, polygon_problem, scene_error)
@@ -256,6 +256,28 @@ class PlacementSettings(_Strict):
     options: dict[str, Any] = {}
 
 
+class Storey(_Strict):
+    """One storey of a building (``storeys:``, issue 33): its floor ``elevation`` (m, building
+    z), its room (footprint, floor-to-ceiling height), walls and furniture, zones, where its
+    floor opens to the storey below (``floor_openings``: plan polygons, m), an optional camera
+    limit (``budget``) and, optionally, its own targets / mounts / mount rules (default: the
+    building's). Coordinates in plan are the building's; heights are above this storey's floor."""
+
+    elevation: Finite = 0.0
+    room: Room
+    obstacles: list[Obstacle] = []
+    zones: list[Zone] = []
+    targets: list[TargetRegion] | None = None
+    mounts: list[Mount] | None = None
+    mount_rules: MountRules | None = None
+    floor_openings: list[Polygon2] = []
+    budget: Annotated[int, Field(ge=0, strict=True)] | None = None
+
+
+STOREY_SHARED = ("voxel_size", "occupancy_resolution", "targets", "cameras", "mounts", "placement", "free_space",
+                 "mount_rules", "recording")  # building keys a storey takes unless it gives its own
+
+
 class SceneSpec(_Strict):
     name: str = Field(min_length=1)
     voxel_size: PositiveFloat = 0.25
@@ -272,6 +294,74 @@ class SceneSpec(_Strict):
     existing: list[ExistingCamera] | str | None = None  # or a placement.csv path (relative to the scene file)
     crowd: CrowdSpec | None = None  # people who may block sight lines (issue 28; camplace.spec.crowd)
     recording: Recording | None = None  # retention for the recording load (issue 27)
+    # a building: storey name -> Storey, stacked at their elevations in one scene (issue 33);
+    # ``room`` is then the building's envelope (filled in when not given)
+    storeys: dict[Annotated[str, Field(min_length=1)], Storey] | None = None
+
+    @model_validator(mode="before")
+    @classmethod
+    def _envelope(cls, data: Any) -> Any:
+        """A building without ``room``: the bounding rectangle of its storeys' footprints,
+        as high as floor of the lowest to ceiling of the highest storey."""
+        if not (isinstance(data, dict) and isinstance(data.get("storeys"), dict) and data["storeys"]
+                and "room" not in data):
+            return data
+        try:
+            rooms = [(float((st.get("elevation") if isinstance(st, dict) else st.elevation) or 0.0),
+                      st["room"] if isinstance(st, dict) else st.room.model_dump()) for st in data["storeys"].values()]
+            pts = [p for _, r in rooms for p in r["footprint"]]
+            x0, y0 = min(float(p[0]) for p in pts), min(float(p[1]) for p in pts)
+            x1, y1 = max(float(p[0]) for p in pts), max(float(p[1]) for p in pts)
+            top = max(e + float(r["height"]) for e, r in rooms) - min(e for e, _ in rooms)
+        except (KeyError, TypeError, ValueError, IndexError, AttributeError):
+            return data  # the storeys' own errors say what is wrong
+        return {**data, "room": {"footprint": [[x0, y0], [x1, y0], [x1, y1], [x0, y1]], "height": top}}
+
+    def storey_spec(self, name: str) -> "SceneSpec":
+        """The single-storey scene of storey ``name`` (floor at z = 0, plan in building x, y):
+        its own room, obstacles, zones and limits with the building's shared keys
+        (STOREY_SHARED) where it gives none; the building budget unless it has its own."""
+        st = (self.storeys or {})[name]
+        data = {k: getattr(self, k) for k in STOREY_SHARED if getattr(self, k) is not None}
+        data.update(name=f"{self.name}/{name}", room=st.room, obstacles=st.obstacles, zones=st.zones)
+        for k in ("targets", "mounts", "mount_rules"):
+            if getattr(st, k) is not None:
+                data[k] = getattr(st, k)
+        if st.budget is not None:
+            data["placement"] = self.placement.model_copy(update={"budget": st.budget})
+        return SceneSpec.model_validate({k: (v.model_dump() if isinstance(v, BaseModel) else
+                                             [x.model_dump() if isinstance(x, BaseModel) else x for x in v]
+                                             if isinstance(v, list) else v) for k, v in data.items()})
+
+    @property
+    def storey_names(self) -> list[str]:
+        """The storeys of a building, lowest floor first ([] for a single room)."""
+        return sorted(self.storeys or {}, key=lambda n: self.storeys[n].elevation)
+
+    @model_validator(mode="after")
+    def _building(self) -> "SceneSpec":
+        if not self.storeys:
+            return self
+        for key in ("obstacles", "zones", "existing", "crowd"):
+            if getattr(self, key):
+                raise scene_error(key, "a building gives these per storey (storeys.NAME.%s)" % key
+                                  if key in ("obstacles", "zones") else "not available for buildings (storeys) yet")
+        names = self.storey_names
+        for name in names:
+            try:
+                self.storey_spec(name)
+            except ValidationError as err:
+                e = err.errors()[0]
+                loc = ".".join(str(p) for p in e["loc"] if not str(p).startswith("function-"))
+                path = (e.get("ctx") or {}).get("path") or loc
+                raise scene_error(f"storeys.{name}.{path}" if path else f"storeys.{name}",
+                                  (e.get("ctx") or {}).get("message") or e["msg"]) from None
+        for lo, hi in zip(names, names[1:]):
+            a, b = self.storeys[lo], self.storeys[hi]
+            if b.elevation <= a.elevation:
+                raise scene_error(f"storeys.{hi}.elevation", f"{b.elevation} m is the floor of '{lo}' too; "
+                                                             f"expected every storey at its own elevation")
+        return self
 
     @model_validator(mode="after")
     def _references(self) -> "SceneSpec":

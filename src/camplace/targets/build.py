@@ -99,10 +99,36 @@ def surface_targets(scene: Scene, region: TargetRegion) -> tuple[np.ndarray, np.
     return p[keep], n[keep]
 
 
+def stack_targets(parts: list[Targets], storeys, prefix: bool = True) -> Targets:
+    """The targets of each storey (local z) as one set in building z: positions raised by
+    each storey's elevation, regions named 'Storey/region', a storey's targets over its own
+    floor openings (no floor there) dropped."""
+    pos, keep_parts, names, offset, rid = [], [], [], 0, []
+    for t, st in zip(parts, storeys):
+        keep = np.ones(len(t), bool)
+        for hole in st.openings:
+            keep &= ~in_polygon(list(hole.exterior.coords), t.positions[:, :2])
+        keep_parts.append(keep)
+        pos.append(t.positions[keep] + [0.0, 0.0, st.elevation])
+        rid.append(t.region_ids[keep] + offset)
+        names.extend(f"{st.name}/{n}" if prefix else n for n in t.region_names)
+        offset += len(t.region_names)
+    cat = lambda attr: np.concatenate([getattr(t, attr)[k] for t, k in zip(parts, keep_parts)])  # noqa: E731
+    return Targets(np.concatenate(pos), cat("normals"), cat("gamma"), cat("weights"),
+                   np.concatenate(rid).astype(np.int32), tuple(names),
+                   tuple(k for t in parts for k in t.region_kinds),
+                   np.concatenate([t.max_incidence_deg for t in parts]),
+                   np.concatenate([np.zeros(len(t.region_names)) if t.min_px_per_m is None else t.min_px_per_m
+                                   for t in parts]), parts[0].voxel_size)
+
+
 def build_targets(scene: Scene) -> Targets:
     """All target regions of the scene, in the order of ``scene.spec.targets``, then one
     region per non-privacy zone (camplace.targets.zones: zones replace the volume targets
-    inside their polygons, later zones win)."""
+    inside their polygons, later zones win). A building: every storey's, stacked
+    (stack_targets)."""
+    if scene.storeys:
+        return stack_targets([build_targets(st.scene) for st in scene.storeys], scene.storeys)
     pos, nrm, gam, wts, rid = [], [], [], [], []
     zones = scene.spec.zones
     regions = list(scene.spec.targets) + [zone_region(z, scene.spec) for z in zones if not z.privacy]
@@ -139,6 +165,10 @@ def privacy_targets(scene: Scene) -> Targets | None:
     """The points of the privacy zones (one region per zone; at the zone's heights, default
     every voxel centre from floor to ceiling; free space only), or None without privacy
     zones. Never part of the cost: the visibility step removes every candidate that sees one."""
+    if scene.storeys:
+        parts = [(privacy_targets(st.scene), st) for st in scene.storeys]
+        parts = [(t, st) for t, st in parts if t is not None]
+        return stack_targets([t for t, _ in parts], [st for _, st in parts]) if parts else None
     zones = [z for z in scene.spec.zones if z.privacy]
     if not zones:
         return None

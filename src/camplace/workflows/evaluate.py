@@ -93,7 +93,7 @@ def evaluate(scene: str | Path | SceneSpec, placement: str | Path | Poses, progr
     timings["solve"] = 0.0
     t = time.perf_counter()
     cost = problem.cost(selected)
-    metrics = placement_metrics(vis, problem, selected)
+    metrics = placement_metrics(vis, problem, selected, scene=sc)
     timings["metrics"] = time.perf_counter() - t
     seen = np.diff(vis.V.indptr)
     inside = sc.occupancy.is_occupied(cands.positions)

@@ -22,11 +22,13 @@ from camplace.spec.schema import SceneSpec
 from camplace.core.errors import InputError, Interrupted
 from camplace.metrics.coverage import Metrics, compute_metrics
 from camplace.problem.model import PlacementProblem, with_type_limits
+from camplace.workflows.building import building_visibility, storey_metrics, with_storey_limits
+from camplace.workflows.solver_options import check_solver_name, check_solver_options, scene_solver_options
 from camplace.scene.build import Scene, build_scene
 from camplace.solvers import Placement, solve
 from camplace.targets.build import Targets, build_targets
 from camplace.core.executors import make_executor
-from camplace.visibility.engine import Visibility, compute_visibility, drop_blind_candidates
+from camplace.visibility.engine import Visibility, drop_blind_candidates
 from camplace.visibility.registry import get_engine
 from camplace.spec.crowd import crowd_with
 from camplace.workflows.crowd import crowd_scores, crowd_stage
@@ -101,8 +103,8 @@ def prepare_site(scene: str | Path | SceneSpec, progress: Progress | None = None
     with make_executor(workers, scheduler) as executor:
         if site is not None:  # privacy zones, existing cameras (camplace.workflows.sites)
             cands = site.admit(cands, executor, cache_dir)
-        vis = compute_visibility(engine, sc.occupancy, targets, cands, executor=executor, cache_dir=cache_dir,
-                                 progress=progress)
+        vis = building_visibility(engine, sc, targets, cands, executor=executor, cache_dir=cache_dir,
+                                  progress=progress)  # one call for a single room (camplace.workflows.building)
         if site is not None:
             site.raycast(engine, sc, targets, executor, cache_dir)
     vis = drop_blind_candidates(vis)
@@ -154,6 +156,8 @@ def scene_inputs(scene: str | Path | SceneSpec, progress: Progress | None = None
     t = time.perf_counter()
     _stage(progress, "scene")
     sc = build_scene(spec, base_dir, source, progress=progress)
+    if source.startswith("<built-in "):  # as given ('warehouse:1000'): placement.json's builtin_scene
+        sc.info["builtin"] = source[len("<built-in "):-1]
     timings["scene"] = time.perf_counter() - t
     t = time.perf_counter()
     _stage(progress, "targets")
@@ -235,57 +239,6 @@ def solve_stoppable(problem: PlacementProblem, solver: str, *, log: list | None 
                    f"that polls nothing); wrote the greedy placement instead")
     info = dict(g.info, interrupted_solver=solver, fallback="greedy")
     return replace(g, status="interrupted", bound=b, solver=solver, info=info)
-
-
-def check_solver_name(name: str, key: str) -> None:
-    """InputError naming ``key`` (e.g. '--solver' or 'scene.yaml: placement.solver') for an unknown solver."""
-    from camplace.spec.wording import did_you_mean as _did_you_mean
-    from camplace.solvers import SOLVERS
-
-    if name not in SOLVERS:
-        raise InputError(f"{key}: unknown solver '{name}'{_did_you_mean(name, list(SOLVERS))}; expected one of "
-                         f"{', '.join(sorted(SOLVERS))}")
-
-
-def check_solver_options(name: str, options: dict, triangulation_deg: tuple[float, float] = (20.0, 160.0)) -> str:
-    """InputError(option=key) for a solver option that solver ``name`` does not take or a
-    value that does not fit its type, before any heavy stage (callbacks pass;
-    'greedy-triangulated' also gets the angle range). Returns the given options as the
-    solver reads them ('restarts=3, seed=5'; '' when none)."""
-    from camplace.solvers import build_options
-    from camplace.solvers.contract import HOOK_FIELDS
-
-    opts = {k: v for k, v in options.items() if k not in HOOK_FIELDS}
-    given = list(opts)
-    if name == "greedy-triangulated":
-        opts.update(min_deg=triangulation_deg[0], max_deg=triangulation_deg[1])
-    built = build_options(name, **opts)
-    return ", ".join(f"{k}={getattr(built, k)!r}" for k in given)
-
-
-def scene_solver_options(spec: SceneSpec, solver: str, source: str, log: list | None = None) -> dict:
-    """The scene's ``placement.options``, checked against ``placement.solver`` (InputError
-    naming the file and the key path ``placement.options.KEY``); {} when the run uses
-    another ``solver`` (a line in ``log`` says so)."""
-    from camplace.solvers import build_options
-
-    opts = dict(spec.placement.options)
-    if not opts:
-        return {}
-    if "time_limit_s" in opts:
-        raise InputError(f"{source}: placement.options.time_limit_s: give the time limit as placement.time_limit_s")
-    try:
-        build_options(spec.placement.solver, **opts)
-    except InputError as err:
-        msg = str(err)
-        key = err.option or ""
-        raise InputError(f"{source}: placement.options.{key}: {msg.removeprefix(key + ':').strip()}") from None
-    if solver != spec.placement.solver:
-        if log is not None:
-            log.append(f"placement.options ({', '.join(opts)}) not used: they are for solver "
-                       f"'{spec.placement.solver}', the run uses '{solver}'")
-        return {}
-    return opts
 
 
 def problem_from_visibility(vis: Visibility, budget: int, money_budget: float | None = None) -> PlacementProblem:
@@ -384,6 +337,9 @@ def run(scene: str | Path | SceneSpec, budget: int | None = None, solver: str | 
     log: list[str] = []
     spec, _, source = resolve_scene(scene)
     crowd_spec = crowd_with(spec.crowd, crowd)
+    if spec.storeys and crowd_spec is not None and crowd_spec.density:  # crowds are sampled on one floor
+        raise InputError(f"{source}: crowd: not available for a building yet; plan one storey at a time for crowds",
+                         option="crowd_density")
     if solver is None:
         check_solver_name(spec.placement.solver, f"{source}: placement.solver")
     else:
@@ -417,6 +373,7 @@ def run(scene: str | Path | SceneSpec, budget: int | None = None, solver: str | 
     problem = problem_from_visibility(vis, budget, money)
     problem = with_type_limits(problem, vis.candidates.camera_ids, [c.name for c in vis.candidates.cameras],
                                sc.spec.mount_rules.max_per_type)  # new cameras per type (mount_rules)
+    problem = with_storey_limits(problem, sc, vis.candidates.positions)  # a building's per-storey budgets
     cp = crowd_stage(sc, vis, problem, crowd_spec, site, workers=workers, scheduler=scheduler, progress=progress,
                      log=log, timings=timings, should_stop=should_stop)  # crowd-aware: the sample-average problem
     if site is not None:  # Γ' = max(Γ - existing coverage, 0): the solvers see what remains
@@ -451,7 +408,7 @@ def run(scene: str | Path | SceneSpec, budget: int | None = None, solver: str | 
     _stage(progress, "metrics")
     if site is not None:  # existing cameras join V and the selection, with the full Γ
         vis, problem, placement = site.fold(vis, problem, placement)
-    metrics = placement_metrics(vis, problem, placement.selected, triangulation_deg)
+    metrics = placement_metrics(vis, problem, placement.selected, triangulation_deg, sc)
     if site is not None:
         metrics = site.report(vis, placement, metrics)
     metrics = replace(metrics, grid_cost=grid_cost(placement),
@@ -485,12 +442,18 @@ def grid_cost(placement: Placement) -> float | None:
 
 
 def placement_metrics(vis: Visibility, problem: PlacementProblem, selected: np.ndarray,
-                      triangulation_deg: tuple[float, float] = (20.0, 160.0)) -> Metrics:
-    """Every metric of a selection (rows of vis.V), per region too; shared by ``run`` and
-    camplace.workflows.evaluate so both score a placement the same way."""
+                      triangulation_deg: tuple[float, float] = (20.0, 160.0), scene: Scene | None = None) -> Metrics:
+    """Every metric of a selection (rows of vis.V), per region too (and per storey of a
+    building ``scene``); shared by ``run`` and camplace.workflows.evaluate so both score a
+    placement the same way."""
     from camplace.metrics.triangulation import well_triangulated_of_selection
 
     well = well_triangulated_of_selection(vis.V, vis.candidates.positions, vis.targets.positions,
                                           selected, *triangulation_deg)
-    return compute_metrics(problem, selected, vis.targets.region_ids, vis.targets.region_names,
-                           well_triangulated=well)
+    m = compute_metrics(problem, selected, vis.targets.region_ids, vis.targets.region_names,
+                        well_triangulated=well)
+    if scene is not None and scene.storeys:
+        sel = np.asarray(selected, np.int64)
+        m = replace(m, storeys=storey_metrics(scene, problem, sel, vis.candidates.positions[sel],
+                                              vis.targets.positions))
+    return m

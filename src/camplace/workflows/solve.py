@@ -9,7 +9,7 @@ from pathlib import Path
 
 import numpy as np
 
-from camplace.core.files import atomic_write_json
+from camplace.core.files import atomic_copy, atomic_write_json, atomic_write_text
 from camplace.metrics.coverage import compute_metrics
 from camplace.problem.instance import load_problem_npz
 from camplace.problem.model import PlacementProblem
@@ -70,30 +70,42 @@ def solve_instance(path: str | Path, budget: int, solver: str = "greedy", **solv
     return problem, placement, metrics, arrays, timings
 
 
-def certificate_keys(placement) -> dict:
-    """The certification keys added to placement.json (when the solver reports them)."""
-    out = {}
-    for key in ("incumbent_method", "bound_method"):
-        if key in placement.info:
-            out[key] = str(placement.info[key])
-    return out
-
-
 def write_instance_outputs(out_dir: str | Path, name: str, problem: PlacementProblem, placement, metrics,
-                           arrays: dict[str, np.ndarray], timings: dict[str, float]) -> dict[str, Path]:
-    """placement.json and metrics.json of a solved saved instance (contract keys; pose
-    fields null where the file has no geometry)."""
+                           arrays: dict[str, np.ndarray], timings: dict[str, float],
+                           source: str | Path | None = None) -> dict[str, Path]:
+    """The contract files of a solved saved instance (docs/output-contract.md: placement.json,
+    metrics.json, placement.csv, and visibility.npz: a copy of ``source``, the instance file,
+    unless it is already that file; pose fields null, CSV cells empty, where the file has no
+    geometry), then every registered output writer (camplace.outputs.writers.write_registered;
+    no scene nor candidates: ``visibility`` and ``scene`` are None)."""
+    from camplace.outputs.write import placement_csv, solver_info
+    from camplace.outputs.writers import OutputResult, write_registered
+
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     pdict = {
         "scene": name, "solver": placement.solver, "budget": int(problem.budget), "status": placement.status,
         "objective": float(placement.objective),
         "bound": None if placement.bound is None else float(placement.bound),
-        "gap": placement.gap, **certificate_keys(placement),
+        "gap": placement.gap, **{k: str(placement.info[k]) for k in ("incumbent_method", "bound_method")
+                                 if k in placement.info},
+        **({"solver_info": info} if (info := solver_info(placement.info)) else {}),
         "n_cameras": int(len(placement.selected)),
         "cameras": camera_entries_from_arrays(arrays, placement.selected, problem.location_ids),
     }
     m = metrics.to_dict()
     m["timings_s"] = {k: round(float(v), 4) for k, v in timings.items()}
-    return {"placement.json": atomic_write_json(out / "placement.json", pdict),
-            "metrics.json": atomic_write_json(out / "metrics.json", m)}
+    paths: dict[str, Path] = {}
+    npz = out / "visibility.npz"
+    if source is not None and not (npz.exists() and npz.samefile(source)):
+        paths["visibility.npz"] = atomic_copy(source, npz)
+    elif npz.exists():
+        paths["visibility.npz"] = npz
+    rows = [dict(c, position=c["position"] or ["", "", ""], camera=c["camera"] or "") for c in pdict["cameras"]]
+    paths["placement.json"] = atomic_write_json(out / "placement.json", pdict)
+    paths["placement.csv"] = atomic_write_text(out / "placement.csv", placement_csv(rows))
+    paths["metrics.json"] = atomic_write_json(out / "metrics.json", m)
+    result = OutputResult(pdict, m, name, placement, metrics, problem, None, None, arrays, timings,
+                          written=dict(paths))
+    paths.update(write_registered(out, result))
+    return paths

@@ -84,7 +84,7 @@ def warm(solver: str) -> None:
     placement = solve(problem, solver, time_limit_s=1.0)
     metrics = placement_metrics(vis, problem, placement.selected)
     with tempfile.TemporaryDirectory(prefix="camplace-warm-") as out:
-        write_outputs(out, "demo", vis, placement, 4, metrics, {}, scene=sc)
+        write_outputs(out, "demo", vis, placement, 4, metrics, {}, scene=sc, problem=problem)
 
 
 if __name__ == "__main__":

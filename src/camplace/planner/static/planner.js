@@ -129,7 +129,18 @@
     el("line", { x1: 0, y1: 0, x2: 0, y2: 0.25, stroke: "#7c3aed", "stroke-width": 0.04, "stroke-opacity": 0.5 }, pat);
     svg.insertBefore(defs, svg.firstChild);
 
-    el("polygon", { points: pts(sc.footprint), class: "footprint" }, $("g-footprint"));
+    const floors = (sc.storeys || []).map((f) => f.name);
+    if (floors.length) {  // a building: one footprint per storey, the floor selector shows one storey
+      for (const f of sc.storeys) el("polygon", { points: pts(f.footprint), class: "footprint", "data-storey": f.name }, $("g-footprint"));
+      for (const id of ["floor", "ed-storey"]) {
+        const fs = $(id);
+        fs.innerHTML = "";
+        for (const n of floors) { const o = document.createElement("option"); o.value = o.textContent = n; fs.appendChild(o); }
+      }
+      S.floor = floors[0];
+      $("floor-pick").classList.remove("hidden");
+      $("ed-storey-pick").classList.remove("hidden");
+    } else el("polygon", { points: pts(sc.footprint), class: "footprint" }, $("g-footprint"));
     // scale ticks along the bottom edge, every metre
     const gx = $("g-footprint");
     for (let x = Math.ceil(lo[0]); x <= hi[0] + 1e-9; x += (hi[0] - lo[0] > 30 ? 5 : 1)) {
@@ -138,10 +149,14 @@
     }
     const cell = sc.target_cell_m || 0.25;
     const gc = $("g-coverage");
-    S.covRects = (sc.targets_xy || []).map((p) => el("rect", {
+    S.covRects = (sc.targets_xy || []).map((p, i) => el("rect", Object.assign({
       x: (p[0] - cell / 2).toFixed(3), y: (-p[1] - cell / 2).toFixed(3), width: cell, height: cell,
       fill: "#ef4444", "fill-opacity": 0.5,
-    }, gc));
+    }, floors.length ? { "data-storey": sc.targets_storey[i] } : {}), gc));
+    const onFloor = (name) => {  // 'Storey/name' of a building's obstacles and zones
+      const k = String(name).indexOf("/");
+      return floors.length && k > 0 && floors.includes(name.slice(0, k)) ? { "data-storey": name.slice(0, k) } : {};
+    };
     for (const z of sc.zones || []) {
       el("polygon", { points: pts(z.polygon), class: "zone" }, $("g-zones"));
       const b = bboxOf(z.polygon);
@@ -158,10 +173,13 @@
     }
     for (const o of sc.obstacles || []) {
       const tall = (o.zmax || 0) >= 1.5;
-      el("polygon", { points: pts(o.polygon), class: "obstacle" + (tall ? "" : " low") }, $("g-obstacles"));
-      label(o.polygon, o.name, "label", $("g-obstacles"));
+      el("polygon", Object.assign({ points: pts(o.polygon), class: "obstacle" + (tall ? "" : " low") }, onFloor(o.name)), $("g-obstacles"));
+      const t = label(o.polygon, o.name, "label", $("g-obstacles"));
+      if (onFloor(o.name)["data-storey"]) t.setAttribute("data-storey", onFloor(o.name)["data-storey"]);
     }
-    for (const mt of sc.mounts || []) el("circle", { cx: mt[0], cy: -mt[1], r: 0.04, class: "mount" }, $("g-mounts"));
+    (sc.mounts || []).forEach((mt, i) => el("circle", Object.assign({ cx: mt[0], cy: -mt[1], r: 0.04, class: "mount" },
+      floors.length ? { "data-storey": sc.mounts_storey[i] } : {}), $("g-mounts")));
+    applyFloor();
     $("g-mounts").classList.add("hidden");
 
     (sc.camera_types || []).forEach((t, i) => { S.colour[t.name] = TYPE_COLOURS[i % TYPE_COLOURS.length]; });
@@ -181,6 +199,20 @@
     $("scene-name").textContent = sc.name;
     document.title = sc.name + " · camplace planner";
     drawLegend();
+  }
+
+  /* A building: show only the selected floor's footprint, targets, obstacles, mounts and cameras. */
+  function applyFloor() {
+    if (!S.floor) return;
+    for (const e of document.querySelectorAll("#plan [data-storey]")) {
+      e.style.display = e.getAttribute("data-storey") === S.floor ? "" : "none";
+    }
+  }
+
+  function setFloor(name) {
+    S.floor = name;
+    $("floor").value = name;
+    applyFloor();
   }
 
   function drawLegend() {
@@ -269,9 +301,10 @@
       if (e) { if (e.vs) e.vs.remove(); e.g.remove(); }
       e = { sig, vs: null, g: null };
       const col = colourOf(c.camera);
-      if (vs.length > 2) e.vs = el("polygon", { points: pts(vs), class: "viewshed" + (isSel ? " sel" : ""), fill: col, stroke: col, "data-id": key }, gv);
-      const g = el("g", { class: "cam" + (isSel ? " sel" : "") + (c.locked ? " locked" : ""), "data-id": key,
-        transform: "translate(" + c.position[0].toFixed(3) + "," + (-c.position[1]).toFixed(3) + ")" }, gc);
+      const floor = c.storey ? { "data-storey": c.storey } : {};
+      if (vs.length > 2) e.vs = el("polygon", Object.assign({ points: pts(vs), class: "viewshed" + (isSel ? " sel" : ""), fill: col, stroke: col, "data-id": key }, floor), gv);
+      const g = el("g", Object.assign({ class: "cam" + (isSel ? " sel" : "") + (c.locked ? " locked" : ""), "data-id": key,
+        transform: "translate(" + c.position[0].toFixed(3) + "," + (-c.position[1]).toFixed(3) + ")" }, floor), gc);
       const yaw = c.yaw_deg * Math.PI / 180;
       el("line", { x1: 0, y1: 0, x2: (0.5 * Math.cos(yaw)).toFixed(3), y2: (-0.5 * Math.sin(yaw)).toFixed(3), class: "dir", stroke: col }, g);
       if (isSel) el("circle", { r: 0.3, class: "ring" }, g);
@@ -287,6 +320,7 @@
     }
     if (selEls) { if (selEls.vs) gv.appendChild(selEls.vs); gc.appendChild(selEls.g); }  // selected on top
     S.previewed = null;
+    applyFloor();
     drawHandle();
   }
 
@@ -405,6 +439,7 @@
     $("sel-id").textContent = c ? String(c.id) : "— click a camera";
     if (!c) { $("ed-pos").textContent = ""; return; }
     $("ed-type").value = c.camera;
+    if (c.storey) { $("ed-storey").value = c.storey; $("ed-storey").disabled = fixed(c); }
     $("ed-locked").checked = !!c.locked || !!c.existing;
     $("ed-locked").disabled = !!c.existing;
     $("btn-delete").disabled = fixed(c);
@@ -522,6 +557,7 @@
         const t = $("ed-type").value || ((S.scene.camera_types || [])[0] || {}).name;
         const body = { position: [w[0], w[1]], yaw_deg: 0, pitch_deg: 45 };
         if (t) body.camera = t;
+        if (S.floor) body.storey = S.floor;
         const before = new Set(S.state.cameras.map((c) => String(c.id)));
         change("POST", "/api/cameras", body).then((st) => {
           const added = st ? st.cameras.find((c) => !before.has(String(c.id))) : null;
@@ -561,6 +597,8 @@
     $("btn-cancel").addEventListener("click", () => api("POST", "/api/optimize/cancel", {}).then((r) => { if (r) $("opt-status").textContent = "cancelling: keeping the best placement so far…"; }));
     $("ed-type").addEventListener("change", (e) => putSel({ camera: e.target.value }));
     $("ed-locked").addEventListener("change", (e) => putSel({ locked: e.target.checked }));
+    $("floor").addEventListener("change", (e) => setFloor(e.target.value));
+    $("ed-storey").addEventListener("change", (e) => { setFloor(e.target.value); putSel({ storey: e.target.value }); });
     for (const [k, key] of [["yaw", "yaw_deg"], ["pitch", "pitch_deg"], ["roll", "roll_deg"]]) {
       const inp = $("ed-" + k);
       inp.addEventListener("input", () => {

@@ -1,16 +1,25 @@
 """Plans people have -> an editable scene mapping (issue 18): CAD floor plans (DXF),
-plan images (PNG/JPG/TIFF) and BIM models (IFC).
+plan images (PNG/JPG/TIFF, PDF) and BIM models (IFC), and any format a plugin adds.
 
-One registry: suffix -> importer module; each module offers
-``import_plan(path, **options) -> dict``, a complete scene-file mapping (name, room
-footprint and height, obstacles with ``source`` provenance, zones named after the
-rooms, the default targets, camera and ceiling mounts of a scene from a scan). The
-helpers below build those parts the same way for every format.
+Plan formats are plugins (issue 35): entry points of the group ``camplace.importers``,
+read through ``IMPORTERS`` (a camplace.core.plugins.Registry). An entry point loads an
+importer: an object with ``suffixes`` (lowercase, with the dot: ``(".geojson",)``) and
+``read(path, **options)`` returning a :class:`PlanImport` or a plain scene-file mapping
+(``room``, ``obstacles``, ``zones``, ...: validated like a scene file; the keys it leaves
+out - targets, cameras, mounts, placement - get the defaults of every plan import,
+:func:`scene_defaults`). Optional: ``options`` (the option names ``read`` takes beyond the
+common ones; default: its keyword parameters), ``label`` (for help and docs),
+``read_storeys(path, **options)`` and ``storey_elevations(path, units=None)`` (storey
+'all'). camplace's own (``ifc``, ``dxf``, ``image``) are :class:`PlanFormat` objects
+declared in its pyproject.toml the same way; their modules load at the first read. The
+suffix map, the CLI's format lists and its help are derived from the registry
+(:func:`plan_suffixes`, :func:`formats_text`). The helpers below build a scene's parts the
+same way for every format.
 """
 
 from __future__ import annotations
 
-import importlib
+import inspect
 from collections import Counter
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -21,21 +30,13 @@ import shapely
 from shapely.geometry import MultiPolygon, Polygon
 
 from camplace.core.errors import InputError
+from camplace.scene.formats import (DXF, IFC, IMAGE, IMPORTERS, NATIVE_FORMATS, PlanFormat,  # noqa: F401 - re-exported
+                                    check_importer, formats_text, plan_kind, plan_suffixes)
 from camplace.scene.from_scan import DEFAULT_CAMERA
 
-PLAN_SUFFIXES = {".dxf": "dxf", ".png": "image", ".jpg": "image", ".jpeg": "image", ".tif": "image",
-                 ".tiff": "image", ".webp": "image", ".bmp": "image", ".gif": "image", ".pdf": "image", ".ifc": "ifc",
-                 ".ifczip": "ifc"}
-NATIVE_FORMATS = {  # closed or tool-native formats no open library reads: how to get a plan camplace reads
-    ".dwg": "a DWG drawing (AutoCAD's own format); save it as DXF (AutoCAD, BricsCAD, DraftSight: Save As DXF; "
-            "or the free ODA File Converter), then give the .dxf",
-    ".rvt": "a Revit model; export it as IFC (Revit: File > Export > IFC), then give the .ifc",
-    ".pln": "an ArchiCAD project; save it as IFC (File > Save As > IFC), then give the .ifc",
-    ".skp": "a SketchUp model; export it as IFC or as a mesh (.obj, .glb), then give that file",
-    ".3dm": "a Rhino model; export it as a mesh (.obj, .stl, .glb) or as DXF, then give that file",
-}
 UNITS_M = {"mm": 0.001, "cm": 0.01, "m": 1.0, "in": 0.0254, "ft": 0.3048}  # metres per unit
 COMMON_OPTIONS = ("name", "units", "wall_height", "ceiling_height", "heights", "coverage", "budget")
+FILLED_OPTIONS = ("name", "heights", "coverage", "budget")  # what camplace applies to a plugin's scene mapping
 DEFAULT_CEILING_M = 3.0
 MIN_PRISM_AREA_M2 = 1e-4  # wall pieces smaller than this (1 cm²) are dropped
 MIN_ZONE_PIECE_M2 = 0.5  # a room's further pieces smaller than this are specks, no zones
@@ -48,8 +49,8 @@ class PlanImport:
     """What an importer understood of a plan, beside the scene mapping it made.
 
     ``scene``: the scene-file mapping (room, obstacles, zones, ...; lengths in m).
-    ``kind``: 'ifc', 'dxf' or 'image'. ``used``: what the importer took and how, one
-    short line per item for the summary table (e.g. {"wall layers": "Walls (60 LINE)",
+    ``kind``: the importer's name ('ifc', 'dxf', 'image' or a plugin's). ``used``: what
+    the importer took and how, one short line per item for the summary table (e.g. {"wall layers": "Walls (60 LINE)",
     "units": "cm ($INSUNITS 5)", "scale": "0.0313 m/px (scale bar)"}). ``skipped``:
     reason -> count of what it left out (never a failed import for one bad element).
     ``openings``: plan polygons (m, [[x, y], ...]) of the doors and windows it found,
@@ -71,15 +72,6 @@ class PlanImport:
     floor_openings: list[list[list[float]]] = field(default_factory=list)
 
 
-def plan_kind(path: str | Path) -> str | None:
-    """'dxf', 'image' or 'ifc' by the file's suffix; None for anything else (InputError
-    saying how to export it for a tool-native format, NATIVE_FORMATS)."""
-    suffix = Path(path).suffix.lower()
-    if suffix in NATIVE_FORMATS:
-        raise InputError(f"{path}: {NATIVE_FORMATS[suffix]}")
-    return PLAN_SUFFIXES.get(suffix)
-
-
 def unit_scale(units: str) -> float:
     """Metres per unit of ``units`` (mm, cm, m, in, ft); InputError otherwise."""
     if units not in UNITS_M:
@@ -90,9 +82,10 @@ def unit_scale(units: str) -> float:
 def read_plan(path: str | Path, **options: Any) -> PlanImport:
     """What the importer understood of a plan file: the scene mapping and the summary
     (``options``: None values are left to the importer's defaults; an option the format
-    does not take is an InputError)."""
-    module, p, given = _importer(path, options)
-    return module.read(p, **given)
+    does not take is an InputError). A plugin's plain mapping is completed (scene_defaults)
+    and checked by the scene schema here."""
+    kind, importer, p, given, filled = _importer(path, options)
+    return as_plan_import(_call(kind, importer.read, p, given), kind, p, filled)
 
 
 def import_plan(path: str | Path, **options: Any) -> dict:
@@ -101,38 +94,102 @@ def import_plan(path: str | Path, **options: Any) -> dict:
 
 
 def read_storey_plans(path: str | Path, **options: Any) -> list[tuple[str, PlanImport, float]]:
-    """(storey name, what was understood, floor elevation m) of every storey of an IFC
-    file, or of every plan drawn side by side on a plan image (storey 'all'; options as
-    read_plan). Each scene has its floor at z = 0."""
-    if plan_kind(path) not in (None, "ifc", "image"):
-        raise InputError(f"storey: 'all' belongs to IFC files and plan images; {Path(path).name} is a "
-                         f"{plan_kind(path)} plan with one storey", option="storey")
-    module, p, given = _importer(path, dict(options, storey="all"))
-    levels = module.storey_elevations(p, units=given.get("units"))
-    return [(name, got, levels.get(name, 0.0)) for name, got in module.read_storeys(p, **given)]
+    """(storey name, what was understood, floor elevation m) of every storey of a file whose
+    importer reads storeys (IFC; the plans drawn side by side on a plan image or a DXF sheet;
+    a plugin with ``read_storeys``), storey 'all'; options as read_plan. Each scene has its floor at z = 0."""
+    kind = plan_kind(path)
+    if kind is not None and not callable(getattr(IMPORTERS[kind], "read_storeys", None)):
+        storeyed = [getattr(IMPORTERS[n], "label", None) or n for n in IMPORTERS
+                    if callable(getattr(IMPORTERS[n], "read_storeys", None))]
+        raise InputError(f"storey: 'all' belongs to formats with several storeys ({'; '.join(storeyed)}); "
+                         f"{Path(path).name} is a {kind} plan with one storey", option="storey")
+    own = kind is not None and isinstance(IMPORTERS[kind], PlanFormat)  # a plugin's read_storeys reads them all
+    kind, importer, p, given, filled = _importer(path, dict(options, storey="all") if own else options)
+    elevations = getattr(importer, "storey_elevations", None)
+    levels = elevations(p, units=given.get("units")) if callable(elevations) else {}
+    return [(name, as_plan_import(got, kind, p, filled), levels.get(name, 0.0))
+            for name, got in _call(kind, importer.read_storeys, p, given)]
 
 
 def import_storey_plans(path: str | Path, **options: Any) -> list[tuple[str, dict, float]]:
-    """(storey name, scene mapping, floor elevation m) of every storey of an IFC file
-    (storey 'all'; options as import_plan). Each scene has its floor at z = 0."""
+    """(storey name, scene mapping, floor elevation m) of every storey (storey 'all';
+    options as import_plan). Each scene has its floor at z = 0."""
     return [(name, got.scene, elev) for name, got, elev in read_storey_plans(path, **options)]
 
 
+def importer_options(importer) -> tuple[tuple[str, ...], bool]:
+    """(the option names ``importer.read`` takes beyond the path, whether it takes any
+    keyword): its ``options`` when it has them, else from read's signature."""
+    declared = getattr(importer, "options", None)
+    if declared is not None:
+        return tuple(declared), False
+    params = list(inspect.signature(importer.read).parameters.values())[1:]
+    names = tuple(q.name for q in params if q.kind in (q.KEYWORD_ONLY, q.POSITIONAL_OR_KEYWORD))
+    return names, any(q.kind == q.VAR_KEYWORD for q in params)
+
+
 def _importer(path: str | Path, options: dict):
-    """(importer module, path, the options given) after the checks of import_plan."""
+    """(name, importer, path, the options for read, the options camplace fills in) after
+    the checks of read_plan."""
     p = Path(path)
     kind = plan_kind(p)
     if kind is None:
-        raise InputError(f"{p}: not a plan; expected {', '.join(sorted(set(PLAN_SUFFIXES)))}")
+        raise InputError(f"{p}: not a plan; expected {formats_text()}")
     if not p.is_file():
         raise InputError(f"{p}: file not found" if not p.exists() else f"{p}: is a folder, expected a file")
-    module = importlib.import_module(f"camplace.scene.importers.{kind}")
+    importer = IMPORTERS[kind]
     given = {k: v for k, v in options.items() if v is not None}
+    own, anything = importer_options(importer)
+    takes = COMMON_OPTIONS + own if isinstance(importer, PlanFormat) else own
+    filled = {} if isinstance(importer, PlanFormat) else {k: given[k] for k in FILLED_OPTIONS
+                                                          if k in given and k not in takes}
     for key in given:
-        if key not in COMMON_OPTIONS and key not in module.OPTIONS:
-            raise InputError(f"{key}: not an option of {kind} plans (it takes "
-                             f"{', '.join(COMMON_OPTIONS + tuple(module.OPTIONS))})", option=key)
-    return module, p, given
+        if key not in takes and key not in filled and not anything:
+            known = tuple(dict.fromkeys(takes + (() if isinstance(importer, PlanFormat) else FILLED_OPTIONS)))
+            raise InputError(f"{key}: not an option of {kind} plans (it takes {', '.join(known)})", option=key)
+    return kind, importer, p, {k: v for k, v in given.items() if k not in filled}, filled
+
+
+def _call(kind: str, read, path: Path, options: dict):
+    """``read(path, **options)``; a plugin importer's failure other than an InputError is one
+    line naming the importer and its distribution (camplace's own raise as they are)."""
+    try:
+        return read(path, **options)
+    except InputError:
+        raise
+    except Exception as err:  # noqa: BLE001 - a plugin's bug is reported as one line naming it
+        if isinstance(IMPORTERS[kind], PlanFormat):
+            raise
+        raise InputError(f"{path}: the {kind} importer (from {IMPORTERS.distribution(kind)}) failed: "
+                         f"{type(err).__name__}: {err}") from err
+
+
+def as_plan_import(got, kind: str, path: Path, filled: dict) -> PlanImport:
+    """An importer's result as a PlanImport: a plain mapping completed with the defaults of
+    every plan import (scene_defaults; ``filled``: name, heights, coverage, budget given to
+    camplace, not to the importer) and checked by the scene schema (InputError naming the
+    file and the key)."""
+    if isinstance(got, PlanImport):
+        return got
+    if not isinstance(got, dict):
+        raise InputError(f"{path}: the {kind} importer returned {type(got).__name__}; expected a PlanImport "
+                         f"or a scene mapping")
+    room = got.get("room") if isinstance(got.get("room"), dict) else {}
+    height = float(room.get("height", DEFAULT_CEILING_M))
+    d = scene_defaults(height, **{k: v for k, v in filled.items() if k != "name"})
+    scene = {"name": path.stem, "voxel_size": d.pop("voxel_size"), "occupancy_resolution": d.pop("occupancy_resolution"),
+             "room": None, "obstacles": [], **d, "zones": []}  # the key order of every plan import (plan_scene)
+    scene.update(got)
+    if isinstance(got.get("room"), dict) and "height" not in room:  # a footprint alone: the default ceiling
+        scene["room"] = dict(room, height=height)
+    if filled.get("name"):
+        scene["name"] = filled["name"]
+    if "budget" in filled and isinstance(scene.get("placement"), dict):
+        scene["placement"] = dict(scene["placement"], budget=int(filled["budget"]))
+    cov = int(filled.get("coverage", 2))
+    scene["zones"] = [z if not isinstance(z, dict) or "coverage" in z else dict(z, coverage=cov)
+                      for z in scene.get("zones") or []]
+    return PlanImport(validated(scene, str(path)), kind, used={"format": f"{kind} (plugin importer)"})
 
 
 def polygons_of(geom) -> list[Polygon]:
@@ -297,29 +354,35 @@ def rooms_footprint(rooms: list, walls, gap: float, source: str) -> Polygon:
     return footprint_of(outline_pieces(rooms, walls, gap)[:1], source)
 
 
-def plan_scene(name: str, footprint: Polygon, height: float, obstacles: list[dict], zones: list[dict], *,
-               heights: Iterable[float] | None = None, coverage: int | None = None,
-               budget: int | None = None) -> dict:
-    """A complete scene mapping: the footprint (m) and ceiling ``height`` (m), the given
-    obstacles and zones, walkable volume targets, the default camera on a 1 m ceiling grid."""
+def scene_defaults(height: float, *, heights: Iterable[float] | None = None, coverage: int | None = None,
+                   budget: int | None = None) -> dict:
+    """The keys every plan import gets besides room, obstacles and zones (a room of
+    ``height`` m): voxel and occupancy sizes, walkable volume targets at ``heights`` (those
+    below the ceiling), the default camera on a 1 m ceiling grid, the placement's budget."""
     hs = [float(h) for h in (heights if heights is not None else (0.5, 1.0, 1.5)) if 0 < float(h) < height - 0.1]
     if not hs:
         raise InputError(f"heights: no target height below the ceiling ({height} m)", option="heights")
-    data = {
-        "name": name,
+    return {
         "voxel_size": 0.25,
         "occupancy_resolution": 0.05,
-        "room": {"footprint": _ring(footprint.exterior.coords, 3), "height": round(float(height), 3)},
-        "obstacles": obstacles,
         "targets": [{"name": "walkable", "kind": "volume", "heights": hs,
                      "coverage": int(coverage if coverage is not None else 2)}],
         "cameras": [dict(DEFAULT_CAMERA)],
         "mounts": [{"kind": "ceiling_grid", "camera": "wide", "spacing": 1.0, "offset_below_ceiling": 0.1,
                     "yaw_deg": {"start": 0, "stop": 330, "step": 30}, "pitch_deg": [30, 45, 60]}],
         "placement": {"budget": int(budget if budget is not None else 20), "solver": "greedy"},
-        "zones": zones,
     }
-    return data
+
+
+def plan_scene(name: str, footprint: Polygon, height: float, obstacles: list[dict], zones: list[dict], *,
+               heights: Iterable[float] | None = None, coverage: int | None = None,
+               budget: int | None = None) -> dict:
+    """A complete scene mapping: the footprint (m) and ceiling ``height`` (m), the given
+    obstacles and zones, and the defaults of every plan import (scene_defaults)."""
+    d = scene_defaults(height, heights=heights, coverage=coverage, budget=budget)
+    room = {"footprint": _ring(footprint.exterior.coords, 3), "height": round(float(height), 3)}
+    return {"name": name, "voxel_size": d.pop("voxel_size"), "occupancy_resolution": d.pop("occupancy_resolution"),
+            "room": room, "obstacles": obstacles, **d, "zones": zones}
 
 
 def validated(data: dict, source: str) -> dict:

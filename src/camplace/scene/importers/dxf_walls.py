@@ -178,9 +178,18 @@ def door_leaves(lines: list, arcs: list) -> np.ndarray:
 def encloses_room(solid) -> bool:
     """True when wall solids (m) enclose a free area of at least MIN_ROOM_FACE_M2 that is
     wider on average than a wall (a room, not the strip between two faces)."""
+    return rooms_closed(solid) > 0
+
+
+def rooms_closed(solid, bridge: float = 0.0) -> int:
+    """How many free areas wall solids (m) enclose, each at least MIN_ROOM_FACE_M2 and
+    wider on average than a wall, once gaps up to ``bridge`` m (doorways) are closed."""
+    if bridge > 0 and not solid.is_empty:
+        d = bridge / 2
+        solid = shapely.union_all([solid, solid.buffer(d, join_style="mitre").buffer(-d, join_style="mitre")])
     filled = shapely.union_all([Polygon(q.exterior) for q in polygons_of(solid)] or [Polygon()])
-    return any(q.area >= MIN_ROOM_FACE_M2 and 2 * q.area > PAIR_M[1] * q.length
-               for q in polygons_of(filled.difference(solid)))
+    return sum(1 for q in polygons_of(filled.difference(solid))
+               if q.area >= MIN_ROOM_FACE_M2 and 2 * q.area > PAIR_M[1] * q.length)
 
 
 def wall_layers_by_geometry(stats: dict[str, LayerPairs],
@@ -246,22 +255,19 @@ def is_wall_fill(poly: Polygon) -> bool:
     return poly.area > 0 and 2 * poly.area <= MAX_WALL_WIDTH_M * poly.length
 
 
-def main_building(pieces: list, weights: list[float], gap: float = BUILDING_GAP_M) -> tuple[Polygon, np.ndarray]:
-    """(region, kept) of the building: pieces (m; walls, glass, columns) closer than
-    ``gap`` join one cluster; the cluster of the most ``weights`` (wall area) is the
-    building. ``region``: its pieces grown by gap / 2, holes filled; ``kept[k]``: piece
-    k is in it."""
+def building_clusters(pieces: list, weights: list[float], gap: float = BUILDING_GAP_M
+                      ) -> tuple[list[Polygon], np.ndarray, np.ndarray]:
+    """(clusters, cluster of each piece, each cluster's total weight): pieces (m; walls,
+    glass, columns) closer than ``gap`` join one cluster, its pieces grown by gap / 2."""
     if not pieces:
-        return Polygon(), np.zeros(0, bool)
+        return [], np.zeros(0, int), np.zeros(0)
     arr = np.asarray(pieces, dtype=object)
     blobs = polygons_of(shapely.union_all(shapely.buffer(arr, gap / 2)))
     tree = shapely.STRtree(np.asarray(blobs, dtype=object))
     inside = tree.query(shapely.point_on_surface(arr), predicate="within")
     blob_of = np.zeros(len(pieces), int)
     blob_of[inside[0]] = inside[1]
-    total = np.bincount(blob_of, weights=np.asarray(weights, float), minlength=len(blobs))
-    best = int(np.argmax(total))
-    return Polygon(blobs[best].exterior), blob_of == best
+    return blobs, blob_of, np.bincount(blob_of, weights=np.asarray(weights, float), minlength=len(blobs))
 
 
 def fill_gap(walls, opening, reach: float, touch: float = 0.1):

@@ -22,22 +22,27 @@ from collections import Counter
 from dataclasses import replace
 from pathlib import Path
 
+import numpy as np
 import shapely
 
 from camplace.core.errors import InputError
 from camplace.scene.importers import (UNITS_M, PlanImport, clean_polygons, plan_scene, prism_obstacles, room_zones,
                                       validated)
+from camplace.scene.importers.ifc_checks import check_footprint, check_free_floor, nothing_found
 from camplace.scene.importers.ifc_geometry import (Element, element_shapes, footprint_shapes, plan_hull, plan_shape,
                                                    z_bands)
 from camplace.scene.importers.ifc_model import (Storey, Structure, length_scale, occupiable, open_model, room_labels,
                                                 structure, unit_words)
 from camplace.scene.importers.ifc_storey import (CEILINGS, FLOOR_MAKERS, FLOOR_TOL_M, WALLS, StoreyRooms,
                                                  ceiling_of, choose_storeys, floor_level, storey_footprint)
+from camplace.scene.importers.ifc_openings import STAIRS, VOID, floor_openings
+from camplace.scene.importers.ifc_walls import NEVER_WALLS, storey_walls, wall_class_names
 
-OPTIONS = ("storey", "doors", "glass", "max_wall_gap")
+OPTIONS = ("storey", "doors", "glass", "max_wall_gap", "wall_classes")
 OCCLUDERS = ("IfcElement",)  # walls, slabs, columns, stairs, furniture, proxies, equipment... (IFC2X3 to IFC4X3)
 NOT_ELEMENTS = ("IfcFeatureElement", "IfcVirtualElement", "IfcElementComponent")  # openings, virtual, fasteners
 NOT_FLOORS = ("ROOF", "LANDING")  # slab types that are never a storey's floor
+CEILING_COVERINGS = ("CEILING", "NOTDEFINED", "USERDEFINED", "", "ROOFING")  # coverings that may be a ceiling or roof
 STAY_DOWN = ("IfcFurnishingElement", "IfcDoor", "IfcWindow", "IfcCovering", "IfcDistributionElement")  # never reach up
 
 
@@ -69,8 +74,9 @@ def _space_storey(s: Structure, el: Element) -> int:
     return max(under, key=lambda st: st.elevation).key if under else s.storeys[0].key
 
 
-def _storey_rooms(model, s: Structure, spaces: list[Element]) -> tuple[dict, dict, dict]:
-    """(storey key -> StoreyRooms, space id -> storey key, space id -> zone name)."""
+def _storey_rooms(model, s: Structure, spaces: list[Element], named: tuple[str, ...] = ()) -> tuple[dict, dict, dict]:
+    """(storey key -> StoreyRooms, space id -> storey key, space id -> zone name); ``named``:
+    the classes a user named walls (wall_classes)."""
     where = {e.eid: _space_storey(s, e) for e in spaces}
     ents = {e.eid: model.by_id(e.eid) for e in spaces}
     labels: dict[int, str] = {}
@@ -78,7 +84,7 @@ def _storey_rooms(model, s: Structure, spaces: list[Element]) -> tuple[dict, dic
         labels.update(room_labels([ents[i] for i, k in where.items() if k == key]))
     occluders = _occluder_entities(model)
     counts = Counter(s.storey_key(e.id()) for e in occluders)
-    makers = Counter(s.storey_key(e.id()) for e in occluders if any(e.is_a(c) for c in WALLS) or (
+    makers = Counter(s.storey_key(e.id()) for e in occluders if any(e.is_a(c) for c in WALLS + named) or (
         e.is_a("IfcSlab") and str(getattr(e, "PredefinedType", "") or "") not in NOT_FLOORS))
     rooms = {st.key: StoreyRooms([(labels[e.eid], plan_shape(e).area, occupiable(ents[e.eid], labels[e.eid]))
                                   for e in spaces if where[e.eid] == st.key], counts.get(st.key, 0),
@@ -149,6 +155,27 @@ def _check(doors: str, glass: str, max_wall_gap: float, units: str | None, wall_
                          option="wall_height")
 
 
+def _class_list(wall_classes) -> tuple[str, ...]:
+    """The class names of the wall_classes option: a list, or one text 'A,B'."""
+    items = wall_classes.split(",") if isinstance(wall_classes, str) else list(wall_classes or ())
+    return tuple(str(c).strip() for c in items if str(c).strip())
+
+
+def _roles(model, s: Structure, ents: list, named: tuple[str, ...]) -> tuple[dict, set, set]:
+    """(entity id -> (class, predefined type, the ``named`` classes it is an instance of),
+    ids of roofs (IfcRoof, ROOF slabs, a roof's parts), ids of elements that may be walls by
+    their shape (not WALLS, not NEVER_WALLS, not a part of one: a stair's stringers))."""
+    kinds = {e.id(): (e.is_a(), str(getattr(e, "PredefinedType", "") or ""), tuple(c for c in named if e.is_a(c)))
+             for e in ents}
+    roofs = {e.id() for e in ents if e.is_a("IfcRoof") or kinds[e.id()][:2] in (("IfcSlab", "ROOF"),
+                                                                              ("IfcCovering", "ROOFING"))
+             or s.parent.get(e.id()) and model.by_id(s.parent[e.id()]).is_a("IfcRoof")}
+    never = WALLS + NEVER_WALLS
+    may_be = {e.id() for e in ents if not any(e.is_a(c) for c in never)
+              and not (s.parent.get(e.id()) and any(model.by_id(s.parent[e.id()]).is_a(c) for c in never))}
+    return kinds, roofs, may_be
+
+
 class _Model:
     """An opened IFC file: its structure, unit factor and the bodies tessellated so far."""
 
@@ -156,6 +183,7 @@ class _Model:
         self.path, self.model = path, open_model(path)
         scale = length_scale(self.model)
         self.factor = UNITS_M[units] / scale if units is not None else 1.0
+        self.metres_per_unit = scale * self.factor
         self.units = (f"{units} (units option; the file says {unit_words(self.model, scale)})" if units is not None
                       else unit_words(self.model, scale))
         self.s = structure(self.model, scale * self.factor)
@@ -201,18 +229,22 @@ def import_storeys(path: str | Path, **options) -> list[tuple[str, dict]]:
 def read_storeys(path: str | Path, *, storey: str | None = None, doors: str = "open", glass: str = "opaque",
                  max_wall_gap: float = 0.6, name: str | None = None, units: str | None = None,
                  wall_height: float | None = None, ceiling_height: float | None = None, heights=None,
-                 coverage: int | None = None, budget: int | None = None) -> list[tuple[str, PlanImport]]:
+                 coverage: int | None = None, budget: int | None = None,
+                 wall_classes=None) -> list[tuple[str, PlanImport]]:
     """(storey name, what was understood) of each storey imported: the one named ``storey``,
     every storey with rooms for 'all', else the one a user plans (choose_storeys).
     ``units`` overrides the file's length unit; ``max_wall_gap`` (m): the thickest wall
-    between two spaces that the footprint closes over."""
+    between two spaces that the footprint closes over; ``wall_classes``: IFC classes
+    (names, or one text 'A,B') whose elements are walls, beside IfcWall and the elements
+    shaped like walls (ifc_walls)."""
     p = Path(path)
     _check(doors, glass, max_wall_gap, units, wall_height)
     m = _Model(p, units)
+    named = wall_class_names(m.model, _class_list(wall_classes)) if wall_classes else ()
     s, skipped = m.s, Counter()
     spaces = m.shapes(list(m.model.by_type("IfcSpace")), skipped)
     m.with_floors(spaces, spaces=True)
-    rooms, where, labels = _storey_rooms(m.model, s, spaces)
+    rooms, where, labels = _storey_rooms(m.model, s, spaces, named)
     chosen, why = choose_storeys(s, rooms, storey, p)
     own = {st.key for st in chosen} | {0}
     below = {s.below(st).key for st in chosen if s.below(st) is not None} - own
@@ -227,9 +259,14 @@ def read_storeys(path: str | Path, *, storey: str | None = None, doors: str = "o
     elements = m.shapes(ents, skipped)
     m.with_floors(elements)
     chosen = [next(x for x in s.storeys if x.key == st.key) for st in chosen]
-    kinds = {e.id(): (e.is_a(), str(getattr(e, "PredefinedType", "") or "")) for e in ents}
+    kinds, roofs, may_be = _roles(m.model, s, ents, named)
+    levels = {x.key: x.elevation for x in s.storeys}
     opts = dict(doors=doors, glass=glass, gap=max_wall_gap, name=name, heights=heights, coverage=coverage,
-                budget=budget, ceiling=ceiling_height, several=len(chosen) > 1, why=why)
+                budget=budget, ceiling=ceiling_height, several=len(chosen) > 1, why=why, named=named, roofs=roofs,
+                may_be=may_be, given=storey not in (None, "all"),
+                others=[x.name for x in s.storeys if rooms.get(x.key, StoreyRooms([], 0)).elements],
+                spaces=[(e, levels.get(where[e.eid], float("nan"))) for e in spaces],
+                model_m2=_plan_extent(elements + spaces))
     out = []
     for st in chosen:
         own = [e for e in spaces if where[e.eid] == st.key]
@@ -249,17 +286,27 @@ def _storey(m: _Model, st: Storey, spaces: list[Element], elements: list[Element
     keys = {st.key, 0} | ({below.key} if below else set())
     mine = [e for e in elements if s.synthetic or s.storey_key(e.eid) in keys]
     floor = st.elevation
-    ceilings = [e for e in elements if e.ifc_class in CEILINGS and kinds[e.eid][1] != "FLOORING"
+    ceilings = [e for e in elements if e.ifc_class in CEILINGS and (e.ifc_class != "IfcCovering" or kinds[e.eid][1]
+                                                                   in CEILING_COVERINGS)
                 and (s.synthetic or s.storey_key(e.eid) in keys | ({up.key} if up else set()))]
-    walls = [e for e in mine if e.ifc_class in WALLS]
+    walls, by_hand, by_shape = storey_walls(mine, kinds, floor, opts["gap"], opts["named"], spaces, opts["may_be"])
     height, h_from = ((opts["ceiling"], "ceiling_height option") if opts["ceiling"] is not None else
-                      ceiling_of(floor, up.elevation if up else None, ceilings, spaces, walls))
+                      ceiling_of(floor, up.elevation if up else None, ceilings, spaces, walls, opts["roofs"]))
     top = floor + height
     floors = [e for e in mine if (e.ifc_class == "IfcSlab" and kinds[e.eid][1] not in NOT_FLOORS
-                                  or kinds[e.eid] == ("IfcCovering", "FLOORING"))
+                                  or kinds[e.eid][:2] == ("IfcCovering", "FLOORING"))
               and abs(e.z_range[1] - floor) <= FLOOR_TOL_M]
     where = f"{p}: storey '{st.name}'" if not s.synthetic else f"{p}: the building '{st.name}'"
-    fp = storey_footprint(spaces, floors, walls, floor, height, opts["gap"], where)
+    others = [n for n in opts["others"] if n != st.name]
+    own = [e for e in mine if s.synthetic or s.storey_key(e.eid) in (st.key, 0)]
+    if own or spaces:  # a wrong unit shrinks walls below a wall's height, rooms below a room's area: say it first
+        extent = shapely.box(*shapely.union_all([plan_hull(e) for e in own + spaces]).bounds)
+        check_footprint(extent, "elements' extent", where, m.units, m.metres_per_unit, opts["model_m2"], others)
+    own = [e for e in own if e.z_range[1] > floor + 0.05 and e.z_range[0] < top]
+    hint, fix = nothing_found(own, opts["may_be"], others, opts["given"])
+    fp = storey_footprint(spaces, floors, walls, floor, height, opts["gap"], where, hint, fix)
+    check_footprint(fp.polygon, f"footprint (from {fp.how})", where, m.units, m.metres_per_unit, opts["model_m2"],
+                    others)
     skip = {"IfcDoor"} if opts["doors"] == "open" else set()
     skip |= {"IfcWindow"} if opts["glass"] == "transparent" else set()
     lying = {e.eid for e in floors}  # floor slabs and finishes: the floor itself, not obstacles
@@ -268,6 +315,7 @@ def _storey(m: _Model, st: Storey, spaces: list[Element], elements: list[Element
     obstacles, used = _obstacles(blockers, floor, top, fp.polygon, p.name, skipped)
     obstacles += prism_obstacles(fp.seams, 0.0, height, "outside", {"file": p.name, "class": "outside"},
                                  skipped=skipped)
+    check_free_floor(fp.polygon, obstacles, where, others)
     inside = [e for e in spaces if plan_shape(e).intersection(fp.polygon).area > 0.5 * plan_shape(e).area]
     skipped["IfcSpace outside the footprint"] += len(spaces) - len(inside)
     coverage = opts["coverage"] if opts["coverage"] is not None else 2
@@ -279,6 +327,13 @@ def _storey(m: _Model, st: Storey, spaces: list[Element], elements: list[Element
     got = PlanImport(validated(data, f"{p} (storey '{st.name}')"), "ifc")
     got.skipped = Counter({k: v for k, v in skipped.items() if v})
     got.openings = _openings(mine, floor, top)
+    if below is not None:
+        lower = [e for e, z in opts["spaces"] if z < floor - FLOOR_TOL_M]
+        stairs = [e for e in mine if e.ifc_class in STAIRS]
+        voids = [e for e in spaces if VOID.search(labels[e.eid])]
+        got.floor_openings, found = floor_openings(fp.polygon, floor, floors, walls, stairs, lower, voids)
+    else:
+        found = {}
     said = {"lowest space": "the lowest point of its spaces", "doors and walls": "where most of its doors and walls "
             "stand", "nothing: 0": "it has no spaces, doors or walls to say it"}
     got.notes = [opts["why"]] + ([f"the file gives '{st.name}' no floor level: taken at z = {floor:.2f} m "
@@ -299,10 +354,33 @@ def _storey(m: _Model, st: Storey, spaces: list[Element], elements: list[Element
         "rooms": (f"{len(inside)} IfcSpace, zones named by LongName (else Name)" if inside else
                   f"no IfcSpace: one zone '{zones[0]['name']}' over the footprint"),
         "elements": ", ".join(f"{c} {n}" for c, n in sorted(used.items(), key=lambda t: (-t[1], t[0]))),
+        "walls": _wall_words([e for e in walls if e.z_range[1] > floor + 0.05 and e.z_range[0] < top], by_hand,
+                             by_shape),
+        "floor openings": (f"{len(got.floor_openings)} open to the storey below"
+                           + (f" ({', '.join(f'{k} {n}' for k, n in found.items() if n)})" if got.floor_openings
+                              else "") if below is not None else "none: the lowest storey"),
         "doors": f"{opts['doors']}: {n_doors} IfcDoor " + ("left out (open)" if opts["doors"] == "open" else "block"),
         "glass": f"{opts['glass']}: {n_glass} IfcWindow " + ("occlude" if opts["glass"] == "opaque" else "left out"),
     }
     return got
+
+
+def _plan_extent(elements: list[Element]) -> float:
+    """The area (m²) of the plan bounding box of ``elements`` (0 for none)."""
+    if not elements:
+        return 0.0
+    lo = np.min([e.vertices[:, :2].min(axis=0) for e in elements], axis=0)
+    hi = np.max([e.vertices[:, :2].max(axis=0) for e in elements], axis=0)
+    return float(np.prod(hi - lo))
+
+
+def _wall_words(walls: list[Element], by_hand: Counter, by_shape: Counter) -> str:
+    """The summary's walls line: classes with counts, and which came by hand or by shape."""
+    plain = Counter(e.ifc_class for e in walls) - by_hand - by_shape
+    words = [f"{c} {n}" for c, n in plain.most_common()]
+    words += [f"{c} {n} (wall_classes)" for c, n in by_hand.most_common()]
+    words += [f"{c} {n} (shaped like walls)" for c, n in by_shape.most_common()]
+    return ", ".join(words) or "none"
 
 
 def storey_elevations(path: str | Path, units: str | None = None) -> dict[str, float]:

@@ -6,7 +6,8 @@ An element belongs to the storey its chain of relations leads to: contained in a
 spatial element (IfcRelContainedInSpatialStructure), part of an aggregate
 (IfcRelAggregates: a stair flight of its stair, a space of its storey), a door or window
 filling an opening (IfcRelFillsElement) voiding a wall (IfcRelVoidsElement), furniture
-contained in a space. One pass over the relations (no per-element lookups).
+contained in a space, a covering of a space or an element (IfcRelCoversSpaces,
+IfcRelCoversBldgElements). One pass over the relations (no per-element lookups).
 """
 
 from __future__ import annotations
@@ -146,6 +147,13 @@ def _parents(model) -> dict[int, int]:
         parent.setdefault(rel.RelatedBuildingElement.id(), rel.RelatingOpeningElement.id())
     for rel in rels("IfcRelVoidsElement"):
         parent.setdefault(rel.RelatedOpeningElement.id(), rel.RelatingBuildingElement.id())
+    for rel in rels("IfcRelCoversSpaces"):  # a ceiling covering of a space (IFC4 RelatingSpace, IFC2X3 RelatedSpace)
+        space = getattr(rel, "RelatingSpace", None) or getattr(rel, "RelatedSpace", None)
+        for o in (rel.RelatedCoverings or ()) if space is not None else ():
+            parent.setdefault(o.id(), space.id())
+    for rel in rels("IfcRelCoversBldgElements"):  # a covering of a slab or wall
+        for o in rel.RelatedCoverings or ():
+            parent.setdefault(o.id(), rel.RelatingBuildingElement.id())
     for rel in rels("IfcRelNests"):
         for o in rel.RelatedObjects or ():
             parent.setdefault(o.id(), rel.RelatingObject.id())
@@ -184,8 +192,9 @@ def unique_names(names: list[str], suffixes: list[str]) -> list[str]:
 
 def structure(model, scale: float) -> Structure:
     """The model's storeys and element -> storey map (elevations in m: the storey's placement z,
-    world, like the geometry; its Elevation attribute where placements are missing or all
-    equal while the attributes differ; neither: nan, left to the geometry). A file without
+    world, like the geometry; its Elevation attribute, above its building's placement, where
+    placements are missing or all equal while the attributes differ; neither: nan, left to
+    the geometry). A file without
     IfcBuildingStorey: one storey per IfcBuilding (one for the file without one), its
     elevation left to the geometry."""
     parent = _parents(model)
@@ -197,7 +206,10 @@ def structure(model, scale: float) -> Structure:
                zip(unique_names([name for _, name in stand], [str(k) for k, _ in stand]), stand)]
         return Structure(sts, parent, True, buildings)
     placed = [_placement_z(s, scale) for s in ents]
-    attrs = [None if s.Elevation is None else float(s.Elevation) * scale for s in ents]
+    # Elevation is above the building's own 0.00 (its placement): world z = the building's z + Elevation
+    base = {b.id(): _placement_z(b, scale) or 0.0 for b in model.by_type("IfcBuilding")}
+    attrs = [None if s.Elevation is None else float(s.Elevation) * scale
+             + base.get(_building_of(s.id(), parent, set(buildings)), 0.0) for s in ents]
     use_attr = (any(z is None for z in placed) or (len(set(round(z, 4) for z in placed)) < len(placed)
                                                     and len(set(a for a in attrs if a is not None)) > 1))
     sts = []

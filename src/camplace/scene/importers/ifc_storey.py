@@ -110,27 +110,51 @@ def floor_level(elements: list[Element]) -> float:
     return float(min((e.z_range[0] for e in elements), default=0.0))
 
 
-def ceiling_of(floor: float, nxt: float | None, ceilings: list[Element], spaces: list[Element],
-               walls: list[Element]) -> tuple[float, str]:
-    """The storey's clear height (m above ``floor``) and where it came from: the lowest
-    underside of the slabs / roofs / ceiling coverings at one level (5 cm) that together cover a
-    quarter of its spaces, at least
-    MIN_CEILING_M up, else the next storey's elevation ``nxt``, else the top of its spaces,
-    else the height most of its walls reach, else DEFAULT_CEILING_M."""
-    area = shapely.union_all([plan_shape(e) for e in spaces]) if spaces else Polygon()
+def _lowest_level(floor: float, nxt: float | None, elements: list[Element], area) -> tuple[float, list] | None:
+    """(height above ``floor``, elements) of the lowest level (5 cm) of the undersides of
+    ``elements`` at least MIN_CEILING_M up (and not above ``nxt``) that together lie over a
+    quarter of ``area`` (the storey's spaces; empty: any); None when there is none."""
     levels: dict[float, list[Element]] = {}
-    for e in ceilings:
+    for e in elements:
         z = e.z_range[0] - floor
         if z >= MIN_CEILING_M and (nxt is None or e.z_range[0] <= nxt + 1e-6):
             levels.setdefault(round(z / 0.05) * 0.05, []).append(e)
-    for z in sorted(levels):  # the lowest level whose elements together cover a quarter of the spaces
+    for z in sorted(levels):
         els = levels[z]
         if area.is_empty or shapely.union_all([plan_shape(e) for e in els]).intersection(area).area > 0.25 * area.area:
-            return min(e.z_range[0] for e in els) - floor, f"{els[0].ifc_class} underside"
+            return min(e.z_range[0] for e in els) - floor, els
+    return None
+
+
+def ceiling_of(floor: float, nxt: float | None, ceilings: list[Element], spaces: list[Element],
+               walls: list[Element], roofs: set[int] = frozenset()) -> tuple[float, str]:
+    """The storey's clear height (m above ``floor``) and where it came from, first found of:
+    the ceiling coverings (IfcCovering) over the rooms; the slabs above (the lowest level,
+    5 cm, of undersides at least MIN_CEILING_M up that together lie over a quarter of its
+    spaces), unless its spaces' tops are lower; the top of its spaces; only then the roof
+    (``roofs``: entity ids of IfcRoof, ROOF slabs, ROOFING coverings, a roof's parts): a mono-pitch roof's
+    eave says nothing where a covering or a space says the height; the next storey's
+    elevation ``nxt``; the height most of its walls reach; DEFAULT_CEILING_M."""
+    area = shapely.union_all([plan_shape(e) for e in spaces]) if spaces else Polygon()
+    tops = [e.z_range[1] - floor for e in spaces]
+    top = min(max(tops), nxt - floor) if tops and nxt is not None else max(tops) if tops else 0.0
+    space_top = top if top >= MIN_CEILING_M else None
+    covers = _lowest_level(floor, nxt, [e for e in ceilings if e.ifc_class == "IfcCovering" and e.eid not in roofs],
+                           area)
+    if covers:
+        return covers[0], f"IfcCovering underside over {'the rooms' if spaces else 'the storey'}"
+    slabs = _lowest_level(floor, nxt, [e for e in ceilings if e.ifc_class != "IfcCovering" and e.eid not in roofs],
+                          area)
+    if slabs and (space_top is None or slabs[0] <= space_top + 1e-6):
+        return slabs[0], f"{slabs[1][0].ifc_class} underside"
+    if space_top is not None:
+        return space_top, "top of the spaces" + (", not the roof: a roof counts only where no covering or space "
+                                                 "says the height" if any(e.eid in roofs for e in ceilings) else "")
+    roof = _lowest_level(floor, nxt, [e for e in ceilings if e.eid in roofs], area)
+    if roof:
+        return roof[0], f"{roof[1][0].ifc_class} underside: a roof, as no ceiling covering or space says the height"
     if nxt is not None:
         return nxt - floor, "next storey's elevation"
-    if spaces and max(e.z_range[1] for e in spaces) - floor >= MIN_CEILING_M:
-        return max(e.z_range[1] for e in spaces) - floor, "top of the spaces"
     tops = Counter(round(e.z_range[1] - floor, 2) for e in walls if e.z_range[1] - floor >= MIN_CEILING_M)
     if tops:
         return float(tops.most_common(1)[0][0]), "height of most walls"
@@ -158,12 +182,13 @@ def join_pieces(pieces: list[Polygon], width: float = SEAM_M) -> tuple[Polygon, 
 
 
 def storey_footprint(spaces: list[Element], floors: list[Element], walls: list[Element], floor: float,
-                     height: float, gap: float, where: str) -> Footprint:
+                     height: float, gap: float, where: str, hint: str = "", option: str | None = None) -> Footprint:
     """The footprint of a storey, the building's outline at the outer faces of its outer
     walls: its spaces merged with the walls that bound them (outline_pieces; walls up to
     ``gap`` m thick); else its floor slabs (top within FLOOR_TOL_M of ``floor``) with those
     walls; else the outline of its walls above the floor (walls_outline). Separate pieces
-    are joined by seams. InputError naming ``where`` when the storey has none of these."""
+    are joined by seams. InputError naming ``where`` when the storey has none of these (``hint``:
+    what it holds and the fix, ``option`` the option that fixes it)."""
     shapes = [q for q in (plan_shape(e) for e in walls  # the walls reaching above the floor (not the footings)
                           if min(e.z_range[1], floor + height) - max(e.z_range[0], floor + 0.05) > 0)
               if not q.is_empty]
@@ -179,4 +204,4 @@ def storey_footprint(spaces: list[Element], floors: list[Element], walls: list[E
     if shapes:
         return Footprint(walls_outline(wall_plan), Polygon(), 1,
                          f"outline of {len(shapes)} walls above the floor (no IfcSpace, no floor slab)")
-    raise InputError(f"{where} has no spaces, floor slab or walls to make a footprint of", option="storey")
+    raise InputError(f"{where} has no IfcSpace, floor slab or wall to make a footprint of{hint}", option=option)

@@ -18,6 +18,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import ndimage
 
+from camplace.scene.importers.area_text import is_tatami
 from camplace.scene.importers.image_text import line_tile, restore_point
 from camplace.scene.importers.image_walls import EIGHT
 
@@ -194,9 +195,9 @@ def printed_area(text: str) -> float | None:
     """The area (m²) a label like '14,43 m²', '14.4 m2' or '25,50' states; None otherwise
     (a number needs a unit or a decimal comma with two digits to be an area; where the
     comma was not read, '14 43 m²', two digits after the space; with two decimals a
-    small 'm²' may be misread, '12 25 4?')."""
+    small 'm²' may be misread, '12 25 4?'); never a tatami count (area_text.is_tatami)."""
     m = AREA_RE.match(text.strip())
-    if not m:
+    if not m or is_tatami(text):
         return None
     decimals = m.group(2) or m.group(3)
     if not (m.group(4) or len(decimals) == 2):
