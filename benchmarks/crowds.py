@@ -14,7 +14,7 @@ camplace.metrics.crowd, and on the empty store (the cost each pays there). Write
 JSON object to stdout (``--out FILE``: also to FILE) and a markdown table to stderr.
 
     python benchmarks/crowds.py [--scene standard-store] [--budget 40] [--densities 0.3,1.0]
-        [--solvers greedy,tabu] [--time-limit 60] [--samples 16] [--score-samples 32]
+        [--solvers greedy,tabu] [--time-limit 60] [--samples 64] [--score-samples 32]
         [--workers N | --scheduler tcp://HOST:PORT] [--timing-only] [--refine SECONDS]
 
 ``--refine SECONDS``: the CLI's default path instead — ``camplace.run`` with the solver and
@@ -137,7 +137,7 @@ def main() -> None:
     ap.add_argument("--densities", default="0.3,1.0")
     ap.add_argument("--solvers", default="greedy,tabu")
     ap.add_argument("--time-limit", type=float, default=60.0)
-    ap.add_argument("--samples", type=int, default=16)
+    ap.add_argument("--samples", type=int, default=64)
     ap.add_argument("--score-samples", type=int, default=32)
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--out", default=None)
