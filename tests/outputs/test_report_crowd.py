@@ -43,3 +43,28 @@ def test_report_shows_the_crowd():
                          cov[0], gamma, rid, ["walk"], extra_html=cr.section, extra_figures=cr.figures,
                          extra_traces=cr.traces, dated=False)
     assert "id='crowdmap'" in page and '"crowdmap":' in page and "people (one crowd sample, 2)" in page
+
+
+def test_the_map_shows_the_chance_a_person_standing_there_is_triangulatable():
+    from dataclasses import replace
+
+    from camplace.metrics.crowd import people_metrics
+
+    xs, ys = np.meshgrid(np.arange(4) + 0.5, np.arange(3) + 0.5)
+    pos = np.c_[xs.ravel(), ys.ravel(), np.full(12, 1.5)]
+    cm = crowd_metrics(np.full(12, 2), np.ones(12), np.full((1, 12), 2), np.zeros(12, np.int32), ["walk"],
+                       np.zeros((0, 2)), 0.25, 1.75, {"density": 0.5, "zones": {}, "radius": 0.25, "height": 1.75,
+                                                      "seed": 0, "samples": 1, "persons": {"mean": 3.0}},
+                       report_height=1.5)
+    people = people_metrics(np.array([2, 1, 3]), np.zeros(3, np.int64), 1, np.zeros(3), ["walk"], 2, [1.25, 1.6])
+    cm = replace(cm, summary=dict(cm.summary, people=people), p_person=np.linspace(0.0, 1.0, 12))
+    view = SceneView("room", np.array([[0, 0], [4, 0], [4, 3], [0, 3]], float), 3.0, 1.0)
+
+    class T:
+        positions, is_surface = pos, np.zeros(12, bool)
+
+    cr = crowd_report(view, T, cm, {"regions": {}}, [])
+    fig = cr.figures["crowdmap"]
+    assert "a person standing here" in fig["layout"]["title"]["text"]
+    assert fig["data"][0]["z"][0][0] == 0.0 and fig["data"][0]["z"][-1][-1] == 1.0
+    assert "all people" in cr.section and "66.7 %" in cr.section  # 2 of the 3 people seen by >= 2

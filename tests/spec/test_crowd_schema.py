@@ -24,11 +24,12 @@ def scene(crowd, zones=()) -> dict:
 def test_defaults_and_overrides():
     c = parse_scene(scene({})).crowd
     assert (c.density, c.radius, c.height, c.samples, c.score_samples, c.seed, c.optimise) == \
-        (0.3, 0.25, 1.75, 16, 32, 0, False)
+        (0.3, 0.25, 1.75, 64, 32, 0, False)
+    assert (c.people_heights, c.people_gamma, c.people_weight, c.steep_pitches) == ([1.25, 1.6], 2, 0.7, [75.0, 90.0])
     assert parse_scene(copy.deepcopy(BASE)).crowd is None
     assert crowd_with(None, {}) is None and crowd_with(None, {"density": None}) is None
     o = crowd_with(c, {"density": 1.0, "optimise": True})
-    assert o.density == 1.0 and o.optimise and o.samples == 16
+    assert o.density == 1.0 and o.optimise and o.samples == 64
     assert crowd_with(None, {"seed": 3}).density == 0.3  # a scene without crowd: the defaults
 
 
@@ -56,3 +57,20 @@ def test_bad_overrides_name_their_option():
     with pytest.raises(InputError) as e:
         crowd_with(None, {"samples": 0})
     assert e.value.option == "crowd_samples"
+
+
+def test_people_keys_are_checked():
+    """issue 36: points on the person, a share for the mix, pitches within [0, 90]."""
+    for crowd, key in (({"people_heights": [1.2, 1.9]}, "crowd.people_heights"),
+                       ({"people_heights": []}, "crowd.people_heights"),
+                       ({"people_heights": [1.2, 1.2]}, "crowd.people_heights"),
+                       ({"people_weight": 1.5}, "crowd.people_weight"),
+                       ({"people_gamma": 0}, "crowd.people_gamma"),
+                       ({"steep_pitches": [95]}, "crowd.steep_pitches")):
+        with pytest.raises(InputError, match=key.replace(".", r"\.")):
+            parse_scene(scene(crowd))
+    with pytest.raises(InputError, match="people_weight"):
+        crowd_with(parse_scene(scene({})).crowd, {"people_weight": -0.1})
+    c = parse_scene(scene({"density": 0.5, "optimise": True})).crowd
+    assert c.offers_steep() == (75.0, 90.0)
+    assert crowd_with(c, {"people_weight": 0.0}).offers_steep() == () and crowd_with(c, {"density": 0.0}).offers_steep() == ()

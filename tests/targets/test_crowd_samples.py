@@ -27,7 +27,7 @@ def room():
 
 
 def test_people_stand_on_free_floor_apart_and_as_many_as_asked(room):
-    crowd = CrowdSpec(density=1.0, zones={"queue": 2.0})
+    crowd = CrowdSpec(density=1.0, zones={"queue": 2.0}, samples=16)
     floor = walkable_floor(room, crowd)
     cr = sample_crowds(room, crowd, floor=floor)
     areas = floor.areas()

@@ -57,6 +57,23 @@ def test_density_0_equals_the_run_without_a_crowd(empty_store):
                                                                   empty_store.placement.bound)
 
 
+def test_density_0_with_refinement_equals_the_run_without_a_crowd():
+    """The golden check of issue 36: a crowd-aware run at density 0 offers no steep views,
+    builds no people problem and refines the same poses as the run without a crowd."""
+    d = copy.deepcopy(SCENE)
+    del d["crowd"]
+    plain = run(parse_scene(d), solver="greedy", refine=True, refine_time_s=60.0)
+    zero = run(spec(density=0.0, optimise=True), solver="greedy", refine=True, refine_time_s=60.0)
+    assert plain.placement.info["refine"]["stopped"] == "converged"  # not cut by the clock: comparable
+    assert np.array_equal(plain.placement.selected, zero.placement.selected)
+    assert plain.placement.objective == zero.placement.objective
+    assert np.array_equal(plain.visibility.candidates.positions, zero.visibility.candidates.positions)
+    assert np.array_equal(plain.visibility.candidates.angles_deg, zero.visibility.candidates.angles_deg)
+    assert (plain.visibility.V != zero.visibility.V).nnz == 0
+    c = zero.metrics.crowd.to_dict()["people"]
+    assert c["persons"]["max"] == 0 and c["seen_by_2_pct"]["mean"] == 0.0
+
+
 def test_crowd_aware_is_optimal_on_its_own_crowds(empty_store):
     from camplace.workflows.crowd import crowd_problem
 
@@ -64,12 +81,20 @@ def test_crowd_aware_is_optimal_on_its_own_crowds(empty_store):
     opt = aware.placement.info["crowd"]
     assert aware.placement.status == "optimal" and opt["samples"] == 4
     assert aware.placement.objective == aware.problem.cost(aware.placement.selected)  # the contract: empty-store cost
-    sc, vis = prepare(spec())
+    sc, vis = prepare(spec(), extra_pitches=spec(optimise=True).crowd.offers_steep())  # the run's steep views too
+    assert len(vis.candidates) == len(aware.visibility.candidates)
     cp = crowd_problem(sc, vis, problem_from_visibility(vis, 3), spec().crowd)
-    assert cp.problem.n_targets == 4 * vis.V.shape[1]
+    assert cp.problem.n_targets == vis.V.shape[1] + 2 * int(cp.crowds.counts.sum())  # torso and head of each
     assert abs(cp.problem.cost(aware.placement.selected) - opt["objective"]) < 1e-9
     assert cp.problem.cost(empty_store.placement.selected) >= opt["objective"] - 1e-9
     assert aware.metrics.crowd.to_dict()["optimised"] and not empty_store.metrics.crowd.to_dict()["optimised"]
+
+
+def test_steep_views_are_offered_only_to_a_crowd_aware_run_with_people(empty_store):
+    aware = run(spec(optimise=True), solver="greedy")
+    pitches = lambda r: set(np.round(r.visibility.candidates.angles_deg[:, 1], 6))  # noqa: E731
+    assert {75.0, 90.0} <= pitches(aware) and not {75.0, 90.0} & pitches(empty_store)
+    assert spec(density=0.0, optimise=True).crowd.offers_steep() == ()
 
 
 def test_crowd_aware_refinement_scores_poses_on_the_crowds():
@@ -93,25 +118,36 @@ def test_evaluate_scores_the_same_held_out_crowds(empty_store, tmp_path):
     assert other.metrics.crowd.to_dict()["coverage_gap"] != r.metrics.crowd.to_dict()["coverage_gap"]
 
 
-def test_existing_cameras_are_thinned_by_the_same_crowds():
-    from camplace.problem.crowd import sample_coverage
+def test_existing_cameras_see_the_same_people():
+    """The crowd objective of a run with an existing camera, recomputed by hand from the
+    selected cameras' (existing ones folded in) views of the people: the offset keeps the
+    full mixed cost (module doc of camplace.problem.people)."""
     from camplace.problem.gains import shortfall_cost
     from camplace.targets.crowd import sample_crowds
-    from camplace.visibility.crowd import crowd_rows
+    from camplace.targets.people import people_targets
+    from camplace.visibility.crowd import people_grid
+    from camplace.visibility.people import people_rows
+    from camplace.visibility.voxel import VoxelEngine
 
     d = copy.deepcopy(SCENE)
     d["existing"] = [{"id": "E1", "camera": "cam", "position": [0.5, 0.5, 2.9], "yaw_deg": 45, "pitch_deg": 45}]
     r = run(spec_with(d, optimise=True), solver="greedy")
     opt = r.placement.info["crowd"]
     vis, sel = r.visibility, r.placement.selected  # existing rows folded in and selected
-    crowds = sample_crowds(r.scene, r.scene.spec.crowd)
-    rows = crowd_rows(vis.V[sel], vis.candidates.positions[sel], vis.targets.positions, crowds)
-    cov = sample_coverage(rows, crowds.n_samples, np.arange(len(sel)))
-    t = vis.targets
-    want = np.mean([shortfall_cost(t.gamma, t.weights, c) for c in cov])
-    assert abs(opt["objective"] - want) < 1e-9 * max(1.0, want)  # the offset keeps the full crowd cost
-    assert abs(opt["coverage_gap"] - want / float(np.dot(t.weights, t.gamma ** 2))) < 1e-12
-
+    c = r.scene.spec.crowd
+    crowds = sample_crowds(r.scene, c)
+    people = people_targets(crowds, vis.targets, c.people_heights, c.people_gamma)
+    seen = people_rows(VoxelEngine(), r.scene.occupancy, people, vis.candidates.subset(sel),
+                       people_grid(crowds, np.zeros(2), np.array([6.0, 4.0])))
+    pt, t = people.targets, vis.targets
+    norm = float(np.dot(t.weights, t.gamma ** 2))
+    w_p = pt.weights / crowds.n_samples
+    lam = c.people_weight
+    want = ((1 - lam) * shortfall_cost(t.gamma, t.weights, np.asarray(vis.V[sel].sum(axis=0)).ravel())
+            + lam * norm / float(np.dot(w_p, pt.gamma ** 2))
+            * shortfall_cost(pt.gamma, w_p, np.asarray(seen.sum(axis=0)).ravel()))
+    assert abs(opt["objective"] - want) < 1e-9 * max(1.0, want)
+    assert abs(opt["coverage_gap"] - want / norm) < 1e-12
 
 
 def test_a_ctrl_c_while_sampling_the_crowds_drops_them():

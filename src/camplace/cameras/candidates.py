@@ -245,7 +245,8 @@ def focal_models(cameras: tuple[CameraModel, ...], camera_ids: np.ndarray,
     return cams, ids
 
 
-def stack_candidates(scene: Scene, cameras: dict[str, CameraModel]) -> Candidates:
+def stack_candidates(scene: Scene, cameras: dict[str, CameraModel],
+                     extra_pitches: tuple[float, ...] = ()) -> Candidates:
     """A building's candidates: each storey's (its own mounts and rules, floor at z = 0)
     raised to its elevation, as one set in building z; poses that would hang in the open
     slab under the next storey's floor openings (within OPENING_REACH_M of that storey's
@@ -254,7 +255,7 @@ def stack_candidates(scene: Scene, cameras: dict[str, CameraModel]) -> Candidate
     parts, empty, dropped = [], [], 0
     for k, st in enumerate(scene.storeys):
         try:
-            c = build_candidates(st.scene, cameras)
+            c = build_candidates(st.scene, cameras, extra_pitches)
         except InputError:
             empty.append(st.name)
             continue
@@ -283,13 +284,15 @@ def stack_candidates(scene: Scene, cameras: dict[str, CameraModel]) -> Candidate
 OPENING_REACH_M = 0.5  # a ceiling pose this close below an opening in the floor above has nothing to hang from
 
 
-def build_candidates(scene: Scene, cameras: dict[str, CameraModel]) -> Candidates:
+def build_candidates(scene: Scene, cameras: dict[str, CameraModel],
+                     extra_pitches: tuple[float, ...] = ()) -> Candidates:
     """Every mount of the scene expanded into poses, each pose with every focal setting of
     each camera type the mount carries; poses inside an obstacle or closer than
     ``mount_rules.clearance`` to one are dropped (counted per pose in ``info``). A building:
-    every storey's (stack_candidates)."""
+    every storey's (stack_candidates). ``extra_pitches`` (degrees down) join every mount's
+    own pitches (a crowd-aware run's steep views, camplace.spec.crowd.CrowdSpec.steep_pitches)."""
     if scene.storeys:
-        return stack_candidates(scene, cameras)
+        return stack_candidates(scene, cameras, extra_pitches)
     cam_list, cam_index = lens_settings(cameras)
     pos, ang, cid = [], [], []
     rules = scene.spec.mount_rules
@@ -297,6 +300,8 @@ def build_candidates(scene: Scene, cameras: dict[str, CameraModel]) -> Candidate
     ruled_out = n_all = n_inside = n_close = 0
     for mount in scene.spec.mounts:
         yaws, pitches, rolls = (angle_values(a) for a in (mount.yaw_deg, mount.pitch_deg, mount.roll_deg))
+        if extra_pitches:
+            pitches = sorted(set(pitches) | {float(v) for v in extra_pitches})
         yy, pp, rr = np.meshgrid(yaws, pitches, rolls, indexing="ij")
         a = np.c_[yy.ravel(), pp.ravel(), rr.ravel()]
         ks = [k for name in mount.camera_names for k in cam_index[name]]  # camera types x focal settings
@@ -322,6 +327,8 @@ def build_candidates(scene: Scene, cameras: dict[str, CameraModel]) -> Candidate
     rot = rotation_from_ypr(angles[:, 0], angles[:, 1], angles[:, 2])
     info = {"generated": n_all, "dropped_inside_obstacle": n_inside, "dropped_clearance": n_close,
             "clearance_m": float(rules.clearance)}
+    if extra_pitches:  # the refinement's pitch steps count them too (camplace.improve.refine.pose_box)
+        info["extra_pitches"] = [float(v) for v in extra_pitches]
     if rules.active:
         info.update(mount_positions_ruled_out=ruled_out, explicit_points=None if points is None else len(points))
     return Candidates(positions, rot, angles, camera_ids, location_ids_of(positions), cam_list, info)

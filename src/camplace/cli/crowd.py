@@ -10,7 +10,7 @@ import typer
 DENSITY_OPT = typer.Option(None, "--crowd-density", help="People per m² of walkable floor (the scene's crowd "
                            "density; a scene without crowd: gets one). Adds crowd metrics.")
 SAMPLES_OPT = typer.Option(None, "--crowd-samples", help="Crowd samples a --crowd-aware run optimises over "
-                           "(default 16).")
+                           "(default 64).")
 SCORE_SAMPLES_OPT = typer.Option(None, "--crowd-score-samples", help="Held-out crowd samples the crowd metrics "
                                  "average over (default 32).")
 SEED_OPT = typer.Option(None, "--crowd-seed", help="Seed of the crowd samples (default 0).")

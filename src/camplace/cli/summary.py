@@ -94,6 +94,15 @@ def crowd_rows(m) -> list[tuple[str, str]]:
     rows = [("in a crowd", head), ("  crowd coverage gap", pm(c["coverage_gap"], 4)),
             ("  seen by ≥ Γ in the crowd", pm(c["seen_by_gamma_pct"], 1, " %")),
             ("  triangulatable in the crowd", pm(c["triangulatable_pct"], 1, " %"))]
+    ppl = c.get("people")
+    if ppl:  # issue 36: the people themselves
+        g = ppl["gamma"]
+        rows.append(("  people seen by ≥ 2 cameras", pm(ppl["seen_by_2_pct"], 1, " %")))
+        if g != 2:
+            rows.append((f"  people seen by ≥ {g} cameras", pm(ppl["seen_by_gamma_pct"], 1, " %")))
+        rows += [(f"    people in {name}", f"seen by ≥ 2 {r['seen_by_2_pct']['mean']:.1f} %"
+                                          + (f", ≥ {g} {r['seen_by_gamma_pct']['mean']:.1f} %" if g != 2 else ""))
+                 for name, r in ppl.get("regions", {}).items()]
     for name, r in c.get("regions", {}).items():
         rows.append((f"    region {name}", f"gap {r['coverage_gap']['mean']:.4f}, seen ≥ Γ "
                                              f"{r['seen_by_gamma_pct']['mean']:.1f} %, triangulatable "

@@ -46,11 +46,12 @@ Progress = Callable[[str, int, int], None]
 # A pose guard: (poses (K, 6) x, y, z, yaw, pitch, roll; camera ids (K,)) -> (K,) bool, True = allowed
 # (camplace.visibility.privacy.PrivacyGuard: the pose sees no privacy point)
 PoseGuard = Callable[[np.ndarray, np.ndarray], np.ndarray]
-# A row map: (camera positions (K, 3) m, raycast V rows (K, N_p)) -> the problem's rows of those
-# poses (K, N_p') (None: the raycast rows themselves; a crowd-aware run: the rows thinned by
-# the same crowd samples and stacked, camplace.workflows.crowd)
-RowMap = Callable[[np.ndarray, sp.csr_matrix], sp.csr_matrix]
+# A row map: (the poses as Candidates (K), raycast V rows (K, N_p)) -> the problem's rows of those
+# poses (K, N_p') (None: the raycast rows themselves; a crowd-aware run: the rows with the
+# poses' views of the people in the same crowd samples, camplace.workflows.crowd)
+RowMap = Callable[[Candidates, sp.csr_matrix], sp.csr_matrix]
 HALF = 0.499  # stay strictly inside half a step so neighbouring grid points never meet
+WALL_Z_STEP, WALL_Z_LOW, WALL_Z_TOP = 1.0, 1.0, 0.1  # m: a crowd-aware run's wall cameras move in height (issue 36)
 FOCAL = 6  # column of the focal length (mm) in a refined pose (x, y, z, yaw, pitch, roll, focal_mm); issue 27
 
 
@@ -93,7 +94,10 @@ def mount_of(spec: SceneSpec, camera_name: str, z: float) -> Mount | None:
 def pose_box(scene: Scene, candidates: Candidates, i: int, fraction: float = HALF) -> PoseBox:
     """The search box of candidate i: ``fraction`` of its mount's grid spacing and angle
     steps around it. Wall-mount cameras stay at their wall point and only turn; a pose
-    not from any mount may only turn, by 15° / 7.5°."""
+    not from any mount may only turn, by 15° / 7.5°. The pitch steps are those of the mount's
+    pitches and of the candidates' ``info['extra_pitches']`` (a crowd-aware run's steep views);
+    in such a run a wall camera may also move up or down its wall by ``fraction`` of
+    WALL_Z_STEP (between WALL_Z_LOW above the floor and WALL_Z_TOP below the ceiling)."""
     cam = candidates.cameras[int(candidates.camera_ids[i])]
     p = candidates.positions[i]
     centre = np.r_[p, candidates.angles_deg[i]]
@@ -107,7 +111,10 @@ def pose_box(scene: Scene, candidates: Candidates, i: int, fraction: float = HAL
         region = scene.polygon
     else:
         s = 0.0 if getattr(m, "kind", "ceiling_grid") == "wall" else float(m.spacing)  # wall cameras only turn
-        half = np.array([s, s, 0.0, angle_step(m.yaw_deg), angle_step(m.pitch_deg), angle_step(m.roll_deg)]) * fraction
+        pitches = angle_values(m.pitch_deg) + list(candidates.info.get("extra_pitches", []))  # + a crowd's steep views
+        half = np.array([s, s, 0.0, angle_step(m.yaw_deg), angle_step(pitches), angle_step(m.roll_deg)]) * fraction
+        if s == 0.0 and "extra_pitches" in candidates.info:  # a crowd-aware run: a wall camera may move up or down
+            half[2] = max(0.0, min(WALL_Z_STEP * fraction, scene.height - WALL_Z_TOP - p[2], p[2] - WALL_Z_LOW))
         region = scene.polygon.buffer(-m.wall_clearance) if m.wall_clearance > 0 else scene.polygon
     rules = scene.spec.mount_rules
     if rules.active:  # mount rules bound the search (camplace.cameras.mount_rules): explicit points only turn
@@ -191,7 +198,8 @@ def extend_problem(problem: PlacementProblem, vis: Visibility, row_map: RowMap |
     V = vis.V
     if row_map is not None:
         n = problem.n_candidates
-        V = sp.vstack([problem.V, row_map(vis.candidates.positions[n:], vis.V[n:])], format="csr")
+        new = vis.candidates.subset(np.arange(n, vis.V.shape[0]))
+        V = sp.vstack([problem.V, row_map(new, vis.V[n:])], format="csr")
     costs = np.array([vis.candidates.cameras[c].cost for c in vis.candidates.camera_ids], np.float64)
     types = None if problem.type_ids is None else _appended_groups(problem, vis.candidates)
     return replace(problem, V=V, location_ids=vis.candidates.location_ids, camera_costs=costs, type_ids=types)
@@ -278,10 +286,13 @@ class _PolledRows:
 def _valid_positions(box: PoseBox, occupancy: OccupancyGrid, poses: np.ndarray) -> np.ndarray:
     if len(poses) == 0:
         return np.zeros(0, bool)
-    moved = np.any(np.abs(poses[:, :3] - box.centre[:3]) > 1e-9, axis=1)  # only ceiling-grid cameras move
+    moved = np.any(np.abs(poses[:, :2] - box.centre[:2]) > 1e-9, axis=1)  # only ceiling-grid cameras move in plan
     # a camera that stays at its grid position only turns (or zooms): that position is valid as is (a wall
-    # camera sits on the boundary of the region, which contains_xy would refuse)
+    # camera sits on the boundary of the region, which contains_xy would refuse); one that only moves up or
+    # down its wall (a crowd-aware run) needs a free cell there
+    up_down = ~moved & (np.abs(poses[:, 2] - box.centre[2]) > 1e-9)
     ok = ~moved | (shapely.contains_xy(box.region, poses[:, 0], poses[:, 1]) & ~occupancy.is_occupied(poses[:, :3]))
+    ok[up_down] = ~occupancy.is_occupied(poses[up_down, :3])
     moved &= ok
     if box.clearance > 0 and moved.any():
         ok[moved] = occupied_distance(occupancy, poses[moved, :3], CEILING_BACK, box.clearance) >= box.clearance - 1e-6
@@ -388,8 +399,9 @@ def _trial_rows(engine: VisibilityEngine, scene: Scene, vis: Visibility, cid: in
                 row_map: RowMap | None) -> sp.csr_matrix:
     """The problem's rows of trial poses (K, 7) of camera type ``cid``: raycast by ``engine``, then
     (with ``row_map``) scored as the problem's rows (e.g. on the same crowd samples)."""
-    R = raycast_poses(engine, scene.occupancy, vis.targets, vis.candidates, cid, trial)
-    return R if row_map is None else row_map(trial[:, :3], R)
+    cands = single_pose_candidates(vis.candidates, cid, trial)
+    R = raycast_rows(engine, scene.occupancy, vis.targets, cands)
+    return R if row_map is None else row_map(cands, R)
 
 
 def _guarded(guard: PoseGuard, cands: Candidates, cid: int, trial: np.ndarray) -> np.ndarray:

@@ -9,6 +9,10 @@ and per target region:
 - ``seen_by_gamma_pct``: % of targets seen by at least Γ_j cameras;
 - ``triangulatable_pct``: % of targets still seen by at least 2 cameras.
 
+and of the people themselves (issue 36, ``people``): % of the persons in each held-out crowd
+seen by ≥ 2 and by ≥ Γ^p cameras (a person's coverage is the least coverage among its
+points, camplace.targets.people), mean and spread over the crowds, overall and per zone.
+
 Per target: the share of samples in which it is seen by ≥ 2 cameras and by ≥ Γ_j (drawn
 by report.html), and one sampled crowd to show.
 """
@@ -47,10 +51,39 @@ def _summary(gamma: np.ndarray, weights: np.ndarray, cov: np.ndarray) -> dict:
     return {k: spread(np.array([p[k] for p in per])) for k in FIGURES}
 
 
+def _people_pct(cov: np.ndarray, sample: np.ndarray, n_samples: int, need: int) -> np.ndarray:
+    """(S',) % of the persons of each sample that has anyone with coverage ≥ need (samples without persons left out)."""
+    n = np.bincount(sample, minlength=n_samples)
+    ok = np.bincount(sample, weights=(cov >= need).astype(np.float64), minlength=n_samples)
+    has = n > 0
+    return 100.0 * ok[has] / n[has]
+
+
+def people_metrics(person_cov: np.ndarray, sample: np.ndarray, n_samples: int, region: np.ndarray, region_names,
+                   gamma: int, heights) -> dict:
+    """metrics.json ``crowd.people``: person_cov (P,) coverage of each person of the held-out
+    crowds (sample (P,) its crowd, region (P,) its zone index into region_names), Γ^p
+    ``gamma``, the points' ``heights`` (m)."""
+    cov = np.asarray(person_cov, np.int64)
+    smp = np.asarray(sample, np.int64)
+    reg = np.asarray(region, np.int64)
+
+    def figs(m: np.ndarray) -> dict:
+        return {"persons": spread(np.bincount(smp[m], minlength=n_samples)),
+                "seen_by_2_pct": spread(_people_pct(cov[m], smp[m], n_samples, 2)),
+                "seen_by_gamma_pct": spread(_people_pct(cov[m], smp[m], n_samples, int(gamma)))}
+
+    out = {"heights": [float(z) for z in heights], "gamma": int(gamma), **figs(np.ones(len(cov), bool))}
+    out["regions"] = {str(name): figs(reg == r) for r, name in enumerate(region_names) if np.any(reg == r)}
+    return out
+
+
 @dataclass(frozen=True)
 class CrowdMetrics:
     """summary: metrics.json ``crowd``; p_triangulatable / p_seen: (N_p,) share of samples
-    in which each target is seen by ≥ 2 / ≥ Γ_j cameras; shown: (n, 2) m the people of one
+    in which each target is seen by ≥ 2 / ≥ Γ_j cameras; p_person: (N_p,) at the volume
+    targets of report_height, the share of the crowds in which a person standing at the
+    target's (x, y) is seen by ≥ 2 cameras (NaN elsewhere; issue 36); shown: (n, 2) m the people of one
     sample (for the report's 3D view); radius, height: m; report_height: m, the target
     height the report draws."""
 
@@ -62,6 +95,7 @@ class CrowdMetrics:
     height: float
     report_height: float | None = None
     extra: dict = field(default_factory=dict)
+    p_person: np.ndarray | None = None  # (N_p,) chance a person standing there is seen by ≥ 2 (NaN: not drawn)
 
     def to_dict(self) -> dict:
         return {**self.summary, **self.extra}
@@ -89,4 +123,4 @@ def crowd_metrics(gamma: np.ndarray, weights: np.ndarray, coverage: np.ndarray, 
                         report_height)
 
 
-__all__ = ["CrowdMetrics", "FIGURES", "crowd_metrics", "sample_figures", "spread"]
+__all__ = ["CrowdMetrics", "FIGURES", "crowd_metrics", "people_metrics", "sample_figures", "spread"]

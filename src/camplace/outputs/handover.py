@@ -92,17 +92,18 @@ def building_plan_section(whole: PlanData, storeys: list[PlanData], svgs: list[s
 
 
 def write_plan_set(out_dir: str | Path, scene, vis, placement: dict, metrics: dict, selected, *, paper: str = "A3",
-                   height: float = WORKING_HEIGHT, repeatable: bool = False, input_from_scene=None
-                   ) -> tuple[dict[str, Path], str, tuple[list[dict], int]]:
+                   height: float = WORKING_HEIGHT, repeatable: bool = False, input_from_scene=None,
+                   people: tuple | None = None) -> tuple[dict[str, Path], str, tuple[list[dict], int]]:
     """The hand-over set of a placement (scene: camplace.scene.build.Scene; vis: Visibility;
     placement / metrics: the placement.json / metrics.json dicts; selected: rows of vis.V).
     The camera views are rendered once (report_html.camera_views, its time budget unless
     ``repeatable``) and returned for report.html; the viewsheds have their own budget
     (plan_data.VIEWSHED_BUDGET_S, none when ``repeatable``). ``input_from_scene`` (4x4):
-    plan.dxf in that frame (write_outputs(frame='input')). Returns (paths, plan section HTML, views)."""
+    plan.dxf in that frame (write_outputs(frame='input')). ``people``: (xy (P, 2), radius, height) m,
+    test people drawn into the camera views (issue 36). Returns (paths, plan section HTML, views)."""
     from camplace.outputs.report_html import VIEW_BUDGET_S, camera_views
 
-    views = camera_views(scene, vis, selected, budget_s=float("inf") if repeatable else VIEW_BUDGET_S)
+    views = camera_views(scene, vis, selected, budget_s=float("inf") if repeatable else VIEW_BUDGET_S, people=people)
     if is_building(scene):  # issue 33: one plan sheet per storey
         whole, storeys = building_plans(scene, vis, placement, metrics, selected, height=height, paper=paper,
                                         repeatable=repeatable, views=views[0], input_from_scene=input_from_scene)

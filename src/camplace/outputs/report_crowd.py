@@ -2,7 +2,8 @@
 
 - ``crowd_traces``: one sampled crowd in the 3D view (each person a cylinder);
 - ``crowd_map_figure``: at one target height, the share of the held-out crowds in which
-  each spot is seen by ≥ 2 cameras (a heatmap over the coverage slice's layout);
+  a person standing at each spot is seen by ≥ 2 cameras (issue 36; without it: the spot
+  itself), a heatmap over the coverage slice's layout;
 - ``crowd_section``: the figures of metrics.json ``crowd`` (mean ± std over the samples,
   overall and per region) beside the empty-store ones.
 """
@@ -51,9 +52,10 @@ def crowd_traces(shown: np.ndarray, radius: float, height: float) -> list[dict]:
 
 
 def crowd_map_figure(view: SceneView, positions: np.ndarray, is_surface: np.ndarray, p2: np.ndarray,
-                     height: float, cameras: list[dict]) -> dict | None:
+                     height: float, cameras: list[dict], person: bool = False) -> dict | None:
     """Heatmap of p2 (N_p,) share of crowds in which each target is seen by ≥ 2 cameras, at
-    the volume targets of ``height`` (m); None without volume targets there."""
+    the volume targets of ``height`` (m); None without volume targets there. ``person``: p2
+    is the chance that a person standing at each spot is seen by ≥ 2 (triangulatable)."""
     sl = next((s for s in coverage_slices(view, positions, is_surface, p2) if abs(s.height - height) < 1e-6), None)
     if sl is None:
         return None
@@ -64,7 +66,12 @@ def crowd_map_figure(view: SceneView, positions: np.ndarray, is_surface: np.ndar
                       "colorbar": {"title": {"text": "P(seen by \u2265 2)"}, "tickformat": ".0%", "len": 0.8},
                       "hovertemplate": "(%{x}, %{y}) m: seen by \u2265 2 cameras in %{z:.0%} of the crowds"
                                        "<extra></extra>"}
-    fig["layout"]["title"]["text"] = f"chance of being seen by \u2265 2 cameras in the crowd, z = {height:.2f} m"
+    fig["layout"]["title"]["text"] = (
+        "chance that a person standing here is triangulatable (each of its points seen by \u2265 2 cameras) in the "
+        "crowd" if person else f"chance of being seen by \u2265 2 cameras in the crowd, z = {height:.2f} m")
+    if person:
+        fig["data"][0]["hovertemplate"] = ("(%{x}, %{y}) m: a person here is seen by \u2265 2 cameras in %{z:.0%} of "
+                                           "the crowds<extra></extra>")
     return fig
 
 
@@ -84,6 +91,15 @@ def _rows(crowd: dict, metrics: dict) -> str:
                  f"<td class=num>{_pm(c['seen_by_gamma_pct'], 1, ' %')}</td></tr>")
     head = ("<tr><th>region</th><th>crowd coverage gap</th><th>empty store</th><th>triangulatable (\u2265 2) in "
             "the crowd</th><th>empty store</th><th>seen by \u2265 \u0393 in the crowd</th></tr>")
+    ppl = crowd.get("people")
+    if ppl:  # issue 36: the people themselves
+        g = ppl["gamma"]
+        prow = "".join(f"<tr><td>{html.escape(str(n))}</td><td class=num>{_pm(r['seen_by_2_pct'], 1, ' %')}</td>"
+                       f"<td class=num>{_pm(r['seen_by_gamma_pct'], 1, ' %')}</td></tr>"
+                       for n, r in [("all people", ppl)] + list((ppl.get("regions") or {}).items()))
+        body_p = (f"<table><tr><th>people in</th><th>seen by \u2265 2 cameras</th><th>seen by \u2265 {g}</th></tr>"
+                  f"{prow}</table>")
+        return f"<table>{head}{body}</table>{body_p}"
     return f"<table>{head}{body}</table>"
 
 
@@ -120,8 +136,10 @@ def crowd_report(view: SceneView, targets, crowd_metrics, metrics: dict, cameras
     cm = crowd_metrics
     figs = {}
     if cm.report_height is not None:
-        fig = crowd_map_figure(view, targets.positions, targets.is_surface, cm.p_triangulatable, cm.report_height,
-                               cameras)
+        person = getattr(cm, "p_person", None) is not None  # issue 36: a person standing there, not the air
+        fig = crowd_map_figure(view, targets.positions, targets.is_surface,
+                               cm.p_person if person else cm.p_triangulatable, cm.report_height, cameras,
+                               person=person)
         if fig is not None:
             figs["crowdmap"] = fig
     section = crowd_section(cm.to_dict(), metrics, "crowdmap" if figs else None)

@@ -49,10 +49,11 @@ VIEW_MAX_CELLS = 80_000_000  # occupancy cells above which no view is rendered (
 
 
 def camera_views(scene, vis, selected: np.ndarray, width: int = VIEW_WIDTH,
-                 budget_s: float = VIEW_BUDGET_S) -> tuple[list[dict], int]:
+                 budget_s: float = VIEW_BUDGET_S, people: tuple | None = None) -> tuple[list[dict], int]:
     """What each selected camera sees (camplace.outputs.render: rays through its lens model into
     the occupancy grid), with the targets it covers as dots coloured by their coverage
-    class. Returns ([{id, caption, uri}], number not rendered within ``budget_s``)."""
+    class; ``people`` (xy (P, 2), radius, height) m: test people drawn in (issue 36,
+    camplace.outputs.render_people). Returns ([{id, caption, uri}], number not rendered within ``budget_s``)."""
     import base64
     import io
 
@@ -77,6 +78,12 @@ def camera_views(scene, vis, selected: np.ndarray, width: int = VIEW_WIDTH,
         rv = render_view(scene, cam, c.positions[i], c.rotations[i], width, labels, dist)
         grey = np.clip(rv.rgb, 0, 1) @ np.array([0.299, 0.587, 0.114])  # grey scene: the coloured dots stand out
         img = np.repeat((40 + 200 * grey)[:, :, None], 3, axis=2).astype(np.uint8)
+        if people is not None:  # in their own colour over the grey scene
+            from camplace.outputs.render_people import draw_people
+
+            drawn = draw_people(rv, cam, c.positions[i], c.rotations[i], *people)
+            near = drawn.depth < rv.depth
+            img[near] = (255 * np.clip(drawn.rgb[near], 0, 1)).astype(np.uint8)
         seen = vis.V.indices[vis.V.indptr[i]:vis.V.indptr[i + 1]]
         uv, ok = covered_pixels(cam, c.positions[i], c.rotations[i], vis.targets.positions[seen], rv.scale)
         h, w = img.shape[:2]

@@ -381,8 +381,11 @@ def _write_report_set(out: Path, vis: Visibility, placement: Placement, pdict: d
         from camplace.outputs.handover import write_plan_set
 
         def plan_set() -> dict[str, Path]:
+            cm = getattr(metrics, "crowd", None)  # issue 36: one held-out crowd's people in the camera views
+            people = (cm.shown, cm.radius, cm.height) if cm is not None and len(cm.shown) else None
             paths, plan["extra"], plan["views"] = write_plan_set(out, scene, vis, pdict, m, sel, paper=paper,
-                                                                 repeatable=repeatable, input_from_scene=input_T)
+                                                                 repeatable=repeatable, input_from_scene=input_T,
+                                                                 people=people)
             return paths
 
         parts.run(PLAN_SET, plan_set)

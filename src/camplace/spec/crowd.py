@@ -4,7 +4,11 @@ A crowd sample puts ``density`` persons per m² of walkable floor (a zone may se
 in ``zones``) at random, without overlap, in the walkable free space; ``samples``
 independent crowds from ``seed`` are what a crowd-aware run (``optimise``) averages over,
 ``score_samples`` further ones (another random stream: never the same crowds) are what
-the crowd metrics average over. See docs/scene-file.md#crowd.
+the crowd metrics average over. The people themselves are targets (issue 36): points on
+each sampled person at ``people_heights`` (default torso and head), each to be seen by
+``people_gamma`` cameras (default 2: triangulatable); a crowd-aware run minimises the
+sample-average people cost mixed with the empty-store cost by ``people_weight``.
+See docs/scene-file.md#crowd.
 """
 
 from __future__ import annotations
@@ -20,6 +24,7 @@ from camplace.spec.wording import did_you_mean, format_error_entry, name_list
 
 Density = Annotated[float, BeforeValidator(_no_bool), Field(ge=0, allow_inf_nan=False)]
 Count = Annotated[int, Field(ge=1, le=4096, strict=True)]
+Share = Annotated[float, BeforeValidator(_no_bool), Field(ge=0, le=1, allow_inf_nan=False)]
 MAX_COVER = 0.45  # at most this share of the floor under people (random packing jams near 0.55)
 
 
@@ -30,11 +35,24 @@ class CrowdSpec(_Strict):
     radius: PositiveFloat = 0.25
     height: PositiveFloat = 1.75
     zones: dict[str, Density] = {}  # zone name -> its own density
-    samples: Count = 16  # crowds the crowd-aware optimisation averages over
+    samples: Count = 64  # crowds the crowd-aware optimisation averages over (people: 16 overfit, issue 36)
     score_samples: Count = 32  # held-out crowds the metrics average over
     seed: Annotated[int, Field(ge=0, strict=True)] = 0
     optimise: StrictBool = False  # optimise the sample-average crowd cost (a crowd-aware run)
     report_height: Finite | None = None  # m: where the report draws P(seen by >= 2); default nearest 1.5 m
+    people_heights: list[PositiveFloat] = [1.25, 1.6]  # m: the points on each person to be seen (torso, head)
+    people_gamma: Annotated[int, Field(ge=1, le=64, strict=True)] = 2  # cameras each person point needs
+    people_weight: Share = 0.7  # crowd-aware objective: this share people cost, the rest empty-store cost
+    steep_pitches: list[Annotated[float, BeforeValidator(_no_bool), Field(ge=0, le=90, allow_inf_nan=False)]] = \
+        [75.0, 90.0]  # degrees down: offered at every mount of a crowd-aware run with people in it
+
+    def offers_steep(self) -> tuple[float, ...]:
+        """The extra candidate pitches of a run with this crowd: ``steep_pitches`` when it
+        optimises for a crowd with anybody in it (some density > 0) who counts
+        (``people_weight`` > 0), else none."""
+        if self.optimise and self.people_weight > 0 and any(rho > 0 for _, rho in self.densities()):
+            return tuple(float(v) for v in self.steep_pitches)
+        return ()
 
     def max_density(self) -> float:
         """Persons per m² above which random non-overlapping placement cannot reach the density."""
@@ -59,6 +77,7 @@ def crowd_references(spec) -> None:
                                           f"room ({w:g} m x {d:g} m); expected a radius below {min(w, d) / 2:g} m")
     if c.height > spec.room.height:
         raise scene_error("crowd.height", f"{c.height} m is taller than the room ({spec.room.height} m)")
+    check_people_heights(c, scene_error)
     for key, rho in c.densities():
         if rho > c.max_density():
             raise scene_error(f"crowd.{key}", f"{rho} persons/m² cannot be placed without overlap at radius "
@@ -74,7 +93,19 @@ def crowd_references(spec) -> None:
                                                      "privacy or surface zone (nobody stands in a privacy zone)")
 
 
-CROWD_OPTIONS = ("density", "samples", "score_samples", "seed", "optimise")  # run() / evaluate() overrides
+def check_people_heights(c: CrowdSpec, error) -> None:
+    """``c.people_heights`` are 1 to 8 distinct points within the person (0 < z <= height);
+    ``error(key, message)`` (an exception to raise) otherwise."""
+    z = list(c.people_heights)
+    if not 1 <= len(z) <= 8 or len(set(z)) != len(z):
+        raise error("crowd.people_heights", f"{z}: expected 1 to 8 distinct heights (m)")
+    for h in z:
+        if h > c.height:
+            raise error("crowd.people_heights", f"{h} m is above the people's height ({c.height} m); expected "
+                                                f"points on the person, at most {c.height} m")
+
+
+CROWD_OPTIONS = ("density", "samples", "score_samples", "seed", "optimise", "people_weight", "people_gamma")  # run() / evaluate() overrides
 
 
 def crowd_with(spec_crowd: CrowdSpec | None, overrides: dict[str, Any] | None) -> CrowdSpec | None:
@@ -96,6 +127,7 @@ def crowd_with(spec_crowd: CrowdSpec | None, overrides: dict[str, Any] | None) -
         key = str(e["loc"][0]) if e["loc"] else next(iter(given))
         _, msg = format_error_entry(e, CrowdSpec)
         raise InputError(f"crowd_{key}: {msg}", option=f"crowd_{key}") from None
+    check_people_heights(out, lambda key, msg: InputError(f"{key}: {msg}", option="crowd"))
     if out.density > out.max_density():
         raise InputError(f"crowd_density: {out.density} persons/m² cannot be placed without overlap at radius "
                          f"{out.radius} m; expected at most {out.max_density():.3g}", option="crowd_density")

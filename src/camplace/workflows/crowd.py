@@ -3,11 +3,14 @@
 - ``score_in_crowd``: the crowd metrics of a placement (camplace.metrics.crowd) on the
   held-out crowds (stream camplace.targets.crowd.SCORE): only the selected rows of V are
   thinned, so scoring costs a few milliseconds whatever the size of V.
-- ``crowd_problem``: a crowd-aware run's problem, the sample-average crowd problem
-  (camplace.problem.crowd) of the ``samples`` crowds of stream OPTIMISE, with V_s of
-  every candidate through the run's executors (camplace.visibility.crowd). Existing
-  cameras are thinned by the same crowds (Γ_s' = max(Γ − c_exist,s, 0)). Its ``row_map``
-  scores the refinement's and the adaptive rounds' new poses on the same crowds, and
+  With them, how well it sees the people themselves (issue 36: the points on the people of
+  the held-out crowds, camplace.visibility.people; metrics.json ``crowd.people``).
+- ``crowd_problem``: a crowd-aware run's problem (camplace.problem.people): the
+  sample-average squared shortfall of the points on the people of the ``samples`` crowds
+  of stream OPTIMISE, each seen past the shelves and the other people, mixed with the
+  empty-store cost by ``people_weight``. Existing cameras see the same people
+  (Γ^p' = max(Γ^p − c_exist, 0)). Its ``row_map`` gives the refinement's and the
+  adaptive rounds' new poses their views of the same people, and
   ``nominal`` turns the solved placement back into one of the empty-store problem (the
   output contract: objective = cost recomputed from the written V), keeping the crowd
   objective and bound in ``placement.info['crowd']``.
@@ -24,17 +27,22 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 import scipy.sparse as sp
 
+from camplace.cameras.candidates import Candidates
 from camplace.improve.refine import extend_problem
-from camplace.metrics.crowd import CrowdMetrics, crowd_metrics, spread
-from camplace.problem.crowd import sample_coverage, side_by_side, stacked_problem
+from camplace.metrics.crowd import CrowdMetrics, crowd_metrics, people_metrics, spread
+from camplace.problem.crowd import sample_coverage
 from camplace.problem.model import PlacementProblem
+from camplace.problem.people import mixed_rows, people_problem
 from camplace.scene.build import Scene
 from camplace.solvers.base import Placement
 from camplace.spec.crowd import CrowdSpec
 from camplace.targets.build import Targets
 from camplace.targets.crowd import OPTIMISE, SCORE, Crowds, sample_crowds
+from camplace.targets.people import People, people_targets, person_coverage
 from camplace.visibility.crowd import PeopleGrid, crowd_rows, people_grid
-from camplace.visibility.engine import Visibility
+from camplace.visibility.engine import Visibility, VisibilityEngine, raycast_rows
+from camplace.visibility.people import people_rows
+from camplace.visibility.registry import engine_of
 
 SHOWN_HEIGHT = 1.5  # m: the report's default height (faces), the volume target height nearest to it
 
@@ -76,31 +84,69 @@ def score_in_crowd(sc: Scene, vis: Visibility, selected: np.ndarray, crowd: Crow
     info = crowd_info(crowd, crowds)
     m = crowd_metrics(t.gamma, t.weights, cov, t.region_ids, t.region_names, crowds.sample(0), crowd.radius,
                       crowd.height, info, report_height(t, crowd.report_height))
-    return replace(m, extra={"optimised": False, **(extra or {})})
+    people = people_targets(crowds, t, crowd.people_heights, crowd.people_gamma)
+    grid = _grid(sc, crowds)
+    seen = people_rows(engine_of(vis), sc.occupancy, people, vis.candidates.subset(sel), grid)
+    pcov = person_coverage(np.asarray(seen.sum(axis=0)).ravel(), people.n_heights)
+    who = np.repeat(np.arange(crowds.n_samples, dtype=np.int64), crowds.counts)
+    summary = dict(m.summary, people=people_metrics(pcov, who, crowds.n_samples,
+                                                    people.targets.region_ids[::people.n_heights], t.region_names,
+                                                    crowd.people_gamma, crowd.people_heights))
+    chance = person_chance(sc, vis, sel, crowds, grid, crowd, m.report_height)
+    return replace(m, summary=summary, extra={"optimised": False, **(extra or {})}, p_person=chance)
+
+
+def person_chance(sc: Scene, vis: Visibility, selected: np.ndarray, crowds: Crowds, grid: PeopleGrid,
+                  crowd: CrowdSpec, height: float | None) -> np.ndarray | None:
+    """(N_p,) for each volume target at ``height`` (m): the share of ``crowds`` in which a
+    person standing at its (x, y) (points at ``crowd.people_heights``) is seen by ≥ 2 of the
+    ``selected`` cameras past the shelves and the crowd (a crowd person whose disc holds the
+    spot is taken to be that person); NaN at every other target. None without such targets."""
+    t = vis.targets
+    spots = np.flatnonzero(~t.is_surface & (np.abs(t.positions[:, 2] - (height or 0.0)) < 1e-6))
+    if height is None or len(spots) == 0:
+        return None
+    test = Crowds(t.positions[spots, :2], np.array([0, len(spots)], np.int64), crowds.radius, crowds.height)
+    people = people_targets(test, t, crowd.people_heights, crowd.people_gamma)
+    sel = np.asarray(selected, np.int64)
+    cams = vis.candidates.subset(sel)
+    V = raycast_rows(engine_of(vis), sc.occupancy, people.targets, cams)
+    rows = crowd_rows(V, cams.positions, people.targets.positions, crowds, grid=grid)
+    cov = person_coverage(sample_coverage(rows, crowds.n_samples, np.arange(len(sel))), people.n_heights)
+    out = np.full(len(t), np.nan)
+    out[spots] = np.mean(cov >= 2, axis=0) if crowds.n_samples else 0.0
+    return out
 
 
 @dataclass
 class CrowdProblem:
-    """A crowd-aware run's problem: ``problem`` the stacked sample-average problem (or the
-    problem itself when no sample holds anyone), ``crowds`` the samples it averages over."""
+    """A crowd-aware run's problem: ``problem`` the people-aware problem (or the problem
+    itself when no sample holds anyone, or ``people_weight`` is 0), ``crowds`` the samples
+    it averages over, ``people`` the points on their people, ``engine`` / ``occupancy``
+    what raycasts new poses' views of them."""
 
     problem: PlacementProblem
     crowds: Crowds
     grid: PeopleGrid | None
     targets: Targets
     info: dict = field(default_factory=dict)
-    seconds_per_sample: float = 0.0  # V_s time (log only: no wall-clock figure in the written results)
+    seconds_per_sample: float = 0.0  # people-view time (log only: no wall-clock figure in the written results)
+    people: People | None = None
+    engine: VisibilityEngine | None = None
+    occupancy: object = None
+    people_weight: float = 1.0
 
     @property
     def stacked(self) -> bool:
         return self.grid is not None
 
-    def row_map(self, positions: np.ndarray, rows: sp.csr_matrix) -> sp.csr_matrix:
-        """Raycast rows (K, N_p) of poses at ``positions`` (K, 3) -> their stacked rows (K, S · N_p)."""
+    def row_map(self, poses: Candidates, rows: sp.csr_matrix) -> sp.csr_matrix:
+        """Raycast rows (K, N_p) of new ``poses`` -> their rows of the crowd-aware problem
+        (with their views of the same people)."""
         if not self.stacked:
             return rows
-        thin = crowd_rows(rows, positions, self.targets.positions, self.crowds, grid=self.grid)
-        return side_by_side(thin, self.crowds.n_samples)
+        seen = people_rows(self.engine, self.occupancy, self.people, poses, self.grid)
+        return mixed_rows(rows, seen, self.people_weight)
 
     def nominal(self, vis: Visibility, problem: PlacementProblem, placement: Placement,
                 grid_selected: np.ndarray) -> tuple[PlacementProblem, Placement]:
@@ -133,31 +179,46 @@ def crowd_problem(sc: Scene, vis: Visibility, problem: PlacementProblem, crowd: 
     t0 = time.perf_counter()
     crowds = sample_crowds(sc, crowd, OPTIMISE)
     t = vis.targets
-    if crowds.empty:
+    if crowds.empty or crowd.people_weight == 0:  # nobody to see, or nobody counts: the empty-store problem
         p = site.solver_problem(problem) if site is not None else problem
         return CrowdProblem(p, crowds, None, t, {"persons": spread(crowds.counts)})
-    pos = vis.candidates.positions
     grid = _grid(sc, crowds)
-    rows = crowd_rows(vis.V, pos, t.positions, crowds, executor=executor, progress=progress, grid=grid)
+    people = people_targets(crowds, t, crowd.people_heights, crowd.people_gamma)
+    engine = engine_of(vis)
+    if progress:
+        progress("crowd", 0, 1)
+    seen = people_rows(engine, sc.occupancy, people, vis.candidates, grid, executor)
+    if progress:
+        progress("crowd", 1, 1)
     t1 = time.perf_counter()
-    cov_out = None
-    if site is not None and site.V is not None:  # existing cameras: their coverage in each sample is the offset
-        ex = crowd_rows(site.V, site.existing.positions, t.positions, crowds, grid=grid)
-        cov_out = sample_coverage(ex, crowds.n_samples, np.arange(site.V.shape[0]))
-    stacked = stacked_problem(problem, rows, crowds.n_samples, cov_out)
+    base, cov_out = problem, None
+    if site is not None:
+        base = site.solver_problem(problem)
+        if site.existing is not None and len(site.existing):  # existing cameras see some people already
+            ex = people_rows(engine, sc.occupancy, people, site.existing, grid)
+            cov_out = np.asarray(ex.sum(axis=0)).ravel().astype(np.int64)
     S = crowds.n_samples
-    info = {"persons": spread(crowds.counts), "kept_pct": 100.0 * rows.nnz / max(1, S * vis.V.nnz)}
-    return CrowdProblem(stacked, crowds, grid, t, info, (t1 - t0) / S)
+    pt = people.targets
+    mixed = people_problem(base, seen, pt.gamma, pt.weights / S, crowd.people_weight, pt.positions, cov_out,
+                           full_gamma=problem.gamma)
+    info = {"persons": spread(crowds.counts), "people_points": len(pt), "people_weight": float(crowd.people_weight),
+            "people_gamma": int(crowd.people_gamma), "people_heights": [float(z) for z in crowd.people_heights],
+            "people_seen_pct": 100.0 * float(np.mean(np.diff(seen.tocsc().indptr) > 0)) if len(pt) else 0.0}
+    return CrowdProblem(mixed, crowds, grid, t, info, (t1 - t0) / S, people, engine, sc.occupancy,
+                        float(crowd.people_weight))
 
 
 def describe(cp: CrowdProblem, crowd: CrowdSpec) -> str:
     """The run log's line about a crowd-aware problem."""
     if not cp.stacked:
-        return f"crowd-aware: density {crowd.density:g} /m² places nobody: the problem is the empty-store one"
+        return (f"crowd-aware: density {crowd.density:g} /m² places nobody (or people_weight is 0): the problem is "
+                f"the empty-store one")
     i = cp.info
     return (f"crowd-aware: {cp.crowds.n_samples} crowds of {i['persons']['mean']:.0f} persons (density "
-            f"{crowd.density:g} /m², seed {crowd.seed}); V_s keeps {i['kept_pct']:.1f} % of V's entries, "
-            f"{cp.seconds_per_sample:.3f} s per sample; the solvers see {cp.problem.n_targets} stacked targets")
+            f"{crowd.density:g} /m², seed {crowd.seed}); {i['people_points']} points on them (heights "
+            f"{', '.join(f'{z:g}' for z in i['people_heights'])} m, Γ {i['people_gamma']}), "
+            f"{i['people_seen_pct']:.1f} % seen by some candidate; people weight {i['people_weight']:g}; "
+            f"{cp.seconds_per_sample:.3f} s per sample; the solvers see {cp.problem.n_targets} targets")
 
 
 class _Stopped(Exception):

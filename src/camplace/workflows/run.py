@@ -66,7 +66,8 @@ def prepare_site(scene: str | Path | SceneSpec, progress: Progress | None = None
                  should_stop: Callable[[], bool] | None = None, max_memory_bytes: int | None = None,
                  require_feasible: bool = False, workers: int = 1, scheduler: str | None = None,
                  cache_dir: str | Path | None = None, visibility_mode: str = "voxel", stride: int | None = None,
-                 probe: float | None = None, keep: str | Path | None = None) -> tuple[Scene, Visibility, Site | None]:
+                 probe: float | None = None, keep: str | Path | None = None,
+                 extra_pitches: tuple[float, ...] = ()) -> tuple[Scene, Visibility, Site | None]:
     """Scene, targets, candidates and visibility (blind candidates dropped), and the site
     rules (camplace.workflows.sites: None without privacy zones, existing cameras or ``keep``,
     a previous run's placement file whose cameras stay): candidates that see a privacy
@@ -94,7 +95,7 @@ def prepare_site(scene: str | Path | SceneSpec, progress: Progress | None = None
     sc, targets, cameras, source = scene_inputs(scene, progress, timings, max_memory_bytes)
     t = time.perf_counter()
     _stage(progress, "candidates")
-    cands = build_candidates(sc, cameras)
+    cands = build_candidates(sc, cameras, extra_pitches)  # extra: a crowd-aware run's steep views (issue 36)
     timings["candidates"] = time.perf_counter() - t
     t = time.perf_counter()
     engine = get_engine(visibility_mode, stride=stride, probe=probe)
@@ -355,7 +356,8 @@ def run(scene: str | Path | SceneSpec, budget: int | None = None, solver: str | 
     sc, vis, site = prepare_site(scene, progress, timings, log, should_stop=should_stop,
                                  max_memory_bytes=max_memory_bytes, require_feasible=require_feasible, workers=workers,
                                  scheduler=scheduler, cache_dir=cache_dir, visibility_mode=visibility_mode,
-                                 stride=stride, probe=probe, keep=keep)
+                                 stride=stride, probe=probe, keep=keep,
+                                 extra_pitches=() if crowd_spec is None else crowd_spec.offers_steep())
     budget = sc.spec.placement.budget if budget is None else budget
     solver = sc.spec.placement.solver if solver is None else solver
     solver_options.setdefault("time_limit_s", sc.spec.placement.time_limit_s if time_limit_s is None else time_limit_s)
