@@ -64,13 +64,21 @@ def cube_bin(vx: float, vy: float, vz: float, side: int) -> int:
     """Direction bin of the non-zero vector v (see ``cube_bins``)."""
     ax, ay, az = abs(vx), abs(vy), abs(vz)
     if ax >= ay and ax >= az:
-        face, m, s, t = (0 if vx > 0 else 1), ax, vy, vz
+        face = 0 if vx > 0 else 1
+        s = vy / ax
+        t = vz / ax
     elif ay >= az:
-        face, m, s, t = (2 if vy > 0 else 3), ay, vx, vz
+        face = 2 if vy > 0 else 3
+        s = vx / ay
+        t = vz / ay
     else:
-        face, m, s, t = (4 if vz > 0 else 5), az, vx, vy
-    i = min(max(int((s / m + 1.0) * 0.5 * side), 0), side - 1)
-    j = min(max(int((t / m + 1.0) * 0.5 * side), 0), side - 1)
+        face = 4 if vz > 0 else 5
+        s = vx / az
+        t = vy / az
+    i = int((s + 1.0) * 0.5 * side)
+    j = int((t + 1.0) * 0.5 * side)
+    i = side - 1 if i >= side else (0 if i < 0 else i)
+    j = side - 1 if j >= side else (0 if j < 0 else j)
     return (face * side + i) * side + j
 
 
