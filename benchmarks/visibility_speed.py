@@ -1,12 +1,13 @@
 """V of the built-in scenes by the voxel engine: warm wall and CPU time (min of R runs, no
 cache), and a hash of V checked against the hashes the kernel before issue 37 produced.
 
-Usage: python benchmarks/visibility_speed.py [SCENE ...] [--repeat R] [--cold]
+Usage: python benchmarks/visibility_speed.py [SCENE ...] [--repeat R] [--cold] [--refine-like]
 
 Each scene's V is computed once to load (or compile) the kernels, then R times; the
 minimum is reported because the machine is shared (other jobs only ever add time).
 ``--cold`` also times the kernels' compile in a fresh process with an empty
-NUMBA_CACHE_DIR (the first run after an install). Exits 1 if a V differs from the
+NUMBA_CACHE_DIR (the first run after an install); ``--refine-like`` the CPU time per pose
+of small calls as refine makes them. Exits 1 if a V differs from the
 reference hash. Prints a markdown table for docs/benchmarks.md.
 """
 
@@ -83,11 +84,32 @@ def cold_compile() -> tuple[float, float]:
         return float(wall), float(cpu)
 
 
+def refine_like(scene: str = "standard-store", n: int = 800, per_call: int = 8, repeat: int = 5) -> float:
+    """ms CPU per pose of V rows for ``n`` random poses of ``scene``, ``per_call`` poses a call
+    (as refine raycasts its trial poses; here each at its own position), min of ``repeat``."""
+    from conftest import builtin_inputs
+    from camplace.visibility import voxel
+
+    sc, t, c = builtin_inputs(scene)
+    idx = np.random.default_rng(0).permutation(len(c))[:n]
+    grid = voxel.target_grid(t, voxel.default_grid_cell(c))
+    voxel._block_arrays(sc.occupancy, t, c, 0, per_call, grid)  # load the kernels
+    best = float("inf")
+    for _ in range(repeat):
+        c0 = time.process_time()
+        for k in range(0, n, per_call):
+            sub = c.subset(idx[k:k + per_call])
+            voxel._block_arrays(sc.occupancy, t, sub, 0, len(sub), grid)
+        best = min(best, time.process_time() - c0)
+    return best / n * 1000.0
+
+
 def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("scenes", nargs="*", default=["demo", "standard-store", "store-a"])
     ap.add_argument("--repeat", type=int, default=5)
     ap.add_argument("--cold", action="store_true", help="also time the kernels' compile on an empty numba cache")
+    ap.add_argument("--refine-like", action="store_true", help="also time 800 random standard-store poses, 8 a call")
     a = ap.parse_args()
     print(f"machine: {platform.processor() or platform.machine()}, {os.cpu_count()} cores, python "
           f"{platform.python_version()}, load {os.getloadavg()[0]:.2f}")
@@ -104,6 +126,8 @@ def main() -> None:
     if a.cold:
         wall, cpu = cold_compile()
         print(f"cold compile (empty NUMBA_CACHE_DIR, first V of 8 demo candidates): wall {wall:.1f} s, CPU {cpu:.1f} s")
+    if a.refine_like:
+        print(f"refine-like raycasts (800 random standard-store poses, 8 a call): {refine_like():.3f} ms CPU per pose")
     print(f"load after: {os.getloadavg()[0]:.2f}")
     sys.exit(1 if bad else 0)
 

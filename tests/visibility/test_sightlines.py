@@ -19,8 +19,9 @@ from camplace.scene.build import OccupancyGrid
 from camplace.spec.quality import target_min_px
 from camplace.targets.build import Targets
 from camplace.visibility.raywalk import segment_clear
-from camplace.visibility.sightlines import SURFACE_OFFSET, _passes_view, cone_angle, cube_bin, cube_bins
-from camplace.visibility.voxel import compute_visibility, target_cos_limits
+from camplace.visibility.sightlines import (SURFACE_OFFSET, _passes_view, cone_angle, cube_bin, cube_bins,
+                                           work_arrays)
+from camplace.visibility.voxel import compute_visibility, target_cos_limits, target_grid
 
 from conftest import builtin_inputs, same_csr
 
@@ -134,3 +135,19 @@ def test_nothing_in_the_image_lies_outside_the_cone(kind, a, b, k1, d):
     x, y, z = d
     if project_nb(cam.params, x, y, z)[2]:
         assert math.atan2(math.hypot(x, y), z) <= cone_angle(cam.params) + 1e-9
+
+
+@settings(max_examples=60, deadline=None)
+@given(seed=st.integers(0, 2**31 - 1), cell=st.floats(0.2, 3.0), rng=st.floats(0.1, 6.0))
+def test_work_arrays_hold_every_target_in_range(seed, cell, rng):
+    """The kernel writes the targets within range of a position into the work arrays unchecked:
+    their length must bound that count for any position, inside the grid or far outside it."""
+    r = np.random.default_rng(seed)
+    pos = r.uniform([0, 0, 0], [8, 5, 2], (300, 3))
+    t = Targets(pos, np.zeros_like(pos), np.ones(300, np.int64), np.ones(300), np.zeros(300, np.int32), ("v",),
+                ("volume",), np.array([90.0]))
+    g = target_grid(t, cell)
+    cams = r.uniform([-10, -10, 0], [18, 15, 3], (20, 3))
+    n = len(work_arrays(g.params, g.cell_start, cams, rng)[0])
+    d2 = ((pos[None, :, :] - cams[:, None, :]) ** 2).sum(-1)
+    assert n >= (d2 <= rng * rng).sum(1).max()

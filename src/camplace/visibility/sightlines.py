@@ -196,40 +196,44 @@ def _cell_near(grid, cx: int, cy: int, px: float, py: float, rng: float) -> bool
     return dx * dx + dy * dy <= r * r
 
 
-@numba.njit(cache=True, inline="always")
-def _in_range_bound(p, rng, grid, cell_start) -> int:
-    """How many targets the target-grid cells within ``rng`` of p hold (>= those in range)."""
-    gnx, gny = int(grid[3]), int(grid[4])
-    ax, bx = _cell_span(grid[0], grid[2], gnx, p[0], rng)
-    ay, by = _cell_span(grid[1], grid[2], gny, p[1], rng)
-    n = 0
-    for cx in range(ax, bx + 1):
-        for cy in range(ay, by + 1):
-            if _cell_near(grid, cx, cy, p[0], p[1], rng):
-                n += cell_start[cx * gny + cy + 1] - cell_start[cx * gny + cy]
-    return n
+def work_arrays(grid_params: np.ndarray, cell_start: np.ndarray, positions: np.ndarray,
+                rng: float) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The kernel's per-position work arrays (ids, bins, sorted ids: int32; vectors (n, 4)
+    float64), n = an upper bound on the targets within ``rng`` m of any of ``positions``
+    (N, 3): the largest count of the target-grid cells (``grid_params`` / ``cell_start``, see
+    camplace.visibility.voxel.TargetGrid) in the square of half-side rng about a position,
+    read from a summed-area table."""
+    x0, y0, cell = (float(v) for v in grid_params[:3])
+    nx, ny = int(grid_params[3]), int(grid_params[4])
+    sat = np.zeros((nx + 1, ny + 1), np.int64)
+    sat[1:, 1:] = np.diff(cell_start).reshape(nx, ny).cumsum(0).cumsum(1)
+    p = np.asarray(positions, float).reshape(-1, 3)
+    ax = np.clip(np.floor((p[:, 0] - rng - x0) / cell), 0, nx - 1).astype(np.int64)
+    bx = np.clip(np.floor((p[:, 0] + rng - x0) / cell), 0, nx - 1).astype(np.int64) + 1
+    ay = np.clip(np.floor((p[:, 1] - rng - y0) / cell), 0, ny - 1).astype(np.int64)
+    by = np.clip(np.floor((p[:, 1] + rng - y0) / cell), 0, ny - 1).astype(np.int64) + 1
+    n = int((sat[bx, by] - sat[ax, by] - sat[bx, ay] + sat[ax, ay]).max(initial=0))
+    return np.empty(n, np.int32), np.empty(n, np.int32), np.empty(n, np.int32), np.empty((n, 4))
 
 
 @numba.njit(cache=True, nogil=True)
 def visibility_rows(occ, origin, res, cam_pos, cam_rot, cam_ids, cam_params, tpos, tnrm, tcos, grid, cell_start,
-                    cell_tids, tpx, bins, limits):
+                    cell_tids, tpx, bins, limits, rng, tmp_j, tmp_b, sj, sv):
     """CSR (indptr, indices) of V for a chunk of candidates, each row's indices in the order
     its direction bins are visited (camplace.visibility.voxel sorts them).
 
     Targets are bucketed in an xy grid (``grid`` = [x0, y0, cell, nx, ny], CSR
     ``cell_start`` / ``cell_tids``, camplace.visibility.voxel.target_grid); at each new
-    camera position the targets within the largest range of the chunk's cameras are sorted
-    into the direction bins ``bins`` (``cube_bins``), and each candidate visits only the
-    bins and targets within its view cone (``limits``, ``cone_limits``), so the work scales with the
-    pairs in view. A pair that passes the view tests is walked at once (surface targets to
+    camera position the targets within ``rng`` m (the largest range of the chunk's cameras)
+    are sorted into the direction bins ``bins`` (``cube_bins``; work arrays ``tmp_j``,
+    ``tmp_b``, ``sj``, ``sv`` from ``work_arrays``), and each candidate visits only the bins
+    and targets within its view cone (``limits``, ``cone_limits``), so the work scales with
+    the pairs in view. A pair that passes the view tests is walked at once (surface targets to
     ``SURFACE_OFFSET`` x res outside the face), a seen target appended to a buffer that
     doubles when full (memory O(pairs seen)). Consecutive candidates at one position walk
     each target's line once (``los``)."""
     n_c, n_p, nb = cam_pos.shape[0], tpos.shape[0], bins.shape[0]
     side = int(round(math.sqrt(nb / 6)))
-    rng = 0.0
-    for i in range(n_c):
-        rng = max(rng, cam_params[cam_ids[i]][7])
     indptr = np.zeros(n_c + 1, np.int64)
     buf = np.empty(max(1024, 64 * n_c), np.int32)
     k = 0
@@ -238,20 +242,12 @@ def visibility_rows(occ, origin, res, cam_pos, cam_rot, cam_ids, cam_params, tpo
     walked = np.empty(n_p, np.int32)
     n_walked = 0
     bstart = np.zeros(nb + 1, np.int64)
-    cap = 0
-    tmp_j, tmp_b, sj = np.empty(0, np.int32), np.empty(0, np.int32), np.empty(0, np.int32)
-    sv = np.empty((0, 4))
     for i in range(n_c):
         p = cam_pos[i]
         if i == 0 or p[0] != cam_pos[i - 1, 0] or p[1] != cam_pos[i - 1, 1] or p[2] != cam_pos[i - 1, 2]:
             for n in range(n_walked):  # a new position: forget the lines walked from the last one
                 los[walked[n]] = -1
             n_walked = 0
-            need = _in_range_bound(p, rng, grid, cell_start)
-            if need > cap:
-                cap = max(need, 2 * cap)
-                tmp_j, tmp_b, sj = np.empty(cap, np.int32), np.empty(cap, np.int32), np.empty(cap, np.int32)
-                sv = np.empty((cap, 4))
             _bin_in_range(p, rng, grid, cell_start, cell_tids, tpos, side, tmp_j, tmp_b, bstart, sj, sv)
         ti = cam_ids[i]
         params, R = cam_params[ti], cam_rot[i]

@@ -42,7 +42,7 @@ from camplace.visibility import footprint, sightlines
 from camplace.visibility.engine import Progress, Visibility, drop_blind_candidates  # noqa: F401 (re-exported)
 from camplace.visibility.raywalk import dda_axis, dda_step, segment_clear  # noqa: F401 (re-exported)
 from camplace.visibility.sightlines import (SURFACE_OFFSET, _cell_near, _cell_span, _passes_view, cone_limits,
-                                            cube_bins, visibility_rows)
+                                            cube_bins, visibility_rows, work_arrays)
 DEFAULT_CHUNK = 2048  # candidate rows per block
 
 
@@ -272,10 +272,12 @@ def _block_arrays(occupancy: OccupancyGrid, targets: Targets, candidates: Candid
 
     def piece(a: int, b: int) -> tuple[np.ndarray, np.ndarray]:
         a, b = start + a, start + b
+        cp, ids = np.ascontiguousarray(candidates.positions[a:b], dtype=np.float64), np.ascontiguousarray(
+            candidates.camera_ids[a:b], dtype=np.int64)
+        rng = float(params[ids, 7].max(initial=0.0))
         return _sorted_rows(*visibility_rows(
-            occ, origin, res, np.ascontiguousarray(candidates.positions[a:b], dtype=np.float64),
-            np.ascontiguousarray(candidates.rotations[a:b], dtype=np.float64),
-            np.ascontiguousarray(candidates.camera_ids[a:b], dtype=np.int64), params, *shared, _bins(), limits), len(pos))
+            occ, origin, res, cp, np.ascontiguousarray(candidates.rotations[a:b], dtype=np.float64), ids, params,
+            *shared, _bins(), limits, rng, *work_arrays(grid.params, grid.cell_start, cp, rng)), len(pos))
 
     parts = on_threads(stop - start, piece, min_rows=4)  # refine casts ~8 poses a call: two threads
     if len(parts) == 1:
