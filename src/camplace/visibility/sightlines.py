@@ -260,6 +260,8 @@ def visibility_rows(occ, origin, res, cam_pos, cam_rot, cam_ids, cam_params, tpo
                 if zx * sv[q, 0] + zy * sv[q, 1] + zz * sv[q, 2] < sv[q, 3] * cc:
                     continue
                 j = sj[q]
+                if los[j] == 0:  # its line from here is blocked: not seen, whatever the view tests say
+                    continue
                 nx_, ny_, nz_ = tnrm[j, 0], tnrm[j, 1], tnrm[j, 2]
                 if not _passes_view(p, R, params, tpos[j, 0], tpos[j, 1], tpos[j, 2], nx_, ny_, nz_, tcos[j], tpx[j]):
                     continue
