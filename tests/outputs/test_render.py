@@ -104,6 +104,20 @@ def test_scaled_camera_keeps_field_of_view():
     assert np.allclose(small.fov_deg, cam.fov_deg, atol=1e-6)
 
 
+def test_pixel_rays_are_kept_per_camera_type(room):
+    """A second view of the same camera type reuses its rays: the same image, the rays unchanged."""
+    from camplace.outputs.render import _pixel_rays
+
+    cam = CameraModel.from_fov("o", "opencv", (640, 480), (90.0, 60.0), distortion=(0.05, 0.0, 0.0, 0.0, 0.0))
+    small = scaled_camera(cam, 120)
+    assert _pixel_rays(small) is _pixel_rays(scaled_camera(cam, 120))
+    assert np.array_equal(_pixel_rays(small), small.pixel_rays(1)) and not _pixel_rays(small).flags.writeable
+    R = rotation_from_ypr(np.array([30.0]), np.array([20.0]), np.array([0.0]))[0]
+    a = render_view(room, cam, np.array([1.0, 1.0, 2.0]), R, width=120)
+    b = render_view(room, cam, np.array([1.0, 1.0, 2.0]), R, width=120)
+    assert np.array_equal(a.rgb, b.rgb) and a.rgb.shape == (90, 120, 3)
+
+
 def test_render_camera_png_and_placement(tmp_path):
     out = tmp_path / "view.png"
     path, view, info = render_camera("demo", 5, out=out, width=120)

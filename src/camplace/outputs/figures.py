@@ -22,6 +22,8 @@ from camplace.outputs.walls import label_colours, mpl_path, plan_cut, scene_wall
 
 COVERAGE_CLASSES: tuple[tuple[str, str], ...] = (
     ("0 (not seen)", "#d62728"), ("1", "#1f4fd1"), ("2", "#17becf"), ("\u2265 3", "#2ca02c"))
+PNG_DPI = 110  # pixels per inch of the PNG figures
+PNG_COMPRESS = 2  # zlib level of the PNGs (fast; level 6 is ~10 % smaller and several times slower)
 REGION_COLOURS = ("#4c78a8", "#f58518", "#54a24b", "#b279a2", "#e45756", "#72b7b2", "#eeca3b", "#9d755d")
 
 
@@ -127,32 +129,63 @@ def _png(fig) -> bytes:
     if not isinstance(fig.canvas, FigureCanvasAgg):
         FigureCanvasAgg(fig)
     buf = io.BytesIO()
-    fig.savefig(buf, format="png", dpi=110, pil_kwargs={"compress_level": 2})
+    fig.savefig(buf, format="png", dpi=PNG_DPI, pil_kwargs={"compress_level": PNG_COMPRESS})
     return buf.getvalue()
 
 
-def slice_figures_png(slices: list[CoverageSlice], view: SceneView, cameras: list[dict] = ()) -> list[bytes]:
-    """PNG bytes of each coverage slice (obstacles hatched, cameras as arrows with ids).
-
-    One figure is built and only the per-height parts (image, obstacles, legend, title)
-    change between slices: several times faster than a figure per slice."""
-    from matplotlib.colors import BoundaryNorm, ListedColormap
+def _slice_figure(view: SceneView, overlay: bool):
+    """(figure, axes) of a coverage-slice picture at PNG_DPI on a transparent background:
+    the footprint's extent, equal aspect, room for the legend on the right. ``overlay``:
+    with the axes frame, ticks and labels; else the axes drawn bare (the overlay brings them)."""
     from matplotlib.figure import Figure
-    from matplotlib.patches import Patch, PathPatch, Polygon, Rectangle
 
-    if not slices:
-        return []
-    v = view.voxel_size
     fp = np.asarray(view.footprint, float)
     w, h = np.ptp(fp[:, 0]), np.ptp(fp[:, 1])
-    fig = Figure(figsize=(min(12.0, 2.0 + 7.5 * w / max(w, h)) + 1.8, min(10.0, 1.2 + 7.5 * h / max(w, h))))
+    fig = Figure(figsize=(min(12.0, 2.0 + 7.5 * w / max(w, h)) + 1.8, min(10.0, 1.2 + 7.5 * h / max(w, h))),
+                 dpi=PNG_DPI)
     ax = fig.add_subplot(1, 1, 1)
-    cmap = ListedColormap([c for _, c in COVERAGE_CLASSES]).with_extremes(bad=(0.0, 0.0, 0.0, 0.0))
-    sl0 = slices[0]
-    im = ax.imshow(np.ma.masked_invalid(sl0.coverage), origin="lower", cmap=cmap,
-                   norm=BoundaryNorm([-0.5, 0.5, 1.5, 2.5, 3.5], 4), interpolation="nearest",
-                   extent=(sl0.x[0] - v / 2, sl0.x[-1] + v / 2, sl0.y[0] - v / 2, sl0.y[-1] + v / 2))
-    ax.add_patch(Polygon(fp, closed=True, fill=False, edgecolor="black", linewidth=1.2))
+    ax.set_xlim(fp[:, 0].min() - 0.2, fp[:, 0].max() + 0.2)
+    ax.set_ylim(fp[:, 1].min() - 0.2, fp[:, 1].max() + 0.2)
+    ax.set_aspect("equal")
+    fig.subplots_adjust(left=0.07, right=0.80, bottom=0.08, top=0.93)
+    fig.patch.set_alpha(0.0)
+    ax.patch.set_alpha(0.0)
+    if overlay:
+        ax.set_xlabel("x (m)")
+        ax.set_ylabel("y (m)")
+    else:
+        ax.set_axis_off()
+    return fig, ax
+
+
+def _cell_pixels(ax, sl: CoverageSlice, v: float, hw: tuple[int, int]) -> tuple[np.ndarray, np.ndarray]:
+    """(flat pixel indices, flat grid indices (iy * nx + ix)) of the pixels of an (H, W)
+    figure whose centre lies inside the axes and in a voxel of the slice grid (the cells of
+    ``sl``, edge ``v`` m): the coverage image drawn by hand, as imshow's nearest neighbour."""
+    h, w = hw
+    ax.apply_aspect()
+    bb = ax.bbox
+    inv = ax.transData.inverted()
+    cx, cy = np.arange(w) + 0.5, h - (np.arange(h) + 0.5)  # pixel centres in display coordinates (y up)
+    xd = inv.transform(np.c_[cx, np.full(w, bb.y0)])[:, 0]
+    yd = inv.transform(np.c_[np.full(h, bb.x0), cy])[:, 1]
+    ix = np.floor((xd - (sl.x[0] - v / 2)) / v).astype(np.int64)
+    iy = np.floor((yd - (sl.y[0] - v / 2)) / v).astype(np.int64)
+    okx = (ix >= 0) & (ix < len(sl.x)) & (cx >= bb.x0) & (cx <= bb.x1)
+    oky = (iy >= 0) & (iy < len(sl.y)) & (cy >= bb.y0) & (cy <= bb.y1)
+    rows, cols = np.nonzero(oky)[0], np.nonzero(okx)[0]
+    return (rows[:, None] * w + cols[None, :]).ravel(), (iy[rows][:, None] * len(sl.x) + ix[cols][None, :]).ravel()
+
+
+def _static_overlay(view: SceneView, cameras: list[dict]):
+    """The parts of every slice picture that do not change with the height, on a
+    transparent figure: forbidden/privacy areas, rooms and their names, the cameras (arrows,
+    ids) and the axes. Returns (figure, the areas' legend handles)."""
+    from matplotlib.patches import Patch, Polygon
+
+    fig, ax = _slice_figure(view, overlay=True)
+    fp = np.asarray(view.footprint, float)
+    w, h = np.ptp(fp[:, 0]), np.ptp(fp[:, 1])
     area_handles = []
     for kind, corners in view.areas:  # privacy zones (purple, hatched) and forbidden mount areas (red, dashed)
         style = AREA_STYLES[kind]
@@ -163,7 +196,6 @@ def slice_figures_png(slices: list[CoverageSlice], view: SceneView, cameras: lis
         ax.add_patch(Polygon(corners, closed=True, fill=False, edgecolor="#1b7837", linewidth=0.7, zorder=2.4))
         ax.text(*label_point(corners), name, fontsize=7, color="#1b7837", style="italic", ha="center", va="center",
                 zorder=3.5, bbox={"facecolor": "white", "edgecolor": "none", "alpha": 0.6, "pad": 0.4})
-    wall_colours = label_colours([k for sl in slices for k in sl.walls])
     if cameras:
         pos = np.array([c["position"] for c in cameras], float)
         fwd = np.array([np.asarray(c["rotation"], float)[:2, 2] for c in cameras])
@@ -173,30 +205,90 @@ def slice_figures_png(slices: list[CoverageSlice], view: SceneView, cameras: lis
         ax.plot(pos[:, 0], pos[:, 1], "o", color="black", markersize=3, zorder=3)
         for cam, (x, y) in zip(cameras, pos[:, :2]):
             ax.text(x, y, f" {cam.get('candidate_id', '')}", fontsize=6, color="black", va="bottom", clip_on=False)
-    ax.set_xlim(fp[:, 0].min() - 0.2, fp[:, 0].max() + 0.2)
-    ax.set_ylim(fp[:, 1].min() - 0.2, fp[:, 1].max() + 0.2)
-    ax.set_aspect("equal")
-    ax.set_xlabel("x (m)")
-    ax.set_ylabel("y (m)")
-    fig.subplots_adjust(left=0.07, right=0.80, bottom=0.08, top=0.93)
-    out = []
-    for sl in slices:
-        cls = np.where(np.isnan(sl.coverage), np.nan, np.minimum(sl.coverage, 3))
-        im.set_data(np.ma.masked_invalid(cls))
-        boxes = [ax.add_patch(Rectangle((x0, y0), x1 - x0, y1 - y0, facecolor="#bdbdbd", edgecolor="#555555",
-                                        hatch="//", linewidth=0.8, zorder=2)) for _, x0, y0, x1, y1 in sl.boxes]
-        paths = [(k, mpl_path(g)) for k, g in sl.walls.items()]
-        boxes += [ax.add_patch(PathPatch(p, facecolor=wall_colours[k], edgecolor="black", linewidth=0.3, zorder=2.2))
-                  for k, p in paths if p is not None]
-        counts = np.bincount(cls[~np.isnan(cls)].astype(np.int64), minlength=4)
-        ax.legend(handles=[Patch(color=c, label=f"{lab}: {n}") for (lab, c), n in zip(COVERAGE_CLASSES, counts)]
-                  + area_handles + [Patch(facecolor=wall_colours[k], edgecolor="black", label=k) for k in sl.walls],
-                  title="cameras seeing", loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8, title_fontsize=8)
-        ax.set_title(f"{view.name}: coverage at z = {sl.height:.2f} m")
-        out.append(_png(fig))
-        for b in boxes:
-            b.remove()
+    return fig, area_handles
+
+
+def _rgba(fig) -> np.ndarray:
+    """(H, W, 4) uint8 straight-alpha pixels of ``fig`` drawn on an Agg canvas."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+    canvas = fig.canvas if isinstance(fig.canvas, FigureCanvasAgg) else FigureCanvasAgg(fig)
+    canvas.draw()
+    return np.array(canvas.buffer_rgba())
+
+
+def over(top: np.ndarray, base: np.ndarray) -> np.ndarray:
+    """(H, W, 3) uint8: straight-alpha RGBA ``top`` (H, W, 4) composited over the opaque
+    ``base`` (H, W, 3 or 4); only the pixels ``top`` covers are computed."""
+    out = np.ascontiguousarray(base[..., :3])
+    m = np.flatnonzero(top[..., 3])
+    t, o = top.reshape(-1, 4)[m], out.reshape(-1, 3)
+    a = t[:, 3:4].astype(np.float32) * (1.0 / 255.0)
+    o[m] = (t[:, :3] * a + o[m] * (1.0 - a) + 0.5).astype(np.uint8)
     return out
+
+
+def _slice_pixels(top: np.ndarray, layer: np.ndarray, pix: np.ndarray, rgb: np.ndarray) -> bytes:
+    """PNG of one slice: white, the coverage colours ``rgb`` at flat pixels ``pix``, then the
+    slice's ``layer`` (obstacles, legend, title) and the cameras' ``top`` (RGBA) over them."""
+    h, w = top.shape[:2]
+    img = np.full((h * w, 3), 255, np.uint8)
+    img[pix] = rgb
+    return png_bytes(over(top, over(layer, img.reshape(h, w, 3))))
+
+
+def png_bytes(rgb: np.ndarray) -> bytes:
+    """PNG bytes of (H, W, 3 or 4) uint8 pixels (Pillow, zlib level PNG_COMPRESS; releases the GIL)."""
+    from PIL import Image
+
+    buf = io.BytesIO()
+    Image.fromarray(rgb).save(buf, format="PNG", compress_level=PNG_COMPRESS)
+    return buf.getvalue()
+
+
+def slice_figures_png(slices: list[CoverageSlice], view: SceneView, cameras: list[dict] = ()) -> list[bytes]:
+    """PNG bytes of each coverage slice (obstacles hatched, cameras as arrows with ids).
+
+    Drawn once, reused: the parts that do not change with the height (cameras and their ids,
+    rooms, areas, axes: most of the text) are drawn once on a transparent overlay; each slice
+    draws only its obstacles, legend and title on one reused transparent figure; the coverage
+    colours are set pixel by pixel (``_cell_pixels``, no image resampling) and the layers laid
+    over them on a second thread, which also encodes the PNG, while the next slice draws."""
+    from concurrent.futures import ThreadPoolExecutor
+
+    from matplotlib.patches import Patch, PathPatch, Polygon, Rectangle
+
+    if not slices:
+        return []
+    v = view.voxel_size
+    overlay_fig, area_handles = _static_overlay(view, list(cameras))
+    top = _rgba(overlay_fig)
+    fig, ax = _slice_figure(view, overlay=False)
+    pix, cell = _cell_pixels(ax, slices[0], v, top.shape[:2])
+    colours = np.array([[int(c[1:3], 16), int(c[3:5], 16), int(c[5:7], 16)] for _, c in COVERAGE_CLASSES], np.uint8)
+    ax.add_patch(Polygon(np.asarray(view.footprint, float), closed=True, fill=False, edgecolor="black", linewidth=1.2))
+    wall_colours = label_colours([k for sl in slices for k in sl.walls])
+    pending = []
+    with ThreadPoolExecutor(1, thread_name_prefix="camplace-png") as pool:
+        for sl in slices:
+            cls = np.where(np.isnan(sl.coverage), np.nan, np.minimum(sl.coverage, 3))
+            boxes = [ax.add_patch(Rectangle((x0, y0), x1 - x0, y1 - y0, facecolor="#bdbdbd", edgecolor="#555555",
+                                            hatch="//", linewidth=0.8, zorder=2)) for _, x0, y0, x1, y1 in sl.boxes]
+            paths = [(k, mpl_path(g)) for k, g in sl.walls.items()]
+            boxes += [ax.add_patch(PathPatch(p, facecolor=wall_colours[k], edgecolor="black", linewidth=0.3,
+                                             zorder=2.2)) for k, p in paths if p is not None]
+            counts = np.bincount(cls[~np.isnan(cls)].astype(np.int64), minlength=4)
+            ax.legend(handles=[Patch(color=c, label=f"{lab}: {n}") for (lab, c), n in zip(COVERAGE_CLASSES, counts)]
+                      + area_handles + [Patch(facecolor=wall_colours[k], edgecolor="black", label=k) for k in sl.walls],
+                      title="cameras seeing", loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8,
+                      title_fontsize=8)
+            ax.set_title(f"{view.name}: coverage at z = {sl.height:.2f} m", y=1.0)  # y: no search for tick labels
+            layer = _rgba(fig)
+            k = np.nan_to_num(cls, nan=-1.0).astype(np.int64).ravel()[cell]
+            pending.append(pool.submit(_slice_pixels, top, layer, pix[k >= 0], colours[k[k >= 0]]))
+            for b in boxes:
+                b.remove()
+        return [f.result() for f in pending]
 
 
 def slice_figure_png(sl: CoverageSlice, view: SceneView, cameras: list[dict] = ()) -> bytes:
@@ -226,7 +318,7 @@ def histogram_figure_png(histograms: dict[str, dict[str, int]], gammas: dict[str
     ax.set_ylabel("targets")
     ax.set_title(title or "coverage histogram (dashed: required \u0393 per region)")
     ax.legend(fontsize=8)
-    fig.tight_layout()
+    fig.subplots_adjust(left=0.1, right=0.98, bottom=0.12, top=0.92)  # tight_layout's margins, without its search
     return _png(fig)
 
 

@@ -13,6 +13,7 @@ name or an output folder is camplace.workflows.render. Nothing here prints.
 
 from __future__ import annotations
 
+import functools
 import io
 from dataclasses import dataclass
 
@@ -94,6 +95,15 @@ def scaled_camera(cam: CameraModel, width: int) -> CameraModel:
                        (cam.cy + 0.5) * sy - 0.5, cam.max_range, cam.distortion, cam.cost, cam.max_fov_deg)
 
 
+@functools.lru_cache(maxsize=16)
+def _pixel_rays(camera: CameraModel) -> np.ndarray:
+    """``camera.pixel_rays(1)``, read-only, kept for the next view of the same (scaled) camera
+    type: a report renders every selected camera, most of one or two types."""
+    rays = camera.pixel_rays(1)
+    rays.flags.writeable = False
+    return rays
+
+
 def render_view(scene: Scene, camera: CameraModel, position: np.ndarray, rotation: np.ndarray,
                 width: int = 480, labels: tuple[np.ndarray, dict] | None = None,
                 dist: np.ndarray | None = None) -> RenderedView:
@@ -109,7 +119,7 @@ def render_view(scene: Scene, camera: CameraModel, position: np.ndarray, rotatio
         dist = free_distance(occ)
     elif dist.shape != occ.shape:
         raise ValueError(f"dist: expected the occupancy grid's shape {occ.shape}, got {dist.shape}")
-    rays_c = small.pixel_rays(1)
+    rays_c = _pixel_rays(small)
     R = np.asarray(rotation, float)
     dirs = np.ascontiguousarray(rays_c @ R.T)
     n = len(dirs)

@@ -10,13 +10,15 @@ patch's face cells): its centre, else a lattice of points on the cube faces turn
 the camera, or the patch's face-cell centres, each tested for range, image, incidence
 and line of sight (``_probe_kernel``; probe 1 is the pixel engine's and the paper's
 rule, docs/lenses.md). One fused numba kernel per
-block of candidates, parallel over candidates, returns the block's CSR pieces
+block of candidates (probe 0: camplace.visibility.sightlines.visibility_rows, which culls
+the targets by range and view cone first) returns the block's CSR pieces
 (``VoxelEngine.rows``); camplace.visibility.engine.compute_visibility maps the blocks over
 an executor and the cache.
 """
 
 from __future__ import annotations
 
+import functools
 import math
 import threading
 import weakref
@@ -28,7 +30,7 @@ import numba
 import numpy as np
 import scipy.sparse as sp
 
-from camplace.cameras.models import project_nb, px_per_m_nb
+from camplace.cameras.models import px_per_m_nb
 from camplace.core.errors import InputError
 from camplace.core.executors import on_threads
 from camplace.spec.quality import target_min_px
@@ -36,60 +38,12 @@ from camplace.cameras.candidates import Candidates
 from camplace.scene.build import OccupancyGrid
 from camplace.targets.build import Targets
 from camplace.visibility import engine as _engine
-from camplace.visibility import footprint
+from camplace.visibility import footprint, sightlines
 from camplace.visibility.engine import Progress, Visibility, drop_blind_candidates  # noqa: F401 (re-exported)
 from camplace.visibility.raywalk import dda_axis, dda_step, segment_clear  # noqa: F401 (re-exported)
-
-SURFACE_OFFSET = 0.75  # surface rays end this many occupancy cells outside the face
+from camplace.visibility.sightlines import (SURFACE_OFFSET, _cell_near, _cell_span, _passes_view, cone_limits,
+                                            cube_bins, visibility_rows, work_arrays)
 DEFAULT_CHUNK = 2048  # candidate rows per block
-
-
-@numba.njit(cache=True)  # a call, not inlined: the kernels using it compile in half the time
-def _passes_view(cam_p, R, params, tx, ty, tz, nx_, ny_, nz_, cos_max, min_px=0.0):
-    """Range, image, incidence and pixel-density (``min_px`` px/m, 0 = none) tests of one
-    (camera, target) pair."""
-    vx, vy, vz = tx - cam_p[0], ty - cam_p[1], tz - cam_p[2]
-    d2 = vx * vx + vy * vy + vz * vz
-    rng = params[7]
-    if d2 > rng * rng or d2 <= 1e-18:
-        return False
-    # camera frame: p_cam = R^T v
-    xc = R[0, 0] * vx + R[1, 0] * vy + R[2, 0] * vz
-    yc = R[0, 1] * vx + R[1, 1] * vy + R[2, 1] * vz
-    zc = R[0, 2] * vx + R[1, 2] * vy + R[2, 2] * vz
-    _, _, ok = project_nb(params, xc, yc, zc)
-    if not ok:
-        return False
-    if nx_ != 0.0 or ny_ != 0.0 or nz_ != 0.0:
-        c = -(vx * nx_ + vy * ny_ + vz * nz_) / math.sqrt(d2)  # cos of incidence (view ray vs normal)
-        if c <= 0.0 or c < cos_max:
-            return False
-    if min_px > 0.0:
-        # density on the surface plane (normal in the camera frame) or across the view ray
-        nxc = R[0, 0] * nx_ + R[1, 0] * ny_ + R[2, 0] * nz_
-        nyc = R[0, 1] * nx_ + R[1, 1] * ny_ + R[2, 1] * nz_
-        nzc = R[0, 2] * nx_ + R[1, 2] * ny_ + R[2, 2] * nz_
-        if px_per_m_nb(params, xc, yc, zc, nxc, nyc, nzc) < min_px:
-            return False
-    return True
-
-
-@numba.njit(cache=True, inline="always")
-def _cell_span(lo: float, cell: float, n: int, p: float, rng: float) -> tuple[int, int]:
-    """Index range [a, b] of the grid cells along one axis within rng of coordinate p."""
-    a = int(math.floor((p - rng - lo) / cell))
-    b = int(math.floor((p + rng - lo) / cell))
-    return max(a, 0), min(b, n - 1)
-
-
-@numba.njit(cache=True, inline="always")
-def _cell_near(grid, cx: int, cy: int, px: float, py: float, rng: float) -> bool:
-    """True if the xy rectangle of cell (cx, cy) comes within rng (+1 um) of (px, py)."""
-    x0, y0, c = grid[0], grid[1], grid[2]
-    dx = max(x0 + cx * c - px, 0.0, px - (x0 + (cx + 1) * c))
-    dy = max(y0 + cy * c - py, 0.0, py - (y0 + (cy + 1) * c))
-    r = rng + 1e-6
-    return dx * dx + dy * dy <= r * r
 
 
 @numba.njit(cache=True, nogil=True)
@@ -104,66 +58,6 @@ def _compact(buf, offs, seen):
         for k in range(seen[i]):
             indices[indptr[i] + k] = buf[offs[i] + k]
     return indptr, indices
-
-
-@numba.njit(cache=True, nogil=True)
-def _visibility_kernel(occ, origin, res, cam_pos, cam_rot, cam_ids, cam_params,
-                       tpos, tnrm, tcos, grid, cell_start, cell_tids, tpx):
-    """CSR (indptr, indices) of V for a chunk of candidates, each row's indices in the order
-    its cells are visited (``_sorted_rows`` sorts them).
-
-    Targets are bucketed in an xy grid (``grid`` = [x0, y0, cell, nx, ny], CSR
-    ``cell_start`` / ``cell_tids``, see ``target_grid``): each candidate visits only the
-    cells within its max range, so the work scales with the visible pairs, not N_g x N_p.
-    One pass: a pair that passes the view tests is walked at once, a seen target appended
-    to a buffer that doubles when full (memory O(pairs seen)). A sight line depends on the
-    camera's position only: consecutive candidates at one position (its orientations; the
-    refinement's turned trial poses) walk each target's line once (``los``)."""
-    n_c = cam_pos.shape[0]
-    gnx, gny = int(grid[3]), int(grid[4])
-    indptr = np.zeros(n_c + 1, np.int64)
-    buf = np.empty(max(1024, 64 * n_c), np.int32)
-    k = 0
-    off_len = SURFACE_OFFSET * res
-    los = np.full(tpos.shape[0], -1, np.int8)  # from the current position: -1 not walked, 0 blocked, 1 clear
-    walked = np.empty(tpos.shape[0], np.int32)
-    n_walked = 0
-    for i in range(n_c):
-        params = cam_params[cam_ids[i]]
-        p = cam_pos[i]
-        if i > 0 and (p[0] != cam_pos[i - 1, 0] or p[1] != cam_pos[i - 1, 1] or p[2] != cam_pos[i - 1, 2]):
-            for n in range(n_walked):  # a new position: forget the lines walked from the last one
-                los[walked[n]] = -1
-            n_walked = 0
-        ax, bx = _cell_span(grid[0], grid[2], gnx, p[0], params[7])
-        ay, by = _cell_span(grid[1], grid[2], gny, p[1], params[7])
-        for cx in range(ax, bx + 1):
-            for cy in range(ay, by + 1):
-                if not _cell_near(grid, cx, cy, p[0], p[1], params[7]):
-                    continue
-                cell = cx * gny + cy
-                for q in range(cell_start[cell], cell_start[cell + 1]):
-                    j = cell_tids[q]
-                    nx_, ny_, nz_ = tnrm[j, 0], tnrm[j, 1], tnrm[j, 2]
-                    if not _passes_view(p, cam_rot[i], params, tpos[j, 0], tpos[j, 1], tpos[j, 2], nx_, ny_, nz_, tcos[j],
-                                        tpx[j]):
-                        continue
-                    if los[j] < 0:
-                        los[j] = segment_clear(occ, origin[0], origin[1], origin[2], res, p[0], p[1], p[2],
-                                               tpos[j, 0] + nx_ * off_len, tpos[j, 1] + ny_ * off_len,
-                                               tpos[j, 2] + nz_ * off_len)
-                        walked[n_walked] = j
-                        n_walked += 1
-                    if los[j] == 1:
-                        if k == len(buf):  # full: twice the room (copied element by element: a slice
-                            big = np.empty(2 * k, np.int32)  # assignment compiles numba's shape-mismatch
-                            for n in range(k):  # message, ~2 s on a new install)
-                                big[n] = buf[n]
-                            buf = big
-                        buf[k] = j
-                        k += 1
-        indptr[i + 1] = k
-    return indptr, buf[:k].copy()
 
 
 @numba.njit(cache=True, inline="always")
@@ -355,6 +249,12 @@ def default_grid_cell(candidates: Candidates) -> float:
     return max(rng / GRID_CELLS_PER_RANGE, 0.05)
 
 
+@functools.cache
+def _bins() -> np.ndarray:
+    """The direction bins the kernel culls by view cone with (camplace.visibility.sightlines.cube_bins)."""
+    return cube_bins()
+
+
 def _block_arrays(occupancy: OccupancyGrid, targets: Targets, candidates: Candidates,
                   start: int, stop: int, grid: TargetGrid | None = None) -> tuple[np.ndarray, np.ndarray]:
     """(indptr (rows + 1,) int64, indices (nnz,) int32) of V rows [start, stop), in pieces on
@@ -368,13 +268,16 @@ def _block_arrays(occupancy: OccupancyGrid, targets: Targets, candidates: Candid
         target_cos_limits(targets), target_min_px(targets)))
     shared = (pos, nrm, cos, grid.params, grid.cell_start, grid.cell_tids, min_px)
     origin, res = occupancy.origin.astype(np.float64), float(occupancy.resolution)
+    limits = cone_limits(params, _bins())
 
     def piece(a: int, b: int) -> tuple[np.ndarray, np.ndarray]:
         a, b = start + a, start + b
-        return _sorted_rows(*_visibility_kernel(
-            occ, origin, res, np.ascontiguousarray(candidates.positions[a:b], dtype=np.float64),
-            np.ascontiguousarray(candidates.rotations[a:b], dtype=np.float64),
-            np.ascontiguousarray(candidates.camera_ids[a:b], dtype=np.int64), params, *shared), len(pos))
+        cp, ids = np.ascontiguousarray(candidates.positions[a:b], dtype=np.float64), np.ascontiguousarray(
+            candidates.camera_ids[a:b], dtype=np.int64)
+        rng = float(params[ids, 7].max(initial=0.0))
+        return _sorted_rows(*visibility_rows(
+            occ, origin, res, cp, np.ascontiguousarray(candidates.rotations[a:b], dtype=np.float64), ids, params,
+            *shared, _bins(), limits, rng, *work_arrays(grid.params, grid.cell_start, cp, rng)), len(pos))
 
     parts = on_threads(stop - start, piece, min_rows=4)  # refine casts ~8 poses a call: two threads
     if len(parts) == 1:
@@ -451,7 +354,7 @@ class VoxelEngine:
     def code_modules(self) -> tuple:
         import sys
 
-        return (sys.modules[__name__], footprint)
+        return (sys.modules[__name__], sightlines, footprint)
 
     def setup(self, occupancy: OccupancyGrid, targets: Targets, candidates: Candidates) -> tuple:
         """(occupancy, targets, candidates, the targets' range-culling grid, the probe's
