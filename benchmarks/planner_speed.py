@@ -17,6 +17,7 @@ plus JSON encoding of the full state, in process). Target (issue 20): total <= 2
 from __future__ import annotations
 
 import argparse
+import pickle
 import tempfile
 import time
 from pathlib import Path
@@ -30,6 +31,8 @@ def main() -> None:
     ap.add_argument("--scene", default="standard-store")
     ap.add_argument("--run", default=None, help="an existing run folder of --scene (skips the run)")
     ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--opened", default=None,
+                    help="a pickle of the opened start: loaded when it exists, else written (a site's V takes minutes)")
     args = ap.parse_args()
     from starlette.testclient import TestClient
 
@@ -40,14 +43,20 @@ def main() -> None:
     from camplace.workflows.run import run
 
     t = time.perf_counter()
-    if args.run is None:
-        r = run(args.scene)
-        out = Path(tempfile.mkdtemp(prefix="planner-speed-"))
-        write_outputs(out, r.scene.name, r.visibility, r.placement, r.problem.budget, r.metrics, r.timings_s,
-                      scene=r.scene, report=False)
+    if args.opened and Path(args.opened).is_file():
+        opened = pickle.loads(Path(args.opened).read_bytes())
     else:
-        out = Path(args.run)
-    session = Session(open_start(out, scene=args.scene))
+        if args.run is None:
+            r = run(args.scene)
+            out = Path(tempfile.mkdtemp(prefix="planner-speed-"))
+            write_outputs(out, r.scene.name, r.visibility, r.placement, r.problem.budget, r.metrics, r.timings_s,
+                          scene=r.scene, report=False)
+        else:
+            out = Path(args.run)
+        opened = open_start(out, scene=args.scene)
+        if args.opened:
+            Path(args.opened).write_bytes(pickle.dumps(opened))
+    session = Session(opened)
     print(f"{args.scene}: {len(session.cams)} cameras, {len(session.targets)} targets, "
           f"{len(session.mounts)} mounts; run + open {time.perf_counter() - t:.1f} s")
     client = TestClient(create_app(session, "t", port=8765), base_url="http://127.0.0.1:8765",
