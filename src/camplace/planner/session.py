@@ -30,6 +30,7 @@ from camplace.metrics.coverage import Metrics
 from camplace.planner.errors import ApiError
 from camplace.planner.opening import Opened
 from camplace.planner.scoring import LiveScore, rows_matrix
+from camplace.planner.statejson import POSITIONAL, CameraObject, dumps
 from camplace.planner.storeys import (check_in_storey, floor_z, nearest_layer, same_height, storey_at,
                                       storey_floor_layer, storey_mounts, storey_names, storeys_of, viewshed_height)
 from camplace.visibility.engine import Visibility, compute_visibility
@@ -111,6 +112,7 @@ class Session:
         self.next_id = 1
         self.busy: str | None = None  # an optimisation job holds the cameras
         self.job = None  # the last camplace.planner.optimize.Job
+        self._json: dict[int, tuple] = {}  # id(Cam) -> (Cam, static object, its JSON): camplace.planner.statejson
         cams = []
         given = {str(c["id"]) for c in opened.cameras if c.get("existing") and "id" in c}
         for c in opened.cameras:
@@ -409,16 +411,19 @@ class Session:
         with its camera) + id, locked, existing, viewshed; ``candidate_id`` is the camera's
         row, ``location_id`` numbers the positions of all cameras."""
         loc = location_ids_of(np.array([c.position for c in self.cams]).reshape(-1, 3))
-        floors = storey_names(self.scene, [c.position[2] for c in self.cams]) if storeys_of(self.scene) else []
-        out = []
-        for k, c in enumerate(self.cams):
-            obj = {"candidate_id": k, "location_id": int(loc[k])}
-            obj.update((key, v) for key, v in c.entry.items() if key not in obj)
-            obj.update(id=c.id, locked=c.locked, existing=c.existing, viewshed=c.shed, targets_seen=int(len(c.row)))
-            if floors:
-                obj["storey"] = floors[k]
-            out.append(obj)
-        return out
+        hits = {id(c): self._json.get(id(c)) for c in self.cams}
+        cache = {id(c): h if h is not None and h[0] is c else (c, *self._static(c)) for c, h in
+                 zip(self.cams, hits.values())}
+        self._json = cache  # only the current cameras' encodings are kept
+        return [CameraObject(k, loc[k], *cache[id(c)][1:]) for k, c in enumerate(self.cams)]
+
+    def _static(self, c: Cam) -> tuple[dict, str]:
+        """A camera's state object but for its positional keys, and its JSON (made once per camera)."""
+        obj = {key: v for key, v in c.entry.items() if key not in POSITIONAL}
+        obj.update(id=c.id, locked=c.locked, existing=c.existing, viewshed=c.shed, targets_seen=len(c.row))
+        if storeys_of(self.scene):
+            obj["storey"] = storey_names(self.scene, [c.position[2]])[0]
+        return obj, dumps(obj)
 
     def state(self) -> dict:
         """GET /api/state (see /api in docs/planner.md)."""
