@@ -23,6 +23,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 import shapely
+from scipy.spatial import cKDTree
 
 from camplace.cameras.candidates import Candidates, location_ids_of, rotation_from_ypr, surface_back
 from camplace.cameras.mount_rules import allowed_xy, clear_of_occupied
@@ -101,6 +102,7 @@ class Session:
         self.clips = [free_floor(st.scene, WORKING_HEIGHT) for st in storeys_of(self.scene)] or [
             free_floor(self.scene, WORKING_HEIGHT)]
         self.mounts = self._mount_positions()
+        self.mount_tree = cKDTree(self.mounts)
         layer = storey_floor_layer(self.targets, self.scene, WORKING_HEIGHT)
         self.floor_step = max(1, int(np.ceil(len(layer) / MAX_RASTER_POINTS)))
         self.floor = layer[::self.floor_step]  # the targets of the page's coverage raster
@@ -233,9 +235,9 @@ class Session:
         location); only those of ``storey`` when named (a building). ApiError('position') when
         every mount is taken."""
         free = np.ones(len(self.mounts), bool) if storey is None else storey_mounts(self.scene, self.mounts, storey)
-        if taken is not None and len(taken):
-            d_taken = np.abs(self.mounts[:, None, :] - np.asarray(taken, float)[None, :, :]).max(2)
-            free = ~(d_taken <= 1e-3).any(1)
+        if taken is not None and len(taken):  # mounts within 1 mm (each axis) of a taken position: a k-d tree
+            near = self.mount_tree.query_ball_point(np.asarray(taken, float).reshape(-1, 3), r=1e-3, p=np.inf)
+            free[np.concatenate([np.asarray(n, np.int64) for n in near])] = False
         if not free.any():
             raise ApiError("position: every allowed mount already holds a camera", "position", 409)
         d2 = np.where(free, ((self.mounts[:, :2] - position[:2]) ** 2).sum(1), np.inf)
