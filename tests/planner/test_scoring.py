@@ -10,6 +10,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from camplace.planner.errors import ApiError
 from camplace.planner.scoring import LiveScore, rows_matrix
 from camplace.planner.session import Session
 
@@ -122,3 +123,26 @@ def test_many_swaps_rescore_from_scratch(gone):
     live.change(cams[:8 - gone] + tuple(fake_cam(rng, 50 + k, 30) for k in range(gone)))
     assert calls == ([1] if gone == 3 else [])  # 6 swapped of 8 > a quarter: from scratch
     assert np.array_equal(live.well, LiveScore(targets, None, live.cams).well)
+
+
+def test_privacy_report_from_cached_rows_equals_a_fresh_raycast(tmp_path):
+    """A scene with a privacy zone: the report from each camera's privacy row is privacy_report's."""
+    from test_session import SITE
+
+    from camplace.planner.opening import open_start
+    from camplace.spec.loading import parse_scene
+    from camplace.visibility.privacy import privacy_report
+
+    s = Session(open_start(parse_scene(SITE), root=tmp_path))
+    assert s.guard is not None
+    done = 0
+    for k, yaw in enumerate((0.0, 90.0, 180.0, 270.0) * 2):
+        try:
+            s.update(s.cams[k // 4].id, {"yaw_deg": yaw, "pitch_deg": 60.0})
+        except ApiError:  # a pose that sees the office is refused (the state stays)
+            continue
+        done += 1
+        vis, sel = s.visibility()
+        want = privacy_report(s.guard, vis.candidates, sel, [c.id for c in s.cams])
+        assert s.metrics.privacy == want and want["points"] > 0
+    assert done >= 2
