@@ -74,3 +74,11 @@ def test_storey_is_a_string_in_a_camera_change():
     assert camera_change({"storey": "Level 1"}) == {"storey": "Level 1"}
     with pytest.raises(ApiError):
         camera_change({"storey": 1})
+
+
+def test_a_snap_to_a_storey_with_taken_mounts_stays_on_that_storey(session):
+    """Taken mounts are skipped without losing the storey (issue 37: the free mask was overwritten)."""
+    up = session.mounts[session.mounts[:, 2] > E1]
+    ground = session.mounts[session.mounts[:, 2] < E1]
+    got = session.snap(ground[0], up[:1], "Level 1")  # a ground point, one Level 1 mount taken
+    assert got[2] > E1 and np.abs(got - up[0]).max() > 1e-3

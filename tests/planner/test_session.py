@@ -197,3 +197,21 @@ def test_clearance_snaps_away_and_refuses_a_pose_too_close(tmp_path):
     assert e.value.field == "position"
     s.update(c.id, {"position": [2.9, 1.0, 2.9], "snap": False})  # 0.15 m from the face
     assert np.allclose(s.cams[0].position, [2.9, 1.0, 2.9])
+
+
+def test_snap_skips_every_taken_mount_as_a_brute_force_search_does(session):
+    """The k-d tree of the mounts (issue 37) frees and takes the same mounts as comparing
+    every mount with every taken position (to 1 mm on each axis)."""
+    rng = np.random.default_rng(3)
+    m = session.mounts
+    for _ in range(20):
+        taken = m[rng.choice(len(m), size=int(rng.integers(1, len(m))), replace=False)]
+        taken = taken + rng.uniform(-9e-4, 9e-4, taken.shape)  # within 1 mm: still taken
+        free = ~(np.abs(m[:, None, :] - taken[None]).max(2) <= 1e-3).any(1)
+        p = np.r_[rng.uniform(m.min(0)[:2], m.max(0)[:2]), m[0, 2]]
+        d2 = np.where(free, ((m[:, :2] - p[:2]) ** 2).sum(1), np.inf)
+        got = session.snap(p, taken)
+        k = int(np.flatnonzero((m == got).all(1))[0])
+        assert free[k] and d2[k] <= d2.min() + 1e-9  # a free mount, none free nearer in plan
+    with pytest.raises(ApiError):
+        session.snap(m[0], m)

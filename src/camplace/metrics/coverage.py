@@ -50,7 +50,7 @@ class Metrics:
 def target_figures(gamma: np.ndarray, weights: np.ndarray, cov: np.ndarray) -> dict:
     cost = shortfall_cost(gamma, weights, cov)
     g = gamma.astype(np.float64)
-    norm = float(np.dot(weights, g * g))
+    norm = float(np.einsum("i,i->", np.asarray(weights, np.float64), g * g))  # no BLAS thread team (gains)
     hist = np.bincount(cov, minlength=1) if len(cov) else np.zeros(1, np.int64)
     return {
         "cost": cost,
@@ -66,13 +66,22 @@ def compute_metrics(problem: PlacementProblem, selected: np.ndarray, region_ids:
     """Score a selection (candidate ids) on the problem; per region when ids are given.
     well_triangulated: optional (N_p,) bool from camplace.metrics.triangulation (adds the
     ``well_triangulated_pct`` figures, overall and per region)."""
-    cov = problem.coverage(selected)
-    top = target_figures(problem.gamma, problem.weights, cov)
+    return metrics_of_coverage(problem.gamma, problem.weights, problem.coverage(selected), region_ids, region_names,
+                               well_triangulated)
+
+
+def metrics_of_coverage(gamma: np.ndarray, weights: np.ndarray, cov: np.ndarray, region_ids: np.ndarray | None = None,
+                        region_names: tuple[str, ...] | list[str] = (),
+                        well_triangulated: np.ndarray | None = None) -> Metrics:
+    """compute_metrics from the coverage counts ``cov`` (N_p,) int64 (views of each target)
+    instead of a selection: what an editor that keeps the counts up to date (the planner)
+    rescores with, O(N_p) and no visibility rows."""
+    top = target_figures(gamma, weights, cov)
     regions: dict[str, dict] = {}
     if region_ids is not None:
         for r, name in enumerate(region_names):
             m = region_ids == r
-            fig = target_figures(problem.gamma[m], problem.weights[m], cov[m])
+            fig = target_figures(gamma[m], weights[m], cov[m])
             fig["targets"] = int(m.sum())
             if well_triangulated is not None:
                 fig["well_triangulated_pct"] = 100.0 * float(np.mean(well_triangulated[m])) if m.any() else 0.0

@@ -30,6 +30,7 @@ from camplace.core.errors import InputError
 from camplace.planner import bodies, optimize
 from camplace.planner.errors import ApiError
 from camplace.planner.save import save_session
+from camplace.planner.statejson import state_bytes
 from camplace.planner.sceneinfo import scene_payload
 
 STATIC = Path(__file__).with_name("static")
@@ -108,7 +109,11 @@ def api(fn):
             return _json_error(400, str(err), err.option or "body")
         except Exception as err:  # noqa: BLE001 - a bug: one JSON line, no traceback in the page
             return _json_error(500, f"internal error: {type(err).__name__}: {err}", None)
-        return out if isinstance(out, Response) else JSONResponse(out)
+        if isinstance(out, Response):
+            return out
+        if isinstance(out, dict) and "cameras" in out and "version" in out:  # a state: cameras encoded once
+            return Response(state_bytes(out), media_type="application/json")
+        return JSONResponse(out)
     return endpoint
 
 

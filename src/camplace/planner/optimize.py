@@ -13,9 +13,9 @@ import time
 from dataclasses import dataclass, field, replace
 
 import numpy as np
-import scipy.sparse as sp
 
 from camplace.planner.errors import ApiError
+from camplace.planner.scoring import rows_matrix
 from camplace.visibility.engine import Visibility
 
 PROGRESS_EVERY_S = 0.05  # at most one progress event per stage this often (the last one always)
@@ -57,10 +57,7 @@ def locked_site(session):
         return None, grid
     cands = session._candidates(np.array([c.position for c in locked]), np.array([c.angles for c in locked]),
                                 [c.lens for c in locked])
-    rows = [c.row for c in locked]
-    indptr = np.r_[0, np.cumsum([len(r) for r in rows])].astype(np.int64)
-    V = sp.csr_matrix((np.ones(int(indptr[-1]), np.uint8), np.concatenate(rows), indptr),
-                      shape=(len(locked), len(session.targets)))
+    V = rows_matrix([c.row for c in locked], len(session.targets))
     site = Site(None, cands, tuple(c.id for c in locked), V)
     numbered = replace(grid.candidates, location_ids=np.arange(len(grid.candidates), dtype=np.int64))
     keep = site.admit(numbered).location_ids  # Site's rule: no new camera at a locked camera's position

@@ -5,8 +5,10 @@ grid visibility), the run's visibility engine, the cameras (:class:`Cam`: id, po
 locked; each with its visibility row over the targets and its viewshed) and the
 per-target coverage counts. A change raycasts only the camera it touches (one-row
 ``compute_visibility`` on a one-candidate Candidates), updates the coverage by that
-row, and rescores the selection with camplace.workflows.run.placement_metrics, the
-scoring of ``camplace evaluate`` (so a saved placement evaluates to the same metrics).
+row, and rescores from the per-target counts (camplace.planner.scoring.LiveScore: the
+figures of camplace.workflows.run.placement_metrics, the scoring of ``camplace evaluate``,
+kept up to date from the changed cameras only, so a saved placement evaluates to the
+same metrics). Each camera's placement.json object is built once, when it is made.
 Every change is undoable (snapshots of the immutable camera tuple). Positions snap to
 the nearest allowed mount (the grid candidates' positions) unless ``snap`` is false;
 then they must satisfy the mount rules (camplace.cameras.mount_rules), lie in free
@@ -17,17 +19,19 @@ from __future__ import annotations
 
 import threading
 import time
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 
 import numpy as np
-import scipy.sparse as sp
 import shapely
+from scipy.spatial import cKDTree
 
 from camplace.cameras.candidates import Candidates, location_ids_of, rotation_from_ypr, surface_back
 from camplace.cameras.mount_rules import allowed_xy, clear_of_occupied
 from camplace.metrics.coverage import Metrics
 from camplace.planner.errors import ApiError
 from camplace.planner.opening import Opened
+from camplace.planner.scoring import LiveScore, rows_matrix
+from camplace.planner.statejson import POSITIONAL, CameraObject, dumps
 from camplace.planner.storeys import (check_in_storey, floor_z, nearest_layer, same_height, storey_at,
                                       storey_floor_layer, storey_mounts, storey_names, storeys_of, viewshed_height)
 from camplace.visibility.engine import Visibility, compute_visibility
@@ -42,7 +46,9 @@ class Cam:
     """One camera of the session. position: (3,) m; angles: (3,) yaw, pitch, roll deg;
     lens: index into Session.lenses; row: (k,) int32 sorted target ids it sees; shed:
     its viewshed exterior [[x, y], ...] m at the working height; existing: an existing
-    camera of the site (stays where it is)."""
+    camera of the site (stays where it is); privacy: sorted ids of the privacy points it
+    sees; entry: its placement.json object but for ``candidate_id`` / ``location_id``
+    (camplace.outputs.write.camera_entries, made once)."""
 
     id: str
     position: np.ndarray
@@ -52,6 +58,8 @@ class Cam:
     existing: bool
     row: np.ndarray
     shed: list
+    privacy: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int32))
+    entry: dict | None = None
 
     @property
     def rotation(self) -> np.ndarray:
@@ -94,6 +102,7 @@ class Session:
         self.clips = [free_floor(st.scene, WORKING_HEIGHT) for st in storeys_of(self.scene)] or [
             free_floor(self.scene, WORKING_HEIGHT)]
         self.mounts = self._mount_positions()
+        self.mount_tree = cKDTree(self.mounts)
         layer = storey_floor_layer(self.targets, self.scene, WORKING_HEIGHT)
         self.floor_step = max(1, int(np.ceil(len(layer) / MAX_RASTER_POINTS)))
         self.floor = layer[::self.floor_step]  # the targets of the page's coverage raster
@@ -105,6 +114,7 @@ class Session:
         self.next_id = 1
         self.busy: str | None = None  # an optimisation job holds the cameras
         self.job = None  # the last camplace.planner.optimize.Job
+        self._json: dict[int, tuple] = {}  # id(Cam) -> (Cam, static object, its JSON): camplace.planner.statejson
         cams = []
         given = {str(c["id"]) for c in opened.cameras if c.get("existing") and "id" in c}
         for c in opened.cameras:
@@ -113,8 +123,8 @@ class Session:
             ang = np.array([c["yaw_deg"], c["pitch_deg"], c["roll_deg"]], float)
             cid = str(c["id"]) if c.get("existing") and "id" in c else self._fresh_id(given)
             cams.append(self._make(cid, pos, ang, lens, bool(c.get("existing")), bool(c.get("existing"))))
-        self.cams: tuple[Cam, ...] = tuple(cams)
-        self.cov = self._full_coverage()
+        self.cams: tuple[Cam, ...] = tuple(self._with_privacy(cams))
+        self.live = LiveScore(self.targets, self.guard, self.cams)
         self._score()
 
     # ------------------------------------------------------------------ helpers
@@ -164,44 +174,46 @@ class Session:
                       clip=self.clips[int(storey_at(self.scene, position[2])[0])])
         return _ring(vs.polygon)
 
-    def _make(self, cid: str, pos: np.ndarray, ang: np.ndarray, lens: int, locked: bool, existing: bool) -> Cam:
+    def _make(self, cid: str, pos: np.ndarray, ang: np.ndarray, lens: int, locked: bool, existing: bool,
+              row: np.ndarray | None = None) -> Cam:
+        """A camera with its row (raycast here unless given), viewshed and placement.json object."""
+        from camplace.outputs.write import camera_entries
+
         t = time.perf_counter()
-        row = self._raycast(pos, ang, lens)
+        row = self._raycast(pos, ang, lens) if row is None else row
         t1 = time.perf_counter()
         shed = self._viewshed(pos, ang, lens)
         self.timing["raycast"] = 1000.0 * (t1 - t)
         self.timing["viewshed"] = 1000.0 * (time.perf_counter() - t1)
-        return Cam(cid, pos, ang, lens, locked, existing, row, shed)
+        entry = camera_entries(self._candidates(pos, ang, [lens]), np.zeros(1, np.int64))[0]
+        return Cam(cid, pos, ang, lens, locked, existing, row, shed, entry=entry)
 
-    def _full_coverage(self) -> np.ndarray:
-        cov = np.zeros(len(self.targets), np.int64)
-        for c in self.cams:
-            cov[c.row] += 1
-        return cov
+    def _with_privacy(self, cams: list[Cam]) -> list[Cam]:
+        """``cams`` with their privacy rows (one batch through the guard)."""
+        if self.guard is None or not cams:
+            return cams
+        seen = self.guard.seen_points(self._candidates(np.array([c.position for c in cams]),
+                                                       np.array([c.angles for c in cams]), [c.lens for c in cams]))
+        return [replace(c, privacy=np.sort(seen.indices[seen.indptr[k]:seen.indptr[k + 1]]).astype(np.int32))
+                for k, c in enumerate(cams)]
+
+    @property
+    def cov(self) -> np.ndarray:
+        """(N_p,) int64: views of each target by the session's cameras."""
+        return self.live.cov
 
     def visibility(self) -> tuple[Visibility, np.ndarray]:
         """The session's cameras as a Visibility (row k = camera k) and the selection (all)."""
         n = len(self.cams)
         cands = self._candidates(np.array([c.position for c in self.cams]).reshape(-1, 3),
                                  np.array([c.angles for c in self.cams]).reshape(-1, 3), [c.lens for c in self.cams])
-        rows = [c.row for c in self.cams]
-        indptr = np.r_[0, np.cumsum([len(r) for r in rows])].astype(np.int64)
-        indices = np.concatenate(rows).astype(np.int32) if rows else np.zeros(0, np.int32)
-        V = sp.csr_matrix((np.ones(len(indices), np.uint8), indices, indptr), shape=(n, len(self.targets)))
+        V = rows_matrix([c.row for c in self.cams], len(self.targets))
         return Visibility(V, cands, self.targets, self.engine.mode, engine=self.engine), np.arange(n, dtype=np.int64)
 
     def _score(self) -> None:
         """metrics of the current cameras, as camplace.workflows.evaluate scores them."""
-        from camplace.visibility.privacy import privacy_report
-        from camplace.workflows.run import placement_metrics, problem_from_visibility
-
         t = time.perf_counter()
-        vis, sel = self.visibility()
-        problem = problem_from_visibility(vis, len(sel))
-        m = placement_metrics(vis, problem, sel)
-        if self.guard is not None:
-            m = replace(m, privacy=privacy_report(self.guard, vis.candidates, sel, [c.id for c in self.cams]))
-        self.metrics: Metrics = m
+        self.metrics: Metrics = self.live.metrics()
         self.timing["metrics"] = 1000.0 * (time.perf_counter() - t)
 
     def _index(self, cid: str) -> int:
@@ -223,9 +235,9 @@ class Session:
         location); only those of ``storey`` when named (a building). ApiError('position') when
         every mount is taken."""
         free = np.ones(len(self.mounts), bool) if storey is None else storey_mounts(self.scene, self.mounts, storey)
-        if taken is not None and len(taken):
-            d_taken = np.abs(self.mounts[:, None, :] - np.asarray(taken, float)[None, :, :]).max(2)
-            free = ~(d_taken <= 1e-3).any(1)
+        if taken is not None and len(taken):  # mounts within 1 mm (each axis) of a taken position: a k-d tree
+            near = self.mount_tree.query_ball_point(np.asarray(taken, float).reshape(-1, 3), r=1e-3, p=np.inf)
+            free[np.concatenate([np.asarray(n, np.int64) for n in near])] = False
         if not free.any():
             raise ApiError("position: every allowed mount already holds a camera", "position", 409)
         d2 = np.where(free, ((self.mounts[:, :2] - position[:2]) ** 2).sum(1), np.inf)
@@ -271,26 +283,19 @@ class Session:
 
     # ------------------------------------------------------------------ changes
 
-    def _commit(self, cams: tuple[Cam, ...], t0: float, incremental: tuple[Cam | None, Cam | None] | None) -> dict:
+    def _commit(self, cams: tuple[Cam, ...], t0: float) -> dict:
         """Make ``cams`` current (previous state onto the undo stack) and rescore."""
         self.undo_stack.append(self.cams)
         del self.undo_stack[:-UNDO_DEPTH]
         self.redo_stack.clear()
-        self._apply(cams, incremental)
+        self._apply(cams)
         self.timing["total"] = 1000.0 * (time.perf_counter() - t0)
         return self.state()
 
-    def _apply(self, cams: tuple[Cam, ...], incremental=None) -> None:
-        if incremental is None:
-            self.cams = cams
-            self.cov = self._full_coverage()
-        else:
-            old, new = incremental
-            if old is not None:
-                self.cov[old.row] -= 1
-            if new is not None:
-                self.cov[new.row] += 1
-            self.cams = cams
+    def _apply(self, cams: tuple[Cam, ...]) -> None:
+        """Make ``cams`` current; the score follows from the cameras that changed (LiveScore)."""
+        self.cams = cams
+        self.live.change(cams)
         self.version += 1
         self._score()
 
@@ -325,10 +330,10 @@ class Session:
             if not pose_keys:
                 new = replace(cam, locked=bool(locked))
                 self.timing.update(raycast=0.0, viewshed=0.0)
-                return self._commit(self.cams[:k] + (new,) + self.cams[k + 1:], t0, None)
+                return self._commit(self.cams[:k] + (new,) + self.cams[k + 1:], t0)
             self.check_privacy(pos, ang, lens, pose_keys[0])
             new = self._make(cam.id, pos, ang, lens, bool(locked), cam.existing)
-            return self._commit(self.cams[:k] + (new,) + self.cams[k + 1:], t0, (cam, new))
+            return self._commit(self.cams[:k] + (new,) + self.cams[k + 1:], t0)
 
     def _place(self, position: np.ndarray, snap: bool, moving: str | None = None,
                storey: str | None = None) -> np.ndarray:
@@ -356,7 +361,7 @@ class Session:
             lens = self._lens_of(body["camera"], "camera") if "camera" in body else 0
             self.check_privacy(pos, ang, lens, "position")
             new = self._make(self._fresh_id(), pos, ang, lens, bool(body.get("locked", False)), False)
-            return self._commit(self.cams + (new,), t0, (None, new))
+            return self._commit(self.cams + (new,), t0)
 
     def delete(self, cid: str) -> dict:
         """DELETE /api/cameras/{id} (an existing or locked camera is refused)."""
@@ -369,16 +374,18 @@ class Session:
                 raise ApiError(f"id: camera {cid} is {'an existing camera' if cam.existing else 'locked'}; unlock "
                                f"it before deleting it", "id", 409)
             self.timing.update(raycast=0.0, viewshed=0.0)
-            return self._commit(self.cams[:k] + self.cams[k + 1:], t0, (cam, None))
+            return self._commit(self.cams[:k] + self.cams[k + 1:], t0)
 
     def grid_cam(self, position: np.ndarray, angles: np.ndarray, lens: int, row: np.ndarray) -> Cam:
-        """A new unlocked camera at a grid pose whose row is already known (its viewshed computed here)."""
-        return Cam(self._fresh_id(), position, angles, lens, False, False, row, self._viewshed(position, angles, lens))
+        """A new unlocked camera at a grid pose whose row is already known (its viewshed
+        computed here; its privacy row in replace_unlocked)."""
+        return self._make(self._fresh_id(), position, angles, lens, False, False, row)
 
     def replace_unlocked(self, new_cams: list[Cam], t0: float) -> None:
         """The result of an optimisation: the locked cameras kept, the others replaced (one undo step)."""
         with self.lock:
-            self._commit(tuple(c for c in self.cams if c.locked) + tuple(new_cams), t0, None)
+            new_cams = self._with_privacy(list(new_cams))
+            self._commit(tuple(c for c in self.cams if c.locked) + tuple(new_cams), t0)
 
     def undo(self) -> dict:
         return self._step(self.undo_stack, self.redo_stack, "undo")
@@ -402,18 +409,23 @@ class Session:
     # ------------------------------------------------------------------ views
 
     def camera_objects(self) -> list[dict]:
-        """placement.json camera objects (camplace.outputs.write.camera_entries) + id, locked, existing, viewshed."""
-        from camplace.outputs.write import camera_entries
+        """placement.json camera objects (camplace.outputs.write.camera_entries, each made once
+        with its camera) + id, locked, existing, viewshed; ``candidate_id`` is the camera's
+        row, ``location_id`` numbers the positions of all cameras."""
+        loc = location_ids_of(np.array([c.position for c in self.cams]).reshape(-1, 3))
+        hits = {id(c): self._json.get(id(c)) for c in self.cams}
+        cache = {id(c): h if h is not None and h[0] is c else (c, *self._static(c)) for c, h in
+                 zip(self.cams, hits.values())}
+        self._json = cache  # only the current cameras' encodings are kept
+        return [CameraObject(k, loc[k], *cache[id(c)][1:]) for k, c in enumerate(self.cams)]
 
-        vis, sel = self.visibility()
-        out = []
-        floors = storey_names(self.scene, [c.position[2] for c in self.cams]) if storeys_of(self.scene) else []
-        for k, (c, obj) in enumerate(zip(self.cams, camera_entries(vis.candidates, sel))):
-            obj.update(id=c.id, locked=c.locked, existing=c.existing, viewshed=c.shed, targets_seen=int(len(c.row)))
-            if floors:
-                obj["storey"] = floors[k]
-            out.append(obj)
-        return out
+    def _static(self, c: Cam) -> tuple[dict, str]:
+        """A camera's state object but for its positional keys, and its JSON (made once per camera)."""
+        obj = {key: v for key, v in c.entry.items() if key not in POSITIONAL}
+        obj.update(id=c.id, locked=c.locked, existing=c.existing, viewshed=c.shed, targets_seen=len(c.row))
+        if storeys_of(self.scene):
+            obj["storey"] = storey_names(self.scene, [c.position[2]])[0]
+        return obj, dumps(obj)
 
     def state(self) -> dict:
         """GET /api/state (see /api in docs/planner.md)."""

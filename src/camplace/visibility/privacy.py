@@ -56,7 +56,13 @@ def privacy_report(guard: PrivacyGuard | None, candidates: Candidates, rows: np.
     if guard is None:
         return {"zones": [], "points": 0, "violations": 0, "camera_ids": [], "points_seen": 0}
     rows = np.asarray(rows, np.int64)
-    seen = guard.seen_points(candidates.subset(rows)) if len(rows) else None
+    return privacy_report_of_seen(guard, guard.seen_points(candidates.subset(rows)) if len(rows) else None, ids)
+
+
+def privacy_report_of_seen(guard: PrivacyGuard, seen, ids: list[str]) -> dict:
+    """privacy_report from ``seen`` ((K, P) CSR: the privacy points each of the K cameras
+    ``ids`` sees, as guard.seen_points gives; None for no camera): for an editor that keeps
+    each camera's row (the planner)."""
     hit = np.diff(seen.indptr) > 0 if seen is not None else np.zeros(0, bool)
     return {"zones": list(guard.points.region_names), "points": int(len(guard.points)),
             "violations": int(hit.sum()), "camera_ids": [str(ids[k]) for k in np.flatnonzero(hit)],
