@@ -1,0 +1,64 @@
+"""quality="high" (issue 37): the chain of tabu, refinement and adaptive rounds in one time budget."""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+import pytest
+from hypothesis import given, strategies as st
+
+from camplace.core.errors import InputError
+from camplace.improve.quality import high_quality, step_budget
+
+
+@given(st.floats(0.0, 100.0), st.lists(st.floats(0.01, 1.0), min_size=1, max_size=8))
+def test_step_budgets_never_exceed_the_time_left(left, shares):
+    b = step_budget(left, shares)
+    assert 0.0 <= b <= left + 1e-9
+    if len(shares) == 1:  # the last step gets all that is left
+        assert b == pytest.approx(left)
+
+
+def test_step_budget_by_hand():
+    assert step_budget(10.0, [0.25, 0.25, 0.5]) == pytest.approx(2.5)
+    assert step_budget(6.0, [0.2, 0.1]) == pytest.approx(4.0)  # an early end of a step before flows on
+
+
+def test_chain_on_demo_keeps_its_budget_and_never_worsens(demo_run):
+    r = demo_run
+    t = time.perf_counter()
+    q = high_quality(r.scene, r.visibility, r.problem, r.placement, time_limit_s=3.0)
+    took = time.perf_counter() - t
+    assert took < 3.0 + 2.5  # a step may overrun by one raycast / one tabu chunk
+    assert q.placement.objective <= r.problem.cost(r.placement.selected) + 1e-9
+    assert q.placement.objective == pytest.approx(q.problem.cost(q.placement.selected))
+    q.problem.check_feasible(q.placement.selected)
+    assert q.visibility.V.shape[0] == q.problem.n_candidates
+    costs = [h["cost"] for h in q.steps]
+    assert all(b <= a + 1e-9 for a, b in zip(costs, costs[1:]))  # no step makes it worse
+    assert q.placement.info["quality"]["steps"] == q.steps
+
+
+def test_run_quality_high_keeps_the_whole_run_budget():
+    from camplace.workflows.run import run
+
+    t = time.perf_counter()
+    r = run("demo", quality="high", quality_time_s=8.0)
+    took = time.perf_counter() - t
+    assert took < 8.0 + 3.0
+    assert "quality" in r.placement.info and r.placement.solver.endswith("+quality-high")
+    assert r.metrics.grid_cost is not None and r.metrics.cost <= r.metrics.grid_cost + 1e-9
+    assert any(line.startswith("quality high:") for line in r.log)
+    np.testing.assert_allclose(r.metrics.cost, r.problem.cost(r.placement.selected))
+
+
+@pytest.mark.parametrize("kw, word", [({"quality": "best"}, "quality: expected one of default, high"),
+                                      ({"quality": "high", "adaptive": 2}, "quality: quality=high runs"),
+                                      ({"quality": "high", "quality_time_s": 0}, "quality_time_s: expected")])
+def test_bad_quality_settings_are_one_line_errors(kw, word):
+    from camplace.workflows.run import run
+
+    with pytest.raises(InputError) as e:
+        run("demo", **kw)
+    assert str(e.value).startswith(word)
