@@ -62,3 +62,25 @@ def test_bad_quality_settings_are_one_line_errors(kw, word):
     with pytest.raises(InputError) as e:
         run("demo", **kw)
     assert str(e.value).startswith(word)
+
+
+def test_kick_refine_never_worsens_and_stays_feasible(demo_run):
+    from camplace.improve.quality import kick_refine
+
+    r = demo_run
+    start = r.problem.cost(r.placement.selected)
+    vis, problem, p = kick_refine(r.scene, r.visibility, r.problem, r.placement, 1.5, seed=1)
+    problem.check_feasible(p.selected)
+    assert vis.V.shape[0] == problem.n_candidates >= r.problem.n_candidates
+    assert p.objective == pytest.approx(problem.cost(p.selected)) and p.objective <= start + 1e-9
+
+
+def test_a_refined_camera_never_moves_onto_another_cameras_position():
+    from camplace.improve.refine import _free_of_others
+
+    poses = np.array([[1.0, 1.0, 3.0, 0, 30, 0, 4.0], [1.5, 1.0, 3.0, 90, 30, 0, 4.0]])
+    trial = np.array([[1.5, 1.0, 3.0, 0, 30, 0, 4.0],  # camera 1's position: two cameras, one location
+                      [1.5004, 1.0, 3.0, 0, 30, 0, 4.0],  # the same to 1 mm
+                      [1.25, 1.0, 3.0, 0, 30, 0, 4.0], [1.0, 1.0, 3.0, 45, 30, 0, 4.0]])
+    assert _free_of_others(poses, 0, trial).tolist() == [False, False, True, True]
+    assert _free_of_others(poses, 1, trial).tolist() == [True, True, True, False]

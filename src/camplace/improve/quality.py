@@ -14,8 +14,9 @@ to the next ones. The default plan (``QUALITY_STEPS``):
 6. ``refine`` a last time, from the adaptive result, with the time left.
 
 When the plan ends early (the refinements converged, an adaptive round found nothing), the
-time left goes to more ``tabu`` / ``refine`` cycles (``EXTRA_CYCLE``), each tabu with the
-next seed, until less than ``MIN_CYCLE_S`` is left.
+time left goes to ``kick`` steps (``EXTRA_CYCLE``, :func:`kick_refine`: drop two of the least
+useful cameras, refill by swap descent, refine, keep it if better), each with the next seed,
+until less than ``MIN_CYCLE_S`` is left.
 
 Measured on standard-store, N_s = 20 (benchmarks/quality.py, docs/benchmarks.md): the
 refinement after a tabu swap pays most; a third tabu/refine cycle found nothing more.
@@ -46,7 +47,7 @@ Progress = Callable[[str, int, int], None]
 QUALITY_STEPS: tuple[tuple[str, float], ...] = (("tabu", 0.15), ("refine", 0.1), ("tabu", 0.1), ("refine", 0.1),
                                                 ("adaptive", 0.4), ("refine", 0.15))
 
-EXTRA_CYCLE: tuple[tuple[str, float], ...] = (("tabu", 0.6), ("refine", 0.4))  # repeated while time is left
+EXTRA_CYCLE: tuple[tuple[str, float], ...] = (("kick", 1.0),)  # repeated while time is left
 MIN_CYCLE_S = 1.5  # the least time left (s) worth another cycle
 
 
@@ -69,6 +70,36 @@ def step_budget(left_s: float, shares: list[float]) -> float:
     the shares of all remaining steps (so a step that ended early gives its time to the rest)."""
     total = sum(shares)
     return max(0.0, left_s * shares[0] / total) if total > 0 else 0.0
+
+
+def kick_refine(scene: Scene, vis: Visibility, problem: PlacementProblem, placement: Placement, time_limit_s: float,
+                *, seed: int = 0, drop: int = 2, guard: PoseGuard | None = None, row_map: RowMap | None = None,
+                should_stop: Callable[[], bool] | None = None) -> tuple[Visibility, PlacementProblem, Placement]:
+    """Iterated local search for ``time_limit_s`` seconds: drop ``drop`` cameras drawn among
+    the 2·drop whose loss is least, refill by swap descent (grid and earlier rows alike),
+    refine, keep the result when its cost is lower. The rows raycast stay in V either way."""
+    from camplace.improve.adaptive import swap_descent
+
+    end = time.perf_counter() + time_limit_s
+    rng = np.random.default_rng(seed)
+    stop = (lambda: False) if should_stop is None else should_stop
+    best = problem.cost(placement.selected)
+    while time.perf_counter() < end - 0.3 and not stop():
+        sel = np.asarray(placement.selected, np.int64)
+        loss = np.array([problem.cost(np.delete(sel, k)) for k in range(len(sel))]) - best
+        pool = np.argsort(loss)[: 2 * drop]
+        out = rng.choice(pool, size=min(drop, len(pool)), replace=False)
+        trial, _ = swap_descent(problem, np.delete(sel, out), time_limit_s=max(0.2, end - time.perf_counter()),
+                                should_stop=should_stop)
+        rf = refine_placement(scene, vis, problem, replace(placement, selected=trial, objective=problem.cost(trial)),
+                              time_limit_s=max(0.2, end - time.perf_counter()), guard=guard, row_map=row_map,
+                              should_stop=should_stop)
+        vis, problem = rf.visibility, rf.problem
+        if rf.refined_cost < best - 1e-9:
+            best, placement = rf.refined_cost, rf.placement
+        else:  # the same selection on the extended problem (its rows keep their ids)
+            placement = replace(placement, objective=problem.cost(placement.selected))
+    return vis, problem, placement
 
 
 def high_quality(scene: Scene, vis: Visibility, problem: PlacementProblem, placement: Placement,
@@ -113,6 +144,9 @@ def high_quality(scene: Scene, vis: Visibility, problem: PlacementProblem, place
                                  solver="tabu", solver_time_s=budget / (2 * adaptive_rounds_max), progress=progress,
                                  guard=guard, row_map=row_map, should_stop=should_stop)
             vis, problem, placement = ar.visibility, ar.problem, ar.placement
+        elif name == "kick":
+            vis, problem, placement = kick_refine(scene, vis, problem, placement, budget, seed=seed + cycle,
+                                                  guard=guard, row_map=row_map, should_stop=should_stop)
         else:
             raise ValueError(f"unknown quality step {name!r}")
         on_grid = on_grid and name == "tabu"
@@ -130,4 +164,4 @@ def high_quality(scene: Scene, vis: Visibility, problem: PlacementProblem, place
     return QualityResult(vis, problem, out, start_cost, hist)
 
 
-__all__ = ["EXTRA_CYCLE", "MIN_CYCLE_S", "QUALITY_STEPS", "QualityResult", "high_quality", "step_budget"]
+__all__ = ["EXTRA_CYCLE", "MIN_CYCLE_S", "QUALITY_STEPS", "QualityResult", "high_quality", "kick_refine", "step_budget"]

@@ -18,7 +18,7 @@ from camplace.visibility.engine import Visibility
 
 QUALITIES = ("default", "high")
 QUALITY_TIME_S = 30.0  # the whole run's seconds with quality="high"
-QUALITY_RESERVE_S = 6.0  # kept for the metrics and, on the command line, the output files and report (s)
+QUALITY_RESERVE_S = 7.0  # kept for the metrics and, on the command line, the output files and report (s)
 
 
 def check_quality(quality: str, quality_time_s: float, *, refine: bool = False, adaptive: int = 0,
