@@ -40,11 +40,16 @@ def test_chain_on_demo_keeps_its_budget_and_never_worsens(demo_run):
     assert q.placement.info["quality"]["steps"] == q.steps
 
 
-def test_run_quality_high_keeps_the_whole_run_budget():
+@pytest.mark.parametrize("by", ["keyword", "scene key"])
+def test_run_quality_high_keeps_the_whole_run_budget(by):
+    from camplace.spec.builtin import resolve_scene
     from camplace.workflows.run import run
 
+    spec = resolve_scene("demo")[0]
+    if by == "scene key":
+        spec = spec.model_copy(update={"placement": spec.placement.model_copy(update={"quality": "high"})})
     t = time.perf_counter()
-    r = run("demo", quality="high", quality_time_s=8.0)
+    r = run(spec, quality_time_s=8.0, **({"quality": "high"} if by == "keyword" else {}))
     took = time.perf_counter() - t
     assert took < 8.0 + 3.0
     assert "quality" in r.placement.info and r.placement.solver.endswith("+quality-high")

@@ -317,8 +317,9 @@ def run(scene: str | Path | SceneSpec, budget: int | None = None, solver: str | 
         require_feasible: bool = False, workers: int = 1, scheduler: str | None = None,
         cache_dir: str | Path | None = None, visibility_mode: str = "voxel", stride: int | None = None,
         probe: float | None = None, money_budget: float | None = None, refine: bool = False,
-        refine_time_s: float = 60.0, adaptive: int = 0, robust: int = 0, quality: str = "default",
-        quality_time_s: float = QUALITY_TIME_S, triangulation_deg: tuple[float, float] = (20.0, 160.0), well_triangulated: bool = False,
+        refine_time_s: float = 60.0, adaptive: int = 0, robust: int = 0, quality: str | None = None,
+        quality_time_s: float = QUALITY_TIME_S,
+        triangulation_deg: tuple[float, float] = (20.0, 160.0), well_triangulated: bool = False,
         keep: str | Path | None = None, crowd: dict | None = None, options: dict | None = None,
         **solver_options) -> RunResult:
     """Run every stage on a scene (built-in name, YAML path or spec).
@@ -336,8 +337,9 @@ def run(scene: str | Path | SceneSpec, budget: int | None = None, solver: str | 
     t_run = time.perf_counter()
     timings: dict[str, float] = {}
     log: list[str] = []
-    check_quality(quality, quality_time_s, refine=refine, adaptive=adaptive, robust=robust)
     spec, _, source = resolve_scene(scene)
+    quality = spec.placement.quality if quality is None else quality
+    check_quality(quality, quality_time_s, refine=refine, adaptive=adaptive, robust=robust)
     crowd_spec = crowd_with(spec.crowd, crowd)
     if spec.storeys and crowd_spec is not None and crowd_spec.density:  # crowds are sampled on one floor
         raise InputError(f"{source}: crowd: not available for a building yet; plan one storey at a time for crowds",
