@@ -54,9 +54,9 @@ MIN_CYCLE_S = 1.5  # the least time left (s) worth another cycle
 @dataclass(frozen=True)
 class QualityResult:
     """visibility / problem: V and the problem with the appended rows; placement: the best
-    selection on them (solver '<solver>+quality-high', info['quality']: start_cost, grid_cost -
-    the cost before the first step off the grid -, time_limit_s, steps); steps: per step
-    dict(step, seconds, cost)."""
+    selection on them (solver '<solver>+quality-high'; info['quality']: start_cost, grid_cost -
+    the cost before the first step off the grid -, budget_seconds - the chain's wall-clock
+    budget, left out of placement.json -, steps); steps: per step dict(step, seconds, cost)."""
 
     visibility: Visibility
     problem: PlacementProblem
@@ -157,7 +157,7 @@ def high_quality(scene: Scene, vis: Visibility, problem: PlacementProblem, place
     sel = np.asarray(placement.selected, np.int64)
     problem.check_feasible(sel)
     info = dict(placement.info, quality={"start_cost": start_cost, "grid_cost": grid_cost,
-                                         "time_limit_s": float(time_limit_s), "steps": hist})
+                                         "budget_seconds": float(time_limit_s), "steps": hist})
     out = replace(placement, selected=sel, objective=problem.cost(sel), status="heuristic",
                   solver=f"{start_solver}+quality-high",
                   seconds=placement.seconds + time.perf_counter() - t0, info=info)
