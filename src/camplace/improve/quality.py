@@ -119,7 +119,7 @@ def high_quality(scene: Scene, vis: Visibility, problem: PlacementProblem, place
     hist: list[dict] = []
     plan, n, cycle = list(steps), 0, 0
     while not stop():
-        if n == len(plan):  # time left after the plan: more tabu/refine cycles, a new tabu seed each
+        if n == len(plan):  # time left after the plan: EXTRA_CYCLE steps (kicks), the next seed each
             if end - time.perf_counter() < MIN_CYCLE_S:
                 break
             plan += list(EXTRA_CYCLE)
