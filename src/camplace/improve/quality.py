@@ -5,21 +5,22 @@ starts from the previous step's best selection; a step that finishes early leave
 to the next ones. The default plan (``QUALITY_STEPS``):
 
 1. ``tabu`` on the grid problem, warm-started from the placement (camplace.solvers.tabu);
-2. ``refine``: each camera off the grid by the compass search (camplace.improve.refine);
-3. ``tabu`` again on the extended problem (grid rows + refined rows), from the refined
-   selection: it swaps in grid cameras that the next refinement can move;
-4. ``refine`` again (its search box is centred on the current poses);
-5. ``adaptive``: rounds of finer candidates around the placement, each solved again by swap
+2. ``adaptive``: rounds of finer candidates around the placement, each solved again by swap
    descent and a short tabu from the current selection (camplace.improve.adaptive);
-6. ``refine`` a last time, from the adaptive result, with the time left.
+3. ``refine``: each camera off the grid by the compass search (camplace.improve.refine);
+4. ``tabu`` again on the extended problem (grid, adaptive and refined rows), from the
+   refined selection: it may swap in cameras that the next refinement can move;
+5. ``refine`` again (its search box is centred on the current poses);
+6. ``adaptive`` and 7. ``refine`` once more, around the refined poses.
 
 When the plan ends early (the refinements converged, an adaptive round found nothing), the
 time left goes to ``kick`` steps (``EXTRA_CYCLE``, :func:`kick_refine`: drop two of the least
 useful cameras, refill by swap descent, refine, keep it if better), each with the next seed,
 until less than ``MIN_CYCLE_S`` is left.
 
-Measured on standard-store, N_s = 20 (benchmarks/quality.py, docs/benchmarks.md): the
-refinement after a tabu swap pays most; a third tabu/refine cycle found nothing more.
+Measured on standard-store, N_s = 20 (benchmarks/quality.py, docs/benchmarks.md): adaptive
+rounds on the grid before the first refinement pay most (gap 0.178 against 0.182 with the
+adaptive rounds after two tabu/refine cycles); the steps after the first refinement gain little.
 
 Refinement and adaptive rounds append rows to V, so the returned visibility / problem replace
 the grid ones; the placement stays a selection of V rows and its cost is recomputed from V.
@@ -44,8 +45,8 @@ from camplace.visibility.engine import Visibility
 Progress = Callable[[str, int, int], None]
 # (step, share of the whole budget): shares are of the budget left when the step starts,
 # scaled by the shares of the steps still to come, so unspent time flows on
-QUALITY_STEPS: tuple[tuple[str, float], ...] = (("tabu", 0.15), ("refine", 0.1), ("tabu", 0.1), ("refine", 0.1),
-                                                ("adaptive", 0.4), ("refine", 0.15))
+QUALITY_STEPS: tuple[tuple[str, float], ...] = (("tabu", 0.15), ("adaptive", 0.35), ("refine", 0.1), ("tabu", 0.1),
+                                                ("refine", 0.1), ("adaptive", 0.1), ("refine", 0.1))
 
 EXTRA_CYCLE: tuple[tuple[str, float], ...] = (("kick", 1.0),)  # repeated while time is left
 MIN_CYCLE_S = 1.5  # the least time left (s) worth another cycle
