@@ -59,6 +59,7 @@ def main() -> None:
     ap.add_argument("--budgets", default="25", help="time budgets (s) of the improvement chain")
     ap.add_argument("--seeds", default="0")
     ap.add_argument("--steps", default=None, help="e.g. tabu:0.35,refine:0.2,adaptive:0.3,refine:0.15")
+    ap.add_argument("--adaptive-rounds", type=int, default=3, help="rounds of each adaptive step (at most)")
     ap.add_argument("--end-to-end", action="store_true",
                     help="time camplace.run(scene, refine=True) and camplace.run(scene, quality='high') whole")
     ap.add_argument("--repeats", type=int, default=3, help="--end-to-end: runs of each")
@@ -95,9 +96,11 @@ def main() -> None:
         for budget in (float(b) for b in a.budgets.split(",")):
             for seed in (int(s) for s in a.seeds.split(",")):
                 c = clocks()
-                q = high_quality(sc, vis, problem, grid, budget, seed=seed, steps=steps)
+                q = high_quality(sc, vis, problem, grid, budget, seed=seed, steps=steps,
+                                 adaptive_rounds_max=a.adaptive_rounds)
                 w, p = since(c)
                 rows.append({"variant": f"high {budget:g} s", "steps": a.steps or "default", "seed": seed,
+                             "adaptive_rounds": a.adaptive_rounds,
                              "gap": gap(q.problem, q.placement.selected), "wall_s": round(gs[0] + w, 2),
                              "cpu_s": round(gs[1] + p, 2),
                              "trace": [(h["step"], h["seconds"], round(h["cost"] / norm, 4)) for h in q.steps]})
