@@ -32,6 +32,7 @@ FLAGS = {
     "threads": "--threads", "seed": "--seed", "require_feasible": "--require-feasible",
     "visibility_mode": "--visibility", "stride": "--stride", "probe": "--probe", "local_search": "--local-search",
     "refine": "--refine", "refine_time_s": "--refine-time", "adaptive": "--adaptive", "robust": "--robust",
+    "quality": "--quality", "quality_time_s": "--quality-time",
     "money_budget": "--money-budget", "triangulation_deg": "--tri-angle", "well_triangulated": "--well-triangulated",
     "certify_s": "--certify", "budgets": "--budgets", "methods": "--methods", "targets": "--targets",
     "camera_id": "--camera", "width": "--width", "placement": "--placement",

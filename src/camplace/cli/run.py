@@ -178,6 +178,14 @@ def run_cmd(scene: Optional[list[str]] = typer.Argument(None, help="Scene YAML f
             refine_time: float = typer.Option(60.0, "--refine-time", help="Seconds for the refinement."),
             adaptive: int = typer.Option(0, "--adaptive", help="Rounds of finer candidates around the placement."),
             robust: int = typer.Option(0, "--robust", help="1: best worst case over any single camera failure."),
+            quality: Optional[str] = typer.Option(None, "--quality",
+                                                  help="high: the best placement the whole run reaches in "
+                                                       "--quality-time seconds (tabu, refinement and adaptive rounds "
+                                                       "chained; docs/beyond-the-grid.md); default: the scene's "
+                                                       "placement.quality, else default."),
+            quality_time: Optional[float] = typer.Option(None, "--quality-time",
+                                                         help="--quality high: seconds for the whole run "
+                                                              "(default 30)."),
             money_budget: Optional[float] = typer.Option(None, "--money-budget",
                                                          help="Total camera price limit (default: the scene's)."),
             tri_angle: str = typer.Option("20,160", "--tri-angle",
@@ -268,6 +276,8 @@ def run_cmd(scene: Optional[list[str]] = typer.Argument(None, help="Scene YAML f
                  **({"threads": threads} if threads else {}),
                  **({"coverage_gap": coverage_gap} if coverage_gap is not None else {}),
                  **beyond_grid_options(refine, refine_time, adaptive, robust, money_budget, tri_angle),
+                 **({"quality": quality} if quality is not None else {}),
+                 **({"quality_time_s": quality_time} if quality_time is not None else {}),
                  **({"well_triangulated": True} if well_triangulated else {}),
                  **({"keep": keep} if keep is not None else {}), preview=preview,
                  **({"crowd": c} if (c := crowd.crowd_overrides(crowd_density, crowd_samples, crowd_score_samples,

@@ -366,7 +366,7 @@ def refine_poses(scene: Scene, vis: Visibility, problem: PlacementProblem, selec
                     if not trial:
                         break
                     trial = np.array(trial)
-                    trial = trial[_valid_positions(box, scene.occupancy, trial)]
+                    trial = trial[_valid_positions(box, scene.occupancy, trial) & _free_of_others(poses, k, trial)]
                     if guard is not None and len(trial):
                         trial = trial[_guarded(guard, cands, cid, trial)]
                     if len(trial) == 0:
@@ -393,6 +393,15 @@ def refine_poses(scene: Scene, vis: Visibility, problem: PlacementProblem, selec
     info = {"trials": trials, "raycast": raycast, "accepted_moves": accepted, "sweeps": sweeps, "stopped": stopped,
             "seconds": time.perf_counter() - t0}
     return poses, moved, rows, info
+
+
+def _free_of_others(poses: np.ndarray, k: int, trial: np.ndarray) -> np.ndarray:
+    """(K,) bool: the trial positions not at (to 1 mm) another camera's current position (m);
+    two cameras there would share a location. A box re-centred on a refined pose (a second
+    refinement, camplace.improve.quality) can reach a neighbour's position."""
+    others = np.round(np.delete(poses[:, :3], k, axis=0) * 1000).astype(np.int64)
+    mine = np.round(trial[:, :3] * 1000).astype(np.int64)
+    return ~(mine[:, None, :] == others[None, :, :]).all(-1).any(1)
 
 
 def _trial_rows(engine: VisibilityEngine, scene: Scene, vis: Visibility, cid: int, trial: np.ndarray,

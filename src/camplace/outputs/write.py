@@ -92,7 +92,7 @@ def placement_dict(scene_name: str, placement: Placement, budget: int, candidate
         "gap": placement.gap,
         **{k: str(placement.info[k]) for k in ("incumbent_method", "bound_method") if k in placement.info},
         # issue 10; their wall-clock seconds go to metrics.json timings_s only (run_timings)
-        **{k: _timeless(placement.info[k]) for k in ("refine", "adaptive", "robust") if k in placement.info},
+        **{k: _timeless(placement.info[k]) for k in ("refine", "adaptive", "robust", "quality") if k in placement.info},
         "n_cameras": int(len(placement.selected)),
         "frame": frame,
         "input_from_scene": [[float(v) for v in row] for row in T],
@@ -299,7 +299,7 @@ class ReportParts:
         self.skipped.extend(n for n in self.planned if n not in self.done and n not in self.skipped)
 
 
-OWN_INFO_KEYS = ("incumbent_method", "bound_method", "refine", "adaptive", "robust",  # written as keys of their own
+OWN_INFO_KEYS = ("incumbent_method", "bound_method", "refine", "adaptive", "robust", "quality",  # own keys
                  "source_ids", "existing_ids", "new_budget")  # written into the camera objects and budget
 MAX_INFO_ARRAY = 1000  # a longer array in Placement.info is written as its shape and dtype only
 

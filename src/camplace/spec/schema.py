@@ -250,6 +250,7 @@ class PlacementSettings(_Strict):
     budget: Annotated[int, Field(ge=0, strict=True)] = 20
     solver: str = "greedy"
     time_limit_s: PositiveFloat = 600.0
+    quality: Literal["default", "high"] = "default"  # high: the whole run's quality_time_s on the placement (issue 37)
     money_budget: Annotated[float, Field(ge=0, allow_inf_nan=False)] | None = None  # Σ camera cost limit
     # the solver's own options (and seed / threads), checked against the solver's declared
     # types before any heavy stage (camplace.workflows.run); they go with ``solver`` only

@@ -32,6 +32,7 @@ from camplace.visibility.engine import Visibility, drop_blind_candidates
 from camplace.visibility.registry import get_engine
 from camplace.spec.crowd import crowd_with
 from camplace.workflows.crowd import crowd_scores, crowd_stage
+from camplace.workflows.quality import QUALITY_TIME_S, check_quality, high_quality_stage
 from camplace.workflows.sites import Site, site_of
 
 Progress = Callable[[str, int, int], None]
@@ -317,7 +318,8 @@ def run(scene: str | Path | SceneSpec, budget: int | None = None, solver: str | 
         require_feasible: bool = False, workers: int = 1, scheduler: str | None = None,
         cache_dir: str | Path | None = None, visibility_mode: str = "voxel", stride: int | None = None,
         probe: float | None = None, money_budget: float | None = None, refine: bool = False,
-        refine_time_s: float = 60.0, adaptive: int = 0, robust: int = 0,
+        refine_time_s: float = 60.0, adaptive: int = 0, robust: int = 0, quality: str | None = None,
+        quality_time_s: float = QUALITY_TIME_S,
         triangulation_deg: tuple[float, float] = (20.0, 160.0), well_triangulated: bool = False,
         keep: str | Path | None = None, crowd: dict | None = None, options: dict | None = None,
         **solver_options) -> RunResult:
@@ -333,9 +335,12 @@ def run(scene: str | Path | SceneSpec, budget: int | None = None, solver: str | 
     problem). ``options``: solver options as a mapping (e.g. the command line's), over the
     scene's ``placement.options``; keyword solver options win over both. See ``prepare_site``
     for the other options."""
+    t_run = time.perf_counter()
     timings: dict[str, float] = {}
     log: list[str] = []
     spec, _, source = resolve_scene(scene)
+    quality = spec.placement.quality if quality is None else quality
+    check_quality(quality, quality_time_s, refine=refine, adaptive=adaptive, robust=robust)
     crowd_spec = crowd_with(spec.crowd, crowd)
     if spec.storeys and crowd_spec is not None and crowd_spec.density:  # crowds are sampled on one floor
         raise InputError(f"{source}: crowd: not available for a building yet; plan one storey at a time for crowds",
@@ -391,8 +396,14 @@ def run(scene: str | Path | SceneSpec, budget: int | None = None, solver: str | 
     timings["solve"] = time.perf_counter() - t
     grid_selected = placement.selected
     stopped = should_stop is not None and should_stop()
-    if (refine or adaptive or robust) and stopped:  # interrupted: keep the solver's best, do not improve it
+    if (refine or adaptive or robust or quality == "high") and stopped:  # interrupted: keep the solver's best
         log.append("beyond the grid: skipped (interrupted)")
+    elif quality == "high":  # one time budget for the whole run (camplace.improve.quality)
+        t = time.perf_counter()
+        vis, solving, placement = high_quality_stage(
+            sc, vis, solving, placement, quality_time_s - (t - t_run), should_stop=should_stop, progress=progress,
+            log=log, guard=None if site is None else site.guard, row_map=None if cp is None else cp.row_map)
+        timings["beyond_grid"] = time.perf_counter() - t
     elif refine or adaptive or robust:
         t = time.perf_counter()
         vis, solving, placement = improve_placement(
@@ -435,7 +446,7 @@ def _zones_defaults(options: dict, workers: int, scheduler: str | None, cache_di
 def grid_cost(placement: Placement) -> float | None:
     """The cost of a run's placement before it left the candidate grid (before adaptive
     rounds and refine; existing cameras included); None when it never left it."""
-    for step in ("adaptive", "refine"):
+    for step in ("quality", "adaptive", "refine"):
         if isinstance(placement.info.get(step), dict) and "grid_cost" in placement.info[step]:
             return float(placement.info[step]["grid_cost"])
     return None

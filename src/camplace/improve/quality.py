@@ -1,0 +1,168 @@
+"""High quality within one time budget (issue 37): tabu, refinement and adaptive rounds chained.
+
+From the discrete solver's placement, each step gets a share of one time budget (s) and
+starts from the previous step's best selection; a step that finishes early leaves its time
+to the next ones. The default plan (``QUALITY_STEPS``):
+
+1. ``tabu`` on the grid problem, warm-started from the placement (camplace.solvers.tabu);
+2. ``adaptive``: rounds of finer candidates around the placement, each solved again by swap
+   descent and a short tabu from the current selection (camplace.improve.adaptive);
+3. ``refine``: each camera off the grid by the compass search (camplace.improve.refine);
+4. ``tabu`` again on the extended problem (grid, adaptive and refined rows), from the
+   refined selection: it may swap in cameras that the next refinement can move;
+5. ``refine`` again (its search box is centred on the current poses);
+6. ``adaptive`` and 7. ``refine`` once more, around the refined poses.
+
+When the plan ends early (the refinements converged, an adaptive round found nothing), the
+time left goes to ``kick`` steps (``EXTRA_CYCLE``, :func:`kick_refine`: drop two of the least
+useful cameras, refill by swap descent, refine, keep it if better), each with the next seed,
+until less than ``MIN_CYCLE_S`` is left.
+
+Measured on standard-store, N_s = 20 (benchmarks/quality.py, docs/benchmarks.md): adaptive
+rounds on the grid before the first refinement pay most (gap 0.178 against 0.182 with the
+adaptive rounds after two tabu/refine cycles); the steps after the first refinement gain little.
+
+Refinement and adaptive rounds append rows to V, so the returned visibility / problem replace
+the grid ones; the placement stays a selection of V rows and its cost is recomputed from V.
+No step makes the cost worse: each one returns its start when it finds nothing better.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field, replace
+from typing import Callable
+
+import numpy as np
+
+from camplace.improve.adaptive import adaptive_rounds
+from camplace.improve.refine import PoseGuard, RowMap, refine_placement
+from camplace.problem.model import PlacementProblem
+from camplace.scene.build import Scene
+from camplace.solvers.base import Placement
+from camplace.visibility.engine import Visibility
+
+Progress = Callable[[str, int, int], None]
+# (step, share of the whole budget): shares are of the budget left when the step starts,
+# scaled by the shares of the steps still to come, so unspent time flows on
+QUALITY_STEPS: tuple[tuple[str, float], ...] = (("tabu", 0.15), ("adaptive", 0.35), ("refine", 0.1), ("tabu", 0.1),
+                                                ("refine", 0.1), ("adaptive", 0.1), ("refine", 0.1))
+
+EXTRA_CYCLE: tuple[tuple[str, float], ...] = (("kick", 1.0),)  # repeated while time is left
+MIN_CYCLE_S = 1.5  # the least time left (s) worth another cycle
+
+
+@dataclass(frozen=True)
+class QualityResult:
+    """visibility / problem: V and the problem with the appended rows; placement: the best
+    selection on them (solver '<solver>+quality-high'; info['quality']: start_cost, grid_cost -
+    the cost before the first step off the grid -, budget_seconds - the chain's wall-clock
+    budget, left out of placement.json -, steps); steps: per step dict(step, seconds, cost)."""
+
+    visibility: Visibility
+    problem: PlacementProblem
+    placement: Placement
+    start_cost: float
+    steps: list[dict] = field(default_factory=list)
+
+
+def step_budget(left_s: float, shares: list[float]) -> float:
+    """Seconds for the first of the remaining steps: its share of the time left (s), out of
+    the shares of all remaining steps (so a step that ended early gives its time to the rest)."""
+    total = sum(shares)
+    return max(0.0, left_s * shares[0] / total) if total > 0 else 0.0
+
+
+def kick_refine(scene: Scene, vis: Visibility, problem: PlacementProblem, placement: Placement, time_limit_s: float,
+                *, seed: int = 0, drop: int = 2, guard: PoseGuard | None = None, row_map: RowMap | None = None,
+                should_stop: Callable[[], bool] | None = None) -> tuple[Visibility, PlacementProblem, Placement]:
+    """Iterated local search for ``time_limit_s`` seconds: drop ``drop`` cameras drawn among
+    the 2·drop whose loss is least, refill by swap descent (grid and earlier rows alike),
+    refine, keep the result when its cost is lower. The rows raycast stay in V either way."""
+    from camplace.improve.adaptive import swap_descent
+
+    end = time.perf_counter() + time_limit_s
+    rng = np.random.default_rng(seed)
+    stop = (lambda: False) if should_stop is None else should_stop
+    best = problem.cost(placement.selected)
+    while time.perf_counter() < end - 0.3 and not stop():
+        sel = np.asarray(placement.selected, np.int64)
+        loss = np.array([problem.cost(np.delete(sel, k)) for k in range(len(sel))]) - best
+        pool = np.argsort(loss)[: 2 * drop]
+        out = rng.choice(pool, size=min(drop, len(pool)), replace=False)
+        trial, _ = swap_descent(problem, np.delete(sel, out), time_limit_s=max(0.2, end - time.perf_counter()),
+                                should_stop=should_stop)
+        rf = refine_placement(scene, vis, problem, replace(placement, selected=trial, objective=problem.cost(trial)),
+                              time_limit_s=max(0.2, end - time.perf_counter()), guard=guard, row_map=row_map,
+                              should_stop=should_stop)
+        vis, problem = rf.visibility, rf.problem
+        if rf.refined_cost < best - 1e-9:
+            best, placement = rf.refined_cost, rf.placement
+        else:  # the same selection on the extended problem (its rows keep their ids)
+            placement = replace(placement, objective=problem.cost(placement.selected))
+    return vis, problem, placement
+
+
+def high_quality(scene: Scene, vis: Visibility, problem: PlacementProblem, placement: Placement,
+                 time_limit_s: float = 25.0, *, seed: int = 0, steps: tuple[tuple[str, float], ...] = QUALITY_STEPS,
+                 adaptive_rounds_max: int = 3, progress: Progress | None = None, guard: PoseGuard | None = None,
+                 row_map: RowMap | None = None, should_stop: Callable[[], bool] | None = None) -> QualityResult:
+    """Run ``steps`` (see module doc) from ``placement`` within ``time_limit_s`` seconds of
+    wall clock in all; ``should_stop()`` ends the chain between steps (and inside refine and
+    adaptive), keeping the best placement so far."""
+    from camplace.solvers.tabu import solve_tabu
+
+    t0 = time.perf_counter()
+    end = t0 + float(time_limit_s)
+    stop = (lambda: False) if should_stop is None else should_stop
+    start_cost = problem.cost(placement.selected)
+    start_solver, grid_cost, on_grid = placement.solver, start_cost, True
+    hist: list[dict] = []
+    plan, n, cycle = list(steps), 0, 0
+    while not stop():
+        if n == len(plan):  # time left after the plan: EXTRA_CYCLE steps (kicks), the next seed each
+            if end - time.perf_counter() < MIN_CYCLE_S:
+                break
+            plan += list(EXTRA_CYCLE)
+            cycle += 1
+        name = plan[n][0]
+        budget = step_budget(end - time.perf_counter(), [s for _, s in plan[n:]])
+        n += 1
+        if budget < 0.2:
+            continue
+        ts = time.perf_counter()
+        if name == "tabu":
+            p = solve_tabu(problem, time_limit_s=budget, seed=seed + cycle, initial=placement.selected,
+                           should_stop=should_stop, max_stall_restarts=None)
+            if p.objective < problem.cost(placement.selected) - 1e-9:
+                placement = replace(placement, selected=p.selected, objective=p.objective)
+        elif name == "refine":
+            rf = refine_placement(scene, vis, problem, placement, time_limit_s=budget, progress=progress, guard=guard,
+                                  row_map=row_map, should_stop=should_stop)
+            vis, problem, placement = rf.visibility, rf.problem, rf.placement
+        elif name == "adaptive":
+            ar = adaptive_rounds(scene, vis, problem, placement, rounds=adaptive_rounds_max, time_limit_s=budget,
+                                 solver="tabu", solver_time_s=budget / (2 * adaptive_rounds_max), progress=progress,
+                                 guard=guard, row_map=row_map, should_stop=should_stop)
+            vis, problem, placement = ar.visibility, ar.problem, ar.placement
+        elif name == "kick":
+            vis, problem, placement = kick_refine(scene, vis, problem, placement, budget, seed=seed + cycle,
+                                                  guard=guard, row_map=row_map, should_stop=should_stop)
+        else:
+            raise ValueError(f"unknown quality step {name!r}")
+        on_grid = on_grid and name == "tabu"
+        if on_grid:
+            grid_cost = float(problem.cost(placement.selected))
+        hist.append({"step": name, "seconds": round(time.perf_counter() - ts, 3),
+                     "cost": float(problem.cost(placement.selected))})
+    sel = np.asarray(placement.selected, np.int64)
+    problem.check_feasible(sel)
+    info = dict(placement.info, quality={"start_cost": start_cost, "grid_cost": grid_cost,
+                                         "budget_seconds": float(time_limit_s), "steps": hist})
+    out = replace(placement, selected=sel, objective=problem.cost(sel), status="heuristic",
+                  solver=f"{start_solver}+quality-high",
+                  seconds=placement.seconds + time.perf_counter() - t0, info=info)
+    return QualityResult(vis, problem, out, start_cost, hist)
+
+
+__all__ = ["EXTRA_CYCLE", "MIN_CYCLE_S", "QUALITY_STEPS", "QualityResult", "high_quality", "kick_refine", "step_budget"]

@@ -1,0 +1,56 @@
+"""The ``quality`` setting of a run (issue 37): ``"default"`` keeps the run as it is;
+``"high"`` spends one time budget for the whole run (``quality_time_s``, 30 s by default,
+counted from the start of ``run``) on the improvement chain of camplace.improve.quality
+after the discrete solve, less what the stages before it took and a reserve for the metrics
+and the output files."""
+
+from __future__ import annotations
+
+import time
+from typing import Callable
+
+from camplace.core.errors import InputError
+from camplace.improve.quality import high_quality
+from camplace.problem.model import PlacementProblem
+from camplace.scene.build import Scene
+from camplace.solvers import Placement
+from camplace.visibility.engine import Visibility
+
+QUALITIES = ("default", "high")
+QUALITY_TIME_S = 30.0  # the whole run's seconds with quality="high"
+QUALITY_RESERVE_S = 7.0  # kept for the metrics and, on the command line, the output files and report (s)
+
+
+def check_quality(quality: str, quality_time_s: float, *, refine: bool = False, adaptive: int = 0,
+                  robust: int = 0) -> None:
+    """InputError unless ``quality`` is one of QUALITIES and ``quality_time_s`` a positive
+    number of seconds; "high" includes refinement and adaptive rounds, and cannot go with
+    ``adaptive`` or ``robust`` (``refine`` is accepted: the chain refines anyway)."""
+    if quality not in QUALITIES:
+        raise InputError(f"quality: expected one of {', '.join(QUALITIES)}, got {quality!r}", option="quality")
+    if not (isinstance(quality_time_s, (int, float)) and quality_time_s > 0 and quality_time_s < float("inf")):
+        raise InputError(f"quality_time_s: expected a positive number of seconds, got {quality_time_s!r}",
+                         option="quality_time_s")
+    if quality == "high" and (adaptive or robust):
+        raise InputError("quality: quality=high runs its own adaptive rounds and refinement; leave adaptive=0 "
+                         "and robust=0", option="quality")
+
+
+def high_quality_stage(sc: Scene, vis: Visibility, problem: PlacementProblem, placement: Placement,
+                       seconds_left: float, *, should_stop: Callable[[], bool] | None = None, progress=None,
+                       log: list | None = None, guard=None,
+                       row_map=None) -> tuple[Visibility, PlacementProblem, Placement]:
+    """The chain of camplace.improve.quality.high_quality in ``seconds_left`` less
+    QUALITY_RESERVE_S (at least 1 s); one log line per step."""
+    budget = max(1.0, seconds_left - QUALITY_RESERVE_S)
+    t = time.perf_counter()
+    q = high_quality(sc, vis, problem, placement, budget, progress=progress, guard=guard, row_map=row_map,
+                     should_stop=should_stop)
+    if log is not None:
+        steps = ", ".join(f"{h['step']} {h['cost']:.6g} ({h['seconds']:.1f} s)" for h in q.steps)
+        log.append(f"quality high: cost {q.start_cost:.6g} -> {q.placement.objective:.6g} in "
+                   f"{time.perf_counter() - t:.1f} s of {budget:.1f} s: {steps}")
+    return q.visibility, q.problem, q.placement
+
+
+__all__ = ["QUALITIES", "QUALITY_RESERVE_S", "QUALITY_TIME_S", "check_quality", "high_quality_stage"]
