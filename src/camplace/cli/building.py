@@ -13,7 +13,7 @@ import typer
 from rich.markup import escape
 
 from camplace.cli.common import console
-from camplace.cli.space import ImportOptions, plan_names, space_kind
+from camplace.cli.space import ImportOptions, key_values, plan_names, space_kind
 from camplace.core.errors import InputError
 from camplace.spec.wording import did_you_mean, name_list
 
@@ -31,17 +31,7 @@ def is_building(scenes: list[str], storey: Optional[str]) -> bool:
 
 def storey_budgets(values: Optional[list[str]]) -> dict[str, int]:
     """--storey-budget NAME=K values -> {NAME: K} (InputError naming the flag)."""
-    out: dict[str, int] = {}
-    for v in values or []:
-        name, sep, k = v.rpartition("=")
-        try:
-            n = int(k)
-        except ValueError:
-            n = -1
-        if not sep or not name.strip() or n < 0:
-            raise InputError(f"--storey-budget: expected NAME=K (K a whole number >= 0), got '{v}'")
-        out[name.strip()] = n
-    return out
+    return key_values(values, "--storey-budget", int, lambda n: n >= 0, "NAME=K (K a whole number >= 0)")
 
 
 def _elevations(text: Optional[str], n: int) -> list[float] | None:

@@ -151,18 +151,25 @@ class ImportOptions:
                     viewpoints=[floats(v, "--viewpoint", 3) for v in self.viewpoint] or None)
 
 
-def layer_heights(items: list[str] | None) -> dict[str, float] | None:
-    """{'LAYER': metres} of --layer-height LAYER=M items (None when none given)."""
+def key_values(items: list[str] | None, flag: str, cast, ok, expected: str) -> dict:
+    """{KEY: cast(VALUE)} of a repeated flag's KEY=VALUE items; an item without a key, or
+    whose value cast refuses or ``ok`` rejects, is an InputError naming ``flag`` and ``expected``."""
     out = {}
     for item in items or []:
-        layer, _, value = item.partition("=")
+        key, sep, value = item.rpartition("=")
         try:
-            h = float(value)
+            v = cast(value)
         except ValueError:
-            h = -1.0
-        if not layer.strip() or not h > 0:
-            raise InputError(f"--layer-height: expected LAYER=M with a positive height, got '{item}'")
-        out[layer.strip()] = h
+            v = None
+        if not sep or not key.strip() or v is None or not ok(v):
+            raise InputError(f"{flag}: expected {expected}, got '{item}'")
+        out[key.strip()] = v
+    return out
+
+
+def layer_heights(items: list[str] | None) -> dict[str, float] | None:
+    """{'LAYER': metres} of --layer-height LAYER=M items (None when none given)."""
+    out = key_values(items, "--layer-height", float, lambda h: h > 0, "LAYER=M with a positive height")
     return out or None
 
 
