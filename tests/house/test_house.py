@@ -147,3 +147,12 @@ def test_package_docstrings_and_the_design_table_agree_on_the_layers():
         if not doc.startswith(f"camplace.{pkg} (layer {n})"):
             wrong.append(f"{pkg}: {doc[:60]!r}")
     assert not wrong, "package docstrings that do not open with 'camplace.<pkg> (layer N)':\n" + "\n".join(wrong)
+
+
+def test_test_modules_have_unique_basenames():
+    """The tests are collected without packages (rootdir imports): two test modules with one
+    basename stop the whole collection ('import file mismatch'), as twice this session."""
+    names: dict[str, list[str]] = {}
+    for p in sorted((Path(__file__).resolve().parents[1]).rglob("test_*.py")):
+        names.setdefault(p.name, []).append(str(p.parent.name))
+    assert not {n: d for n, d in names.items() if len(d) > 1}
