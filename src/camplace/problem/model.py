@@ -102,9 +102,9 @@ class PlacementProblem:
 
     @property
     def normalizer(self) -> float:
-        """Σ_j w_j Γ_j², the cost of placing no camera (denominator of paper eq. 8)."""
-        g = self.gamma.astype(np.float64)
-        return float(np.dot(self.weights, g * g))
+        """Σ_j w_j Γ_j², the cost of placing no camera (denominator of paper eq. 8): the
+        shortfall cost at zero coverage, by the same formula (bit for bit the cost of no camera)."""
+        return shortfall_cost(self.gamma, self.weights, np.zeros(self.n_targets, np.int64))
 
     def coverage(self, selected: np.ndarray) -> np.ndarray:
         """(N_p,) int64: how many selected candidates see each target."""

@@ -61,7 +61,7 @@ def storey_metrics(sc: Scene, problem: PlacementProblem, selected: np.ndarray, c
     for k, st in enumerate(sc.storeys):
         m = t_st == k
         g, w = problem.gamma[m], problem.weights[m]
-        norm = float(np.dot(w, g.astype(np.float64) ** 2))
+        norm = shortfall_cost(g, w, np.zeros(len(g), np.int64))
         cost = shortfall_cost(g, w, cov[m])
         out.append({"storey": st.name, "elevation_m": round(st.elevation, 4), "top_m": round(st.top, 4),
                     "budget": st.budget, "cameras": int(np.sum(c_st == k)), "targets": int(m.sum()),
