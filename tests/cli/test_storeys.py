@@ -127,3 +127,26 @@ def test_storey_all_on_a_dxf_plan_gives_its_plans(tmp_path, monkeypatch, capsys)
                          capsys)
     assert code == 2 and "--storey" in text and "it has plan-1" in text and len(text.strip().splitlines()) == 1
     assert not (tmp_path / "two.yaml").exists()
+
+
+def test_one_storey_run_of_an_ifc_writes_cameras_ifc_at_building_z(building, tmp_path, monkeypatch, capsys):
+    """Every IFC run writes cameras.ifc (issue 33): a one-storey run's poses are above that
+    storey's floor, its cameras.ifc puts them in that storey at building z (elevation + z)."""
+    import ifcopenshell
+    import ifcopenshell.util.element as ifc_element
+    import ifcopenshell.util.placement as ifc_placement
+
+    out = tmp_path / "out"
+    code, text = run_cli(["--quiet", "run", building, "--storey", "First Floor", "--budget", "2", "--grid-only",
+                          "--no-plan", "--no-cache", "--out", out], monkeypatch, capsys)
+    assert code == 0, text
+    cams = json.loads((out / "placement.json").read_text())["cameras"]
+    model = ifcopenshell.open(str(out / "cameras.ifc"))
+    elements = [e for e in model.by_type("IfcAudioVisualAppliance")]
+    assert len(elements) == len(cams) == 2
+    up = B.height + B.slab
+    got = sorted(tuple(np.round(ifc_placement.get_local_placement(e.ObjectPlacement)[:3, 3] / 1000.0, 4))
+                 for e in elements)  # the generated model is in mm
+    want = sorted(tuple(np.round([c["position"][0], c["position"][1], c["position"][2] + up], 4)) for c in cams)
+    assert got == pytest.approx(want, abs=1e-3)
+    assert {ifc_element.get_container(e).Name for e in elements} == {"First Floor"}
