@@ -27,11 +27,6 @@ def mark_storeys(pdict: dict, scene) -> None:
                         for st in storeys]
 
 
-def storey_cameras(pdict: dict, name: str) -> list[dict]:
-    """The placement.json cameras on storey ``name``."""
-    return [c for c in pdict.get("cameras", []) if c.get("storey") == name]
-
-
 def cameras_ifc_wanted(scene) -> bool:
     """True for a building or an IFC input: those runs write cameras.ifc."""
     return bool(getattr(scene, "storeys", ())) or bool((getattr(scene, "info", None) or {}).get("source"))
