@@ -2,9 +2,9 @@
 
 In three steps: ``prepare_plan_set`` renders the camera views and computes the ``PlanData``
 (camplace.outputs.plan_data: viewsheds, schedule rows, DORI distances; numba kernels on
-every core); ``plan_file_bytes`` makes plan.pdf, plan.dxf and scene.glb from it (plan.pdf, the
-longest, in a forked child process beside the rest of the report: ``start_plan_pdf``,
-camplace.outputs.background); ``plan_svgs`` draws the floor plan(s) as SVG here, for plan.svg and ``plan_section``, the
+every core); ``plan_file_bytes`` makes plan.pdf, plan.dxf and scene.glb from it (in two forked child
+processes beside the rest of the report: ``start_plan_files``, camplace.outputs.background);
+``plan_svgs`` draws the floor plan(s) as SVG here, for plan.svg and ``plan_section``, the
 report's section (the plan page as inline SVG where hovering a camera shows its schedule
 row). ``write_plan_set`` chains them. What each file holds and how to open it: docs/handover.md.
 """
@@ -76,10 +76,14 @@ def plan_file_bytes(ps: PlanSet, names: tuple[str, ...] = ("plan.pdf", "plan.dxf
     return {name: make[name]() for name in names}
 
 
-def start_plan_pdf(ps: PlanSet) -> Forked:
-    """plan.pdf of ``ps`` (plan_file_bytes) started in a forked child: the longest part of the
-    report set, made beside the rest (camplace.outputs.background)."""
-    return Forked(lambda: plan_file_bytes(ps, ("plan.pdf",)))
+CHILD_FILES = (("plan.pdf",), ("plan.dxf", "scene.glb"))  # made by two children (plan.pdf alone: the longest)
+
+
+def start_plan_files(ps: PlanSet) -> list[Forked]:
+    """plan.pdf, plan.dxf and scene.glb of ``ps`` (plan_file_bytes) started in forked children
+    (CHILD_FILES; camplace.outputs.background): made beside the rest of the report set, and
+    matplotlib's PDF writer, ezdxf and trimesh (and their imports) off this process."""
+    return [Forked(lambda names=names: plan_file_bytes(ps, names)) for names in CHILD_FILES]
 
 
 def plan_svgs(ps: PlanSet) -> list[str]:
@@ -142,7 +146,7 @@ def building_plan_section(whole: PlanData, storeys: list[PlanData], svgs: list[s
 def write_plan_set(out_dir: str | Path, scene, vis, placement: dict, metrics: dict, selected, *, paper: str = "A3",
                    height: float = WORKING_HEIGHT, repeatable: bool = False, input_from_scene=None,
                    people: tuple | None = None, prepared: PlanSet | None = None,
-                   made: Forked | None = None) -> tuple[dict[str, Path], str, tuple[list[dict], int]]:
+                   made: list[Forked] | None = None) -> tuple[dict[str, Path], str, tuple[list[dict], int]]:
     """The hand-over set of a placement (scene: camplace.scene.build.Scene; vis: Visibility;
     placement / metrics: the placement.json / metrics.json dicts; selected: rows of vis.V).
     The camera views are rendered once (report_html.camera_views, its time budget unless
@@ -150,16 +154,16 @@ def write_plan_set(out_dir: str | Path, scene, vis, placement: dict, metrics: di
     (plan_data.VIEWSHED_BUDGET_S, none when ``repeatable``). ``input_from_scene`` (4x4):
     plan.dxf in that frame (write_outputs(frame='input')). ``people``: (xy (P, 2), radius, height) m,
     test people drawn into the camera views (issue 36). ``prepared`` / ``made``: prepare_plan_set's
-    result and start_plan_pdf's on it (camplace.outputs.write starts both before the rest of
-    the report set). plan.pdf is made in a forked child while plan.svg, plan.dxf and scene.glb
-    are made here. Returns (paths, plan section HTML, views)."""
+    result and start_plan_files' on it (camplace.outputs.write starts both before the rest of
+    the report set). plan.pdf, plan.dxf and scene.glb are made in forked children while plan.svg
+    is drawn here. Returns (paths, plan section HTML, views)."""
     ps = prepared or prepare_plan_set(scene, vis, placement, metrics, selected, paper=paper, height=height,
                                       repeatable=repeatable, input_from_scene=input_from_scene, people=people)
-    made = made or start_plan_pdf(ps)
+    made = made or start_plan_files(ps)
     try:
         svgs = plan_svgs(ps)
-        here = plan_file_bytes(ps, ("plan.dxf", "scene.glb"))
-        paths = write_plan_files(out_dir, {**made.result(), **here}, svgs)
+        paths = write_plan_files(out_dir, {k: v for job in made for k, v in job.result().items()}, svgs)
     finally:
-        made.cancel()
+        for job in made:
+            job.cancel()
     return paths, plan_set_section(ps, svgs), ps.views

@@ -389,8 +389,8 @@ def _write_report_set(out: Path, vis: Visibility, placement: Placement, pdict: d
 
             parts.run(PLAN_SET, plan_set)
     finally:
-        if "made" in early:
-            early["made"].cancel()
+        for job in early.get("made", ()):
+            job.cancel()
 
     def html() -> dict[str, Path]:
         extra, figs, traces = plan["extra"], None, None
@@ -420,19 +420,19 @@ def _start_plan_set(scene, vis, pdict: dict, metrics: Metrics, m: dict, sel: np.
                     repeatable: bool, input_T, parts: ReportParts) -> dict:
     """The plan set started before the rest of the report set (when it is planned and fits the
     deadline): the camera views and viewsheds computed now (numba kernels on every core), then
-    plan.pdf made in a forked child (camplace.outputs.handover.start_plan_pdf) while this
-    process writes the exports, the figures and the plan set's other files. Returns write_plan_set's ``prepared`` and
+    plan.pdf, plan.dxf and scene.glb made in forked children (camplace.outputs.handover.
+    start_plan_files) while this process writes the exports, the figures and plan.svg. Returns write_plan_set's ``prepared`` and
     ``made`` keywords ({} when not started; an error here is raised again by the plan set part,
     in its turn)."""
     if paper is None or scene is None or PLAN_SET not in parts.planned or not parts.fits():
         return {}
-    from camplace.outputs.handover import prepare_plan_set, start_plan_pdf
+    from camplace.outputs.handover import prepare_plan_set, start_plan_files
 
     try:
         ps = prepare_plan_set(scene, vis, pdict, m, sel, **_plan_set_args(metrics, paper, repeatable, input_T))
     except Exception:  # noqa: BLE001 - the plan set part meets it again in its turn, after exports and figures
         return {}
-    return {"prepared": ps, "made": start_plan_pdf(ps)}
+    return {"prepared": ps, "made": start_plan_files(ps)}
 
 
 def _unlink_quietly(path: Path) -> None:
