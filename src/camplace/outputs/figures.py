@@ -326,28 +326,21 @@ def slice_png_name(height: float) -> str:
     return f"coverage_slice_z{height:.2f}m.png"
 
 
-def figure_pngs(view: SceneView, positions: np.ndarray, is_surface: np.ndarray, coverage: np.ndarray,
-                cameras: list[dict], histograms: dict[str, dict[str, int]], gammas: dict[str, int] | None = None,
-                slices: list[CoverageSlice] | None = None) -> dict[str, bytes]:
-    """The slice PNGs and coverage_histogram.png, name -> PNG bytes (no file written)."""
-    if slices is None:
-        slices = coverage_slices(view, positions, is_surface, coverage)
-    out = {slice_png_name(s.height): png for s, png in zip(slices, slice_figures_png(slices, view, cameras))}
-    out["coverage_histogram.png"] = histogram_figure_png(histograms, gammas, f"{view.name}: coverage histogram")
-    return out
-
-
 def write_figures(out_dir: str | Path, view: SceneView, positions: np.ndarray, is_surface: np.ndarray,
                   coverage: np.ndarray, cameras: list[dict], histograms: dict[str, dict[str, int]],
-                  gammas: dict[str, int] | None = None, slices: list[CoverageSlice] | None = None,
-                  pngs: dict[str, bytes] | None = None) -> dict[str, Path]:
-    """Write the slice PNGs and coverage_histogram.png into out_dir (``pngs``: figure_pngs'
-    result when already made); slice PNGs of other heights (an earlier run's) are removed;
-    name -> path."""
+                  gammas: dict[str, int] | None = None,
+                  slices: list[CoverageSlice] | None = None) -> dict[str, Path]:
+    """Write the slice PNGs and coverage_histogram.png into out_dir; name -> path."""
     out = Path(out_dir)
-    pngs = pngs if pngs is not None else figure_pngs(view, positions, is_surface, coverage, cameras, histograms,
-                                                     gammas, slices)
+    if slices is None:
+        slices = coverage_slices(view, positions, is_surface, coverage)
+    paths = {}
+    names = {slice_png_name(s.height) for s in slices}
     for stale in out.glob("coverage_slice_z*m.png"):  # heights of an earlier run into the same folder
-        if stale.name not in pngs:
+        if stale.name not in names:
             stale.unlink()
-    return {name: atomic_write_bytes(out / name, png) for name, png in pngs.items()}
+    for s, png in zip(slices, slice_figures_png(slices, view, cameras)):
+        paths[slice_png_name(s.height)] = atomic_write_bytes(out / slice_png_name(s.height), png)
+    paths["coverage_histogram.png"] = atomic_write_bytes(
+        out / "coverage_histogram.png", histogram_figure_png(histograms, gammas, f"{view.name}: coverage histogram"))
+    return paths

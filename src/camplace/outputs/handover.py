@@ -146,7 +146,7 @@ def building_plan_section(whole: PlanData, storeys: list[PlanData], svgs: list[s
 def write_plan_set(out_dir: str | Path, scene, vis, placement: dict, metrics: dict, selected, *, paper: str = "A3",
                    height: float = WORKING_HEIGHT, repeatable: bool = False, input_from_scene=None,
                    people: tuple | None = None, prepared: PlanSet | None = None,
-                   made: list[Forked] | None = None, svgs: list[str] | None = None) -> tuple[dict[str, Path], str, tuple[list[dict], int]]:
+                   made: list[Forked] | None = None) -> tuple[dict[str, Path], str, tuple[list[dict], int]]:
     """The hand-over set of a placement (scene: camplace.scene.build.Scene; vis: Visibility;
     placement / metrics: the placement.json / metrics.json dicts; selected: rows of vis.V).
     The camera views are rendered once (report_html.camera_views, its time budget unless
@@ -155,13 +155,13 @@ def write_plan_set(out_dir: str | Path, scene, vis, placement: dict, metrics: di
     plan.dxf in that frame (write_outputs(frame='input')). ``people``: (xy (P, 2), radius, height) m,
     test people drawn into the camera views (issue 36). ``prepared`` / ``made``: prepare_plan_set's
     result and start_plan_files' on it (camplace.outputs.write starts both before the rest of
-    the report set), ``svgs`` plan_svgs' when already drawn. plan.pdf, plan.dxf and scene.glb
-    are made in forked children while plan.svg is drawn here. Returns (paths, plan section HTML, views)."""
+    the report set). plan.pdf, plan.dxf and scene.glb are made in forked children while plan.svg
+    is drawn here. Returns (paths, plan section HTML, views)."""
     ps = prepared or prepare_plan_set(scene, vis, placement, metrics, selected, paper=paper, height=height,
                                       repeatable=repeatable, input_from_scene=input_from_scene, people=people)
     made = made or start_plan_files(ps)
     try:
-        svgs = svgs or plan_svgs(ps)
+        svgs = plan_svgs(ps)
         paths = write_plan_files(out_dir, {k: v for job in made for k, v in job.result().items()}, svgs)
     finally:
         for job in made:

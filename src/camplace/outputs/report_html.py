@@ -298,8 +298,7 @@ def write_report(out_dir: str | Path, targets, coverage: np.ndarray, placement: 
                  scene=None, vis=None, selected: np.ndarray | None = None,
                  repeatable: bool = False, extra_html: str = "",
                  rendered_views: tuple[list[dict], int] | None = None, written: tuple[str, ...] = (),
-                 extra_figures: dict | None = None, extra_traces: list | None = None,
-                 figure_bytes: dict[str, bytes] | None = None) -> dict[str, Path]:
+                 extra_figures: dict | None = None, extra_traces: list | None = None) -> dict[str, Path]:
     """Write exports (opencv/, colmap/), PNG figures and report.html into out_dir.
 
     targets: camplace.targets.build.Targets (N_p); coverage: (N_p,) achieved coverage of the
@@ -310,24 +309,26 @@ def write_report(out_dir: str | Path, targets, coverage: np.ndarray, placement: 
     depends only on the inputs (byte-identical between identical runs). ``extra_html``: sections
     placed before the camera views (the plan view, camplace.outputs.handover); ``rendered_views``:
     camera_views' result when already rendered; ``written``: names of files an earlier call wrote
-    (report.html links them too); ``extra_figures`` / ``extra_traces``: as for render_report;
-    ``figure_bytes``: report_figure_pngs' result when already made (camplace.outputs.write makes
-    them in a forked child). Returns file name (relative to out_dir) -> path."""
+    (report.html links them too); ``extra_figures`` / ``extra_traces``: as for render_report.
+    Returns file name (relative to out_dir) -> path."""
     from camplace.outputs.exports import write_exports
     from camplace.outputs.figures import write_figures
 
     out = Path(out_dir)
     cameras = placement.get("cameras", [])
-    view = view or _report_view(targets, placement)
+    if view is None:
+        view = SceneView.from_targets(str(placement.get("scene", "scene")), targets.positions, cameras)
     is_surface = targets.is_surface
     slices = coverage_slices(view, targets.positions, is_surface, coverage)
     paths: dict[str, Path] = {}
     if exports:
         paths.update(write_exports(out, cameras))
     if figures:
-        pngs = figure_bytes if figure_bytes is not None else report_figure_pngs(targets, coverage, placement, metrics,
-                                                                                view, slices)
-        paths.update(write_figures(out, view, targets.positions, is_surface, coverage, cameras, {}, pngs=pngs))
+        gammas = {name: int(targets.gamma[targets.region_ids == r].max())
+                  for r, name in enumerate(targets.region_names) if np.any(targets.region_ids == r)}
+        hists = {n: r["coverage_histogram"] for n, r in (metrics.get("regions") or {}).items()}
+        paths.update(write_figures(out, view, targets.positions, is_surface, coverage, cameras,
+                                   hists or {"all targets": metrics.get("coverage_histogram", {})}, gammas, slices))
     if html_report:
         files = file_list([*written, *paths])  # every file written before the page, as returned
         views, skipped = rendered_views or (None, 0)
@@ -341,26 +342,6 @@ def write_report(out_dir: str | Path, targets, coverage: np.ndarray, placement: 
                              storey_figures=_storey_figures(scene, targets, coverage, cameras))
         paths["report.html"] = atomic_write_text(out / "report.html", text)
     return paths
-
-
-def _report_view(targets, placement: dict) -> SceneView:
-    """The SceneView of a report without a scene: from the targets and cameras alone."""
-    return SceneView.from_targets(str(placement.get("scene", "scene")), targets.positions, placement.get("cameras", []))
-
-
-def report_figure_pngs(targets, coverage: np.ndarray, placement: dict, metrics: dict, view: SceneView | None = None,
-                       slices: list[CoverageSlice] | None = None) -> dict[str, bytes]:
-    """The report's PNG figures (camplace.outputs.figures.figure_pngs), name -> bytes: the
-    coverage slices and the histogram by region with each region's Γ; arguments as for
-    write_report. No file written and no thread of this process used (a forked child may make them)."""
-    from camplace.outputs.figures import figure_pngs
-
-    view = view or _report_view(targets, placement)
-    gammas = {name: int(targets.gamma[targets.region_ids == r].max())
-              for r, name in enumerate(targets.region_names) if np.any(targets.region_ids == r)}
-    hists = {n: r["coverage_histogram"] for n, r in (metrics.get("regions") or {}).items()}
-    return figure_pngs(view, targets.positions, targets.is_surface, coverage, placement.get("cameras", []),
-                       hists or {"all targets": metrics.get("coverage_histogram", {})}, gammas, slices)
 
 
 def _storey_figures(scene, targets, coverage: np.ndarray, cameras: list[dict]) -> tuple | None:

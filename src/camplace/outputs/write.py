@@ -361,7 +361,6 @@ def _write_report_set(out: Path, vis: Visibility, placement: Placement, pdict: d
     (ReportParts: exports, figures, the plan set, report.html, each while it fits its deadline).
     ``written``: names of the files written before the report set (linked from report.html)."""
     from camplace.outputs.figures import SceneView
-    from camplace.outputs.handover import plan_svgs
     from camplace.outputs.report_html import write_report
 
     parts = ReportParts(None, []) if parts is None else parts
@@ -377,12 +376,9 @@ def _write_report_set(out: Path, vis: Visibility, placement: Placement, pdict: d
 
     plan: dict = {"extra": "", "views": None}
     early = _start_plan_set(scene, vis, pdict, metrics, m, sel, paper, repeatable, input_T, parts)
-    fig_job = _start_figures(vis.targets, cov, pdict, m, view, parts)
     try:
-        if early:
-            early["svgs"] = _quietly(lambda: plan_svgs(early["prepared"]))  # drawn while the children work
         parts.run(EXPORTS, lambda: report(exports=True))
-        parts.run(FIGURES, lambda: report(figures=True, figure_bytes=fig_job.result() if fig_job else None))
+        parts.run(FIGURES, lambda: report(figures=True))
         if paper is not None and scene is not None:  # the hand-over set renders the camera views once for both
             from camplace.outputs.handover import write_plan_set
 
@@ -393,7 +389,7 @@ def _write_report_set(out: Path, vis: Visibility, placement: Placement, pdict: d
 
             parts.run(PLAN_SET, plan_set)
     finally:
-        for job in [*early.get("made", ()), *([fig_job] if fig_job else [])]:
+        for job in early.get("made", ()):
             job.cancel()
 
     def html() -> dict[str, Path]:
@@ -437,25 +433,6 @@ def _start_plan_set(scene, vis, pdict: dict, metrics: Metrics, m: dict, sel: np.
     except Exception:  # noqa: BLE001 - the plan set part meets it again in its turn, after exports and figures
         return {}
     return {"prepared": ps, "made": start_plan_files(ps)}
-
-
-def _start_figures(targets, cov: np.ndarray, pdict: dict, m: dict, view, parts: ReportParts):
-    """The report's PNG figures (report_html.report_figure_pngs) started in a forked child
-    (camplace.outputs.background.Forked) when they are planned and fit the deadline; else None."""
-    if FIGURES not in parts.planned or not parts.fits():
-        return None
-    from camplace.outputs.background import Forked
-    from camplace.outputs.report_html import report_figure_pngs
-
-    return Forked(lambda: report_figure_pngs(targets, cov, pdict, m, view))
-
-
-def _quietly(fn: Callable[[], object]):
-    """fn() or None when it raises an Exception (work done ahead, met again in its turn)."""
-    try:
-        return fn()
-    except Exception:  # noqa: BLE001 - the part that needs it raises it again
-        return None
 
 
 def _unlink_quietly(path: Path) -> None:
