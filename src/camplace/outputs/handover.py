@@ -39,24 +39,41 @@ class PlanSet:
     data: PlanData
     storeys: list[PlanData]
     scene: object
+    plans: list | None = None  # the floor plan figures (plan_figure), once drawn: for plan.pdf and plan.svg
+
+    def floor_plans(self) -> list:
+        """The floor plan figure of each storey (one room: the one sheet), drawn at the first call."""
+        if self.plans is None:
+            self.plans = [plan_figure(d) for d in (self.storeys or [self.data])]
+        return self.plans
 
 
 def prepare_plan_set(scene, vis, placement: dict, metrics: dict, selected, *, paper: str = "A3",
                      height: float = WORKING_HEIGHT, repeatable: bool = False, input_from_scene=None,
-                     people: tuple | None = None) -> PlanSet:
+                     people: tuple | None = None, preload: bool = False) -> PlanSet:
     """The camera views (report_html.camera_views, its time budget unless ``repeatable``) and the
     PlanData (one per storey too for a building, camplace.outputs.plan_storeys); arguments as
-    for write_plan_set."""
+    for write_plan_set. ``preload``: the children's modules imported (``preload_modules``) on a
+    thread beside the viewsheds' numba kernels (they release the GIL), joined before returning."""
+    import threading
+
     from camplace.outputs.report_html import VIEW_BUDGET_S, camera_views
 
     views = camera_views(scene, vis, selected, budget_s=float("inf") if repeatable else VIEW_BUDGET_S, people=people)
-    if is_building(scene):  # issue 33: one plan sheet per storey
-        whole, storeys = building_plans(scene, vis, placement, metrics, selected, height=height, paper=paper,
-                                        repeatable=repeatable, views=views[0], input_from_scene=input_from_scene)
-        return PlanSet(views, whole, storeys, scene)
-    data = plan_data(scene, vis, placement, metrics, selected, height=height, paper=paper, repeatable=repeatable,
-                     views=views[0], input_from_scene=input_from_scene)
-    return PlanSet(views, data, [], scene)
+    imports = threading.Thread(target=preload_modules, name="camplace-preload", daemon=True) if preload else None
+    if imports is not None:
+        imports.start()
+    try:
+        if is_building(scene):  # issue 33: one plan sheet per storey
+            whole, storeys = building_plans(scene, vis, placement, metrics, selected, height=height, paper=paper,
+                                            repeatable=repeatable, views=views[0], input_from_scene=input_from_scene)
+            return PlanSet(views, whole, storeys, scene)
+        data = plan_data(scene, vis, placement, metrics, selected, height=height, paper=paper, repeatable=repeatable,
+                         views=views[0], input_from_scene=input_from_scene)
+        return PlanSet(views, data, [], scene)
+    finally:
+        if imports is not None:
+            imports.join()  # before any fork: a child must not inherit an import in progress
 
 
 def plan_file_bytes(ps: PlanSet, names: tuple[str, ...] = ("plan.pdf", "plan.dxf", "scene.glb")
@@ -66,11 +83,11 @@ def plan_file_bytes(ps: PlanSet, names: tuple[str, ...] = ("plan.pdf", "plan.dxf
     (camplace.outputs.background). A building's plan.pdf holds each storey's sheets, plan.dxf
     one layer set per storey at its elevation, scene.glb the storeys stacked."""
     if ps.storeys:
-        make = {"plan.pdf": lambda: building_pdf_bytes(ps.data, ps.storeys),
+        make = {"plan.pdf": lambda: building_pdf_bytes(ps.data, ps.storeys, ps.floor_plans()),
                 "plan.dxf": lambda: building_dxf(ps.storeys).encode("utf-8"),
                 "scene.glb": lambda: building_glb(ps.scene, ps.storeys)}
     else:
-        make = {"plan.pdf": lambda: plan_pdf_bytes(ps.data, None, lambda: [bom_figure(ps.data)]),
+        make = {"plan.pdf": lambda: plan_pdf_bytes(ps.data, ps.floor_plans()[0], lambda: [bom_figure(ps.data)]),
                 "plan.dxf": lambda: plan_dxf(ps.data).encode("utf-8"),
                 "scene.glb": lambda: scene_glb(ps.data)}
     return {name: make[name]() for name in names}
@@ -82,13 +99,23 @@ CHILD_FILES = (("plan.pdf",), ("plan.dxf", "scene.glb"))  # made by two children
 def start_plan_files(ps: PlanSet) -> list[Forked]:
     """plan.pdf, plan.dxf and scene.glb of ``ps`` (plan_file_bytes) started in forked children
     (CHILD_FILES; camplace.outputs.background): made beside the rest of the report set, and
-    matplotlib's PDF writer, ezdxf and trimesh (and their imports) off this process."""
+    matplotlib's PDF writer, ezdxf and trimesh off this process. The floor plans are drawn
+    first, here: the PDF's child inherits them and plan_svgs writes them as SVG."""
+    ps.floor_plans()
     return [Forked(lambda names=names: plan_file_bytes(ps, names)) for names in CHILD_FILES]
+
+
+def preload_modules() -> None:
+    """Import what plan_file_bytes uses (once per process; ≈ 0.6 CPU s, trimesh most of it) so
+    that each report's children inherit the modules instead of importing them again."""
+    import ezdxf  # noqa: F401
+    import trimesh  # noqa: F401
+    from matplotlib.backends import backend_pdf  # noqa: F401
 
 
 def plan_svgs(ps: PlanSet) -> list[str]:
     """The floor plan sheet of each storey (one room: the one sheet) as SVG text."""
-    return [plan_svg(d, plan_figure(d)) for d in (ps.storeys or [ps.data])]
+    return [plan_svg(d, fig) for d, fig in zip(ps.storeys or [ps.data], ps.floor_plans())]
 
 
 def plan_set_section(ps: PlanSet, svgs: list[str]) -> str:

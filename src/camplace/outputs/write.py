@@ -419,17 +419,18 @@ def _plan_set_args(metrics: Metrics, paper: str, repeatable: bool, input_T) -> d
 def _start_plan_set(scene, vis, pdict: dict, metrics: Metrics, m: dict, sel: np.ndarray, paper: str | None,
                     repeatable: bool, input_T, parts: ReportParts) -> dict:
     """The plan set started before the rest of the report set (when it is planned and fits the
-    deadline): the camera views and viewsheds computed now (numba kernels on every core), then
-    plan.pdf, plan.dxf and scene.glb made in forked children (camplace.outputs.handover.
-    start_plan_files) while this process writes the exports, the figures and plan.svg. Returns write_plan_set's ``prepared`` and
-    ``made`` keywords ({} when not started; an error here is raised again by the plan set part,
+    deadline): the camera views and viewsheds computed now (numba kernels on every core; the
+    children's imports beside the viewsheds), then plan.pdf, plan.dxf and scene.glb made in forked
+    children (camplace.outputs.handover.start_plan_files) while this process writes the exports,
+    the figures and plan.svg. Returns write_plan_set's ``prepared`` and ``made`` keywords ({} when not started; an error here is raised again by the plan set part,
     in its turn)."""
     if paper is None or scene is None or PLAN_SET not in parts.planned or not parts.fits():
         return {}
     from camplace.outputs.handover import prepare_plan_set, start_plan_files
 
     try:
-        ps = prepare_plan_set(scene, vis, pdict, m, sel, **_plan_set_args(metrics, paper, repeatable, input_T))
+        ps = prepare_plan_set(scene, vis, pdict, m, sel, **_plan_set_args(metrics, paper, repeatable, input_T),
+                              preload=True)
     except Exception:  # noqa: BLE001 - the plan set part meets it again in its turn, after exports and figures
         return {}
     return {"prepared": ps, "made": start_plan_files(ps)}
