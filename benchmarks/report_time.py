@@ -1,6 +1,8 @@
 """Time the report set (report.html, PNG figures, exports, camera views) of a run.
 
-    python benchmarks/report_time.py [SCENE] [BUDGET] [REPEATS]
+    python benchmarks/report_time.py [SCENE] [BUDGET] [REPEATS] [PART]
+
+PART (optional): time only the parts whose name contains it (e.g. 'report=True').
 
 Prints the wall and CPU seconds of each part (best of REPEATS, after one warm-up) and
 the sizes of report.html and the PNGs. CPU seconds count this process's threads and its
@@ -24,6 +26,7 @@ def main() -> None:
     scene = sys.argv[1] if len(sys.argv) > 1 else "standard-store"
     budget = int(sys.argv[2]) if len(sys.argv) > 2 else 40
     reps = int(sys.argv[3]) if len(sys.argv) > 3 else 3
+    only = sys.argv[4] if len(sys.argv) > 4 else ""
     from camplace.outputs.exports import write_exports
     from camplace.outputs.figures import SceneView, coverage_slices, write_figures
     from camplace.workflows.run import run
@@ -54,12 +57,15 @@ def main() -> None:
     }
     print(f"{scene}, {len(sel)} cameras, {len(t)} targets; load average {os.getloadavg()[0]:.1f} "
           f"on {os.cpu_count()} cores")
-    print(f"  {'part':<36} {'wall':>7} {'CPU':>7}   (best of {reps}; CPU = all threads and child processes)")
+    print(f"  {'part':<36} {'wall':>7} {'CPU':>7} {'median':>7}   (best of {reps}, median wall; "
+          f"CPU = all threads and child processes)")
     for name, fn in parts.items():
+        if only not in name:
+            continue
         fn()  # warm-up (imports, numba)
         runs = [_timed(fn) for _ in range(reps)]
         wall, cpu = min(w for w, _ in runs), min(c for _, c in runs)
-        print(f"  {name:<36} {wall:6.2f}s {cpu:6.2f}s")
+        print(f"  {name:<36} {wall:6.2f}s {cpu:6.2f}s {float(np.median([w for w, _ in runs])):6.2f}s")
     views, skipped = camera_views(r.scene, vis, sel)
     print(f"  camera views rendered in budget: {len(views)} of {len(sel)}")
     print(f"  report.html {(out / 'report.html').stat().st_size / 1e6:.2f} MB, "
