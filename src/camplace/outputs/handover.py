@@ -102,7 +102,15 @@ def start_plan_files(ps: PlanSet) -> list[Forked]:
     matplotlib's PDF writer, ezdxf and trimesh off this process. The floor plans are drawn
     first, here: the PDF's child inherits them and plan_svgs writes them as SVG."""
     ps.floor_plans()
-    return [Forked(lambda names=names: plan_file_bytes(ps, names)) for names in CHILD_FILES]
+    jobs: list[Forked] = []
+    try:
+        for names in CHILD_FILES:
+            jobs.append(Forked(lambda names=names: plan_file_bytes(ps, names)))
+    except BaseException:  # a Ctrl-C between two forks: no child left behind
+        for job in jobs:
+            job.cancel()
+        raise
+    return jobs
 
 
 def preload_modules() -> None:
