@@ -70,3 +70,30 @@ def test_a_child_killed_before_answering_is_replaced_by_the_work_here():
     job = Forked(lambda: here if os.getpid() == here else time.sleep(30))  # the child never answers
     os.kill(job.pid, 9)
     assert job.result() == here
+
+
+@forks
+def test_a_stuck_child_is_ended_and_the_work_done_here(monkeypatch):
+    """A child blocked on a lock (here: asleep, using no CPU) is given up after STALL_S s."""
+    monkeypatch.setattr(background, "STALL_S", 2.0)
+    here = os.getpid()
+    job = Forked(lambda: here if os.getpid() == here else time.sleep(60))
+    pid = job.pid
+    t0 = time.perf_counter()
+    assert job.result() == here
+    assert time.perf_counter() - t0 < 20 and job.pid is None
+    with pytest.raises(ChildProcessError):
+        os.waitpid(pid, os.WNOHANG)
+
+
+@forks
+def test_a_busy_child_is_not_taken_for_a_stuck_one(monkeypatch):
+    monkeypatch.setattr(background, "STALL_S", 2.0)
+
+    def busy():
+        t = time.process_time()
+        while time.process_time() - t < 3.0:  # CPU, no answer, for longer than STALL_S
+            pass
+        return os.getpid()
+
+    assert Forked(busy).result() != os.getpid()

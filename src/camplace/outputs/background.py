@@ -9,6 +9,11 @@ Where fork is unavailable (not Linux, ``FORK`` False) or fails (no memory for it
 child dies without an answer, ``fn`` runs in this process at ``result()``: the same bytes,
 only later. ``cancel()`` ends a child whose result is no longer wanted (an interrupt, a
 deadline).
+
+A fork copies only the forking thread; a lock another thread held at that moment stays held
+in the child. Should the child ever block on one, it stops using CPU: ``result()`` watches
+the child's CPU time (/proc) while it waits and, after ``STALL_S`` seconds without any, ends
+it and does the work here, so a stuck child costs time, never a hung run.
 """
 
 from __future__ import annotations
@@ -16,6 +21,7 @@ from __future__ import annotations
 import gc
 import os
 import pickle
+import select
 import signal
 import sys
 import warnings
@@ -25,6 +31,7 @@ from typing import Generic, TypeVar
 T = TypeVar("T")
 
 FORK = sys.platform.startswith("linux") and hasattr(os, "fork")  # tests switch it off to compare
+STALL_S = 20.0  # s of waiting without the child using any CPU: it is stuck (module doc)
 
 
 class Forked(Generic[T]):
@@ -63,14 +70,15 @@ class Forked(Generic[T]):
         if self.pid is None:
             return self.fn()
         try:
-            with os.fdopen(self.fd, "rb") as f:
+            data = _read_all(self.fd, self.pid)  # all of it before waiting: a full pipe would block the child
+            if data is not None:
+                os.close(self.fd)
                 self.fd = None
-                data = f.read()  # all of it before waiting: a full pipe would block the child
-            os.waitpid(self.pid, 0)
-            self.pid = None
+                os.waitpid(self.pid, 0)
+                self.pid = None
         finally:
             self.cancel()
-        if not data:  # the child died without answering (killed): do the work here
+        if not data:  # the child died without answering (killed) or is stuck: do the work here
             return self.fn()
         ok, value = pickle.loads(data)
         if ok:
@@ -89,6 +97,37 @@ class Forked(Generic[T]):
             except (ProcessLookupError, ChildProcessError):
                 pass
             self.pid = None
+
+
+def _cpu_ticks(pid: int) -> int | None:
+    """User + system CPU clock ticks of process ``pid`` (/proc/PID/stat); None where unreadable."""
+    try:
+        with open(f"/proc/{pid}/stat", "rb") as f:
+            fields = f.read().rsplit(b")", 1)[1].split()
+        return int(fields[11]) + int(fields[12])  # utime, stime: fields 14 and 15 of stat(5)
+    except (OSError, IndexError, ValueError):
+        return None
+
+
+def _read_all(fd: int, pid: int, poll_s: float = 1.0) -> bytes | None:
+    """Everything the child writes to ``fd`` until it closes it; None when the child used no
+    CPU for STALL_S seconds (stuck: module doc)."""
+    chunks: list[bytes] = []
+    ticks, idle = _cpu_ticks(pid), 0.0
+    while True:
+        ready, _, _ = select.select([fd], [], [], poll_s)
+        if ready:
+            chunk = os.read(fd, 1 << 20)
+            if not chunk:
+                return b"".join(chunks)
+            chunks.append(chunk)
+            idle = 0.0
+            continue
+        now = _cpu_ticks(pid)
+        idle = idle + poll_s if now is not None and now == ticks else 0.0
+        ticks = now
+        if idle >= STALL_S:
+            return None
 
 
 def _answer(fd: int, fn: Callable[[], object]) -> None:
