@@ -26,6 +26,7 @@ writes the JSON and prints a markdown table (pasted into docs/benchmarks.md).
 from __future__ import annotations
 
 import argparse
+import contextlib
 import hashlib
 import json
 import os
@@ -186,6 +187,31 @@ class StageSampler:
         return self.stages
 
 
+@contextlib.contextmanager
+def timed_output_parts(parts: dict[str, float]):
+    """Inside the block, the seconds of each part of write_outputs go into ``parts``: the
+    contract's visibility.npz (AtomicBatch.stage_savez) and each part of the report set
+    (ReportParts.run: exports, figures, plan set, report.html). Issue 37."""
+    from camplace.core.files import AtomicBatch
+    from camplace.outputs.write import ReportParts
+
+    savez, run_part = AtomicBatch.stage_savez, ReportParts.run
+
+    def timed(name, f, *a, **k):
+        t = time.perf_counter()
+        try:
+            return f(*a, **k)
+        finally:
+            parts[name] = parts.get(name, 0.0) + time.perf_counter() - t
+
+    AtomicBatch.stage_savez = lambda self, path, **k: timed(Path(path).name, savez, self, path, **k)
+    ReportParts.run = lambda self, name, write: timed(name, run_part, self, name, write)
+    try:
+        yield parts
+    finally:
+        AtomicBatch.stage_savez, ReportParts.run = savez, run_part
+
+
 def run_one(size: float, solver: str, budget: int | None, cache: Path, out_dir: Path | None,
             time_limit_s: float) -> dict:
     """camplace run warehouse:<size> end to end in this process (cache at ``cache``,
@@ -199,9 +225,11 @@ def run_one(size: float, solver: str, budget: int | None, cache: Path, out_dir: 
             time_limit_s=time_limit_s)
     sampler("outputs", 0, 1)
     t = time.perf_counter()
+    parts: dict[str, float] = {}
     if out_dir is not None:  # None: --no-outputs
-        write_outputs(out_dir, r.scene.name, r.visibility, r.placement, r.problem.budget, r.metrics, r.timings_s,
-                      scene=r.scene)
+        with timed_output_parts(parts):
+            write_outputs(out_dir, r.scene.name, r.visibility, r.placement, r.problem.budget, r.metrics,
+                          r.timings_s, scene=r.scene)
     report_s = time.perf_counter() - t
     total = time.perf_counter() - t0
     st = sampler.close()
@@ -209,7 +237,7 @@ def run_one(size: float, solver: str, budget: int | None, cache: Path, out_dir: 
     return {"size_m2": size, "mode": "run", "solver": solver, "N_g": int(r.visibility.V.shape[0]),
             "N_p": int(r.visibility.V.shape[1]), "nnz": int(r.visibility.V.nnz), "V_hash": _v_hash(r.visibility.V),
             "cached_chunks": r.visibility.info.get("cached_chunks"), "chunks": r.visibility.info.get("chunks"),
-            "stages": st, "timings_s": dict(r.timings_s, report=report_s), "total_s": total,
+            "stages": st, "timings_s": dict(r.timings_s, report=report_s), "output_parts_s": parts, "total_s": total,
             "reduction_s": red.get("seconds"), "nnz_reduced": red.get("nonzeros_after"),
             "objective": r.placement.objective, "coverage_gap": r.metrics.coverage_gap,
             "cameras": int(len(r.placement.selected)), "status": r.placement.status,
