@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import time
 from dataclasses import replace
+from itertools import pairwise
 from typing import Callable
 
 import numba
@@ -170,13 +171,13 @@ def check_and_build(V: sp.csr_matrix, indptr: np.ndarray, live: np.ndarray, rows
     indices = V.indices
     bounds = row_chunks(indptr, rows, BUILD_CHUNK_NNZ)
     out_ptr = np.zeros(len(rows) + 1, np.int64)
-    for r0, r1 in zip(bounds[:-1], bounds[1:]):
+    for r0, r1 in pairwise(bounds):
         ok = _check_count(indptr, indices, live, rows, rep, r0, r1, out_ptr)
         release_pages(indices)
         if not ok:
             return False, out_ptr, np.zeros(0, np.int32)
     out = np.empty(out_ptr[-1], np.int32)
-    for r0, r1 in zip(bounds[:-1], bounds[1:]):
+    for r0, r1 in pairwise(bounds):
         _build(indptr, indices, live, rows, rep, new_id, r0, r1, out_ptr, out)
         release_pages(indices)
     return True, out_ptr, out
@@ -292,6 +293,7 @@ def solve_reduced(problem: PlacementProblem, run: Callable[[PlacementProblem], P
     info["reduction"] = red.info
     if isinstance(info.get("order"), list):
         info["order"] = [int(red.candidates[i]) for i in info["order"]]
+    del red  # the reduced V goes before problem.cost reads V's rows (a mapped V's read-ahead: issue 37)
     return replace(p, selected=sel, objective=problem.cost(sel), info=info)
 
 
