@@ -6,9 +6,11 @@ the cost), but instead of a lazy heap it keeps every candidate's gain exact: whe
 camera is added, each target j it sees loses one unit of deficit, and the gain of every
 candidate seeing j drops by w_j·2 (deficit was > 1) or w_j (deficit was 1), walked
 through the columns of V. The columns are kept as gaps between consecutive row ids in
-LEB128 varints (``csc_varint``: 7 bits a byte, ~1.2 bytes a non-zero at site scale
+LEB128 varints (``csc_varint``: 7 bits a byte, ~1.03 bytes a non-zero at site scale
 instead of 4 for int32 row ids, issue 37). Work per step = Σ over the new camera's
-targets of their column length, + one O(N_g) argmax scan; memory = V + its varint
+targets of their column length, + the argmax over blocks of 1,024 candidates (each
+block's best kept, rescanned only when one of its gains or flags changed: ``_argmax``,
+issue 37); memory = V + its varint
 columns + O(N_g + N_p). Selections equal ``greedy``'s whenever
 gains are exact in float64 (integer weights, as in every built-in scene); with
 fractional weights, rounding can break an exact tie differently.
@@ -133,20 +135,50 @@ def initial_gains(indptr, indices, deficit, weights):
     return g
 
 
+BLOCK_SHIFT = 10  # candidates per block of the argmax (1,024): issue 37
+
+
+@numba.njit(cache=True)
+def _block_best(gain, alive, b, bmax, barg):
+    """bmax[b], barg[b]: the largest positive gain of an alive candidate in block b and its
+    lowest id (0.0 and −1 when none)."""
+    lo = b << BLOCK_SHIFT
+    hi = min(len(gain), lo + (1 << BLOCK_SHIFT))
+    best, bg = -1, 0.0
+    for i in range(lo, hi):
+        if alive[i] and gain[i] > bg:  # strict: ties keep the lowest id; gain must be > 0
+            best = i
+            bg = gain[i]
+    bmax[b] = bg
+    barg[b] = best
+
+
+@numba.njit(cache=True)
+def _argmax(gain, alive, bmax, barg, dirty):
+    """The alive candidate of largest positive gain, lowest id on ties (−1 when none), from the
+    blocks' maxima; blocks marked dirty (a gain or alive flag changed) are rescanned first.
+    Same answer as one scan over every candidate, in O(blocks + dirty blocks · block size)."""
+    best, bg = -1, 0.0
+    for b in range(len(bmax)):
+        if dirty[b]:
+            _block_best(gain, alive, b, bmax, barg)
+            dirty[b] = False
+        if bmax[b] > bg:  # strict: an earlier block (lower ids) keeps a tie
+            best = barg[b]
+            bg = bmax[b]
+    return best
+
+
 @numba.njit(cache=True)
 def _steps(indptr, indices, col_ptr, col_bytes, weights, deficit, gain, alive, loc, loc_ptr, loc_rows,
-           costs, money, order, n_sel, budget, max_steps, ctype, tleft):
+           costs, money, order, n_sel, budget, max_steps, ctype, tleft, bmax, barg, dirty):
     """Up to max_steps greedy steps, in place (ctype: limited type index or −1, tleft:
-    cameras left per limited type). Returns (n_sel, money, finished)."""
+    cameras left per limited type; bmax, barg, dirty: the argmax's blocks, _argmax).
+    Returns (n_sel, money, finished)."""
     for _ in range(max_steps):
         if n_sel >= budget:
             return n_sel, money, True
-        best = -1
-        bg = 0.0
-        for i in range(len(gain)):
-            if alive[i] and gain[i] > bg:  # strict: ties keep the lowest id; gain must be > 0
-                best = i
-                bg = gain[i]
+        best = _argmax(gain, alive, bmax, barg, dirty)
         if best < 0:
             return n_sel, money, True
         order[n_sel] = best
@@ -155,6 +187,7 @@ def _steps(indptr, indices, col_ptr, col_bytes, weights, deficit, gain, alive, l
         L = loc[best]
         for q in range(loc_ptr[L], loc_ptr[L + 1]):  # one camera per location
             alive[loc_rows[q]] = False
+            dirty[loc_rows[q] >> BLOCK_SHIFT] = True
         t = ctype[best]
         if t >= 0:
             tleft[t] -= 1
@@ -162,10 +195,12 @@ def _steps(indptr, indices, col_ptr, col_bytes, weights, deficit, gain, alive, l
                 for i in range(len(gain)):
                     if ctype[i] == t:
                         alive[i] = False
+                        dirty[i >> BLOCK_SHIFT] = True
         if money < np.inf:
             for i in range(len(gain)):
                 if alive[i] and costs[i] > money + 1e-12:
                     alive[i] = False
+                    dirty[i >> BLOCK_SHIFT] = True
         for q in range(indptr[best], indptr[best + 1]):
             j = indices[q]
             d = deficit[j]
@@ -177,6 +212,7 @@ def _steps(indptr, indices, col_ptr, col_bytes, weights, deficit, gain, alive, l
                 x, r = _varint_at(col_bytes, r)
                 row += x
                 gain[row] -= delta
+                dirty[row >> BLOCK_SHIFT] = True
             deficit[j] = d - 1
     return n_sel, money, False
 
@@ -217,11 +253,13 @@ def solve_greedy_fast(problem: PlacementProblem, *, time_limit_s: float | None =
     ctype, tleft = type_arrays(problem)
     alive &= (ctype < 0) | (tleft[np.maximum(ctype, 0)] > 0)
     order = np.empty(max(0, min(problem.budget, n_g)), np.int64)
+    n_blocks = (n_g >> BLOCK_SHIFT) + 1
+    bmax, barg, dirty = np.zeros(n_blocks), np.full(n_blocks, -1, np.int64), np.ones(n_blocks, np.bool_)
     n_sel, cut, finished = 0, False, n_g == 0
     while not finished:
         n_sel, money, finished = _steps(indptr, indices, col_ptr, col_bytes, weights, deficit, gain, alive, loc,
                                         loc_ptr, loc_rows, costs, money, order, n_sel, len(order), STEPS_PER_CALL,
-                                        ctype, tleft)
+                                        ctype, tleft, bmax, barg, dirty)
         if progress:
             progress("greedy", n_sel, problem.budget)
         if not finished and (stopped(should_stop) or time.perf_counter() > end):
