@@ -149,3 +149,18 @@ def test_savez_at_a_zlib_level_reads_back_the_same_arrays(tmp_path):
         sizes[level] = p.stat().st_size
     plain = atomic_savez(tmp_path / "plain.npz", compressed=False, **arrays).stat().st_size
     assert sizes[9] <= sizes[1] < plain / 3
+
+
+def test_atomic_write_texts_writes_every_file_in_order(tmp_path):
+    """Issue 37: many small files at once on threads; each whole, none left temporary, the
+    paths in the given order, an error raised (the others still written whole or not at all)."""
+    from camplace.core.files import atomic_write_texts
+
+    texts = {tmp_path / f"f{k:03d}.txt": f"camera {k}\n" * (k + 1) for k in range(40)}
+    assert atomic_write_texts(texts) == list(texts)
+    assert all(p.read_text() == t for p, t in texts.items())
+    assert sorted(q.name for q in tmp_path.iterdir()) == sorted(p.name for p in texts)  # no temporaries
+    assert atomic_write_texts({tmp_path / "one.txt": "x"}) == [tmp_path / "one.txt"]
+    with pytest.raises(OSError):
+        atomic_write_texts({tmp_path / "a.txt": "a", tmp_path / "f000.txt" / "b": "b"})  # under a file
+    assert (tmp_path / "a.txt").read_text() == "a"
