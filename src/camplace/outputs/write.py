@@ -142,6 +142,16 @@ def placement_csv(cameras: list[dict]) -> str:
     return buf.getvalue()
 
 
+SITE_NPZ_PAIRS = 20_000_000  # from this many visible pairs on, visibility.npz is written at zlib level 1
+SITE_NPZ_LEVEL = 1  # 2.7x faster than numpy's level 6 on a warehouse's V, files ~1.5x larger (issue 37)
+
+
+def npz_level(nnz: int) -> int | None:
+    """The zlib level of visibility.npz for a V of ``nnz`` pairs: SITE_NPZ_LEVEL at site
+    scale (≥ SITE_NPZ_PAIRS, e.g. warehouse:2500 and up), else None (numpy's own)."""
+    return SITE_NPZ_LEVEL if nnz >= SITE_NPZ_PAIRS else None
+
+
 def visibility_arrays(vis: Visibility) -> dict[str, np.ndarray]:
     """The arrays of visibility.npz (no pickles)."""
     V, t, c = vis.V, vis.targets, vis.candidates
@@ -214,7 +224,7 @@ def write_outputs(out_dir: str | Path, scene_name: str, vis: Visibility, placeme
     with AtomicBatch() as batch:  # the contract files replace the old ones together, once all are written
         paths = {
             "visibility.npz": batch.stage_savez(out / "visibility.npz", compressed=compressed,
-                                                **visibility_arrays(vis)),
+                                                level=npz_level(vis.V.nnz), **visibility_arrays(vis)),
             "placement.json": batch.stage_json(out / "placement.json", pdict),
             "placement.csv": batch.stage_text(out / "placement.csv", placement_csv(pdict["cameras"])),
         }
