@@ -58,6 +58,15 @@ def atomic_write_texts(texts: dict[Path, str]) -> list[Path]:
         return list(pool.map(atomic_write_text, texts.keys(), texts.values()))
 
 
+def write_pipe(fd: int, data: bytes) -> None:
+    """All of ``data`` into the pipe ``fd`` (a forked child's answer: not a file, nothing
+    to make atomic), then close it."""
+    view = memoryview(data)
+    while view:
+        view = view[os.write(fd, view):]
+    os.close(fd)
+
+
 def atomic_write_json(path: str | Path, obj: object) -> Path:
     return atomic_write_text(path, json.dumps(obj, indent=2, sort_keys=False) + "\n")
 

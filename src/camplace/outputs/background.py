@@ -28,6 +28,8 @@ import warnings
 from collections.abc import Callable
 from typing import Generic, TypeVar
 
+from camplace.core.files import write_pipe
+
 T = TypeVar("T")
 
 FORK = sys.platform.startswith("linux") and hasattr(os, "fork")  # tests switch it off to compare
@@ -139,5 +141,4 @@ def _answer(fd: int, fn: Callable[[], object]) -> None:
             payload = pickle.dumps((False, err))
         except Exception:  # noqa: BLE001 - an error that does not pickle: its words
             payload = pickle.dumps((False, RuntimeError(f"{type(err).__name__}: {err}")))
-    with os.fdopen(fd, "wb") as f:
-        f.write(payload)
+    write_pipe(fd, payload)
