@@ -1,4 +1,4 @@
-"""quality="high" (issue 37): the chain of tabu, refinement and adaptive rounds in one time budget."""
+"""quality="high" (issue 37): refinement and relocation (tabu, adaptive rounds, kicks) in one time budget."""
 
 from __future__ import annotations
 

@@ -1,26 +1,27 @@
-"""High quality within one time budget (issue 37): tabu, refinement and adaptive rounds chained.
+"""High quality within one time budget (issue 37): refinement and relocation chained.
 
 From the discrete solver's placement, each step gets a share of one time budget (s) and
 starts from the previous step's best selection; a step that finishes early leaves its time
-to the next ones. The default plan (``QUALITY_STEPS``):
+to the next ones. The default plan (``QUALITY_STEPS``), meant for V of a denser grid
+(camplace.workflows.quality: ``quality="high"`` halves the mount spacing):
 
-1. ``tabu`` on the grid problem, warm-started from the placement (camplace.solvers.tabu);
-2. ``adaptive``: rounds of finer candidates around the placement, each solved again by swap
-   descent and a short tabu from the current selection (camplace.improve.adaptive);
-3. ``refine``: each camera off the grid by the compass search (camplace.improve.refine);
-4. ``tabu`` again on the extended problem (grid, adaptive and refined rows), from the
-   refined selection: it may swap in cameras that the next refinement can move;
-5. ``refine`` again (its search box is centred on the current poses);
-6. ``adaptive`` and 7. ``refine`` once more, around the refined poses.
+1. ``refine``: each camera off the grid by the compass search (camplace.improve.refine);
+2. ``refine`` again (its search box is centred on the current poses);
+3. ``relocate``: each camera moved to the best of a few other candidates, each judged by the
+   pose a compass search makes of it (camplace.improve.relocate);
+4. ``refine`` once more.
 
-When the plan ends early (the refinements converged, an adaptive round found nothing), the
+The other steps a plan may name: ``tabu`` (tabu search warm-started from the placement,
+camplace.solvers.tabu), ``adaptive`` (rounds of finer candidates around the placement, each
+solved again by swap descent and a short tabu; camplace.improve.adaptive) and ``kick``.
+When the plan ends early (the refinements converged, a relocation sweep moved nothing), the
 time left goes to ``kick`` steps (``EXTRA_CYCLE``, :func:`kick_refine`: drop two of the least
 useful cameras, refill by swap descent, refine, keep it if better), each with the next seed,
 until less than ``MIN_CYCLE_S`` is left.
 
-Measured on standard-store, N_s = 20 (benchmarks/quality.py, docs/benchmarks.md): adaptive
-rounds on the grid before the first refinement pay most (gap 0.178 against 0.182 with the
-adaptive rounds after two tabu/refine cycles); the steps after the first refinement gain little.
+Measured on standard-store, N_s = 20 (benchmarks/quality.py, docs/benchmarks.md): on the
+0.5 m grid, greedy then two refinements reach gap 0.175 in ~3 s, a relocation 0.173; the
+earlier plan (tabu, adaptive rounds, refinements on the 1 m grid) ended at 0.178.
 
 Refinement and adaptive rounds append rows to V, so the returned visibility / problem replace
 the grid ones; the placement stays a selection of V rows and its cost is recomputed from V.
@@ -37,6 +38,7 @@ import numpy as np
 
 from camplace.improve.adaptive import adaptive_rounds
 from camplace.improve.refine import PoseGuard, RowMap, refine_placement
+from camplace.improve.relocate import relocate_placement
 from camplace.problem.model import PlacementProblem
 from camplace.scene.build import Scene
 from camplace.solvers.base import Placement
@@ -45,8 +47,7 @@ from camplace.visibility.engine import Visibility
 Progress = Callable[[str, int, int], None]
 # (step, share of the whole budget): shares are of the budget left when the step starts,
 # scaled by the shares of the steps still to come, so unspent time flows on
-QUALITY_STEPS: tuple[tuple[str, float], ...] = (("tabu", 0.15), ("adaptive", 0.35), ("refine", 0.1), ("tabu", 0.1),
-                                                ("refine", 0.1), ("adaptive", 0.1), ("refine", 0.1))
+QUALITY_STEPS: tuple[tuple[str, float], ...] = (("refine", 0.1), ("refine", 0.1), ("relocate", 0.6), ("refine", 0.2))
 
 EXTRA_CYCLE: tuple[tuple[str, float], ...] = (("kick", 1.0),)  # repeated while time is left
 MIN_CYCLE_S = 1.5  # the least time left (s) worth another cycle
@@ -145,6 +146,10 @@ def high_quality(scene: Scene, vis: Visibility, problem: PlacementProblem, place
                                  solver="tabu", solver_time_s=budget / (2 * adaptive_rounds_max), progress=progress,
                                  guard=guard, row_map=row_map, should_stop=should_stop)
             vis, problem, placement = ar.visibility, ar.problem, ar.placement
+        elif name == "relocate":
+            rf = relocate_placement(scene, vis, problem, placement, budget, guard=guard, row_map=row_map,
+                                    should_stop=should_stop)
+            vis, problem, placement = rf.visibility, rf.problem, rf.placement
         elif name == "kick":
             vis, problem, placement = kick_refine(scene, vis, problem, placement, budget, seed=seed + cycle,
                                                   guard=guard, row_map=row_map, should_stop=should_stop)
