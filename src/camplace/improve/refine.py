@@ -257,7 +257,7 @@ class _PolledRows:
     of a camera whose own pose stayed while its neighbours' moves changed its gains (the
     demo's refinement: 10,936 trial poses, 5,008 distinct). A pose gives the same row
     whenever it is raycast, so a remembered row changes nothing but the time. At most
-    ``max_entries`` V entries are kept (then all are forgotten and kept afresh)."""
+    ``max_entries`` V entries are kept (then all but the current poll's are forgotten)."""
 
     def __init__(self, n_cols: int, max_entries: int = 20_000_000):
         self.n_cols, self.max_entries = n_cols, max_entries
@@ -271,9 +271,9 @@ class _PolledRows:
         new = [n for n, key in enumerate(keys) if key not in self.rows]
         if new:
             R = cast(trial[new])
-            if self.entries + R.nnz > self.max_entries:
-                self.rows.clear()
-                self.entries = 0
+            if self.entries + R.nnz > self.max_entries:  # forget all but this poll's poses seen before
+                self.rows = {key: self.rows[key] for key in keys if key in self.rows}
+                self.entries = sum(len(ix) for ix, _ in self.rows.values())
             for r, n in enumerate(new):
                 self.rows[keys[n]] = (R.indices[R.indptr[r]:R.indptr[r + 1]], R.data[R.indptr[r]:R.indptr[r + 1]])
             self.entries += R.nnz
