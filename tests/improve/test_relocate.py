@@ -7,6 +7,7 @@ from dataclasses import replace
 import numpy as np
 import pytest
 import scipy.sparse as sp
+from hypothesis import given, strategies as st
 
 from camplace.improve.relocate import _allowed_rows, _best_per_location, relocate_placement
 from camplace.problem.model import PlacementProblem
@@ -33,6 +34,22 @@ def test_best_per_location_by_hand():
     loc = np.array([0, 0, 1, 2, 2])
     np.testing.assert_array_equal(_best_per_location(s, loc, 3), [1, 4, 2])  # row 3 (-inf) never
     np.testing.assert_array_equal(_best_per_location(s, loc, 1), [1])
+
+
+@given(st.lists(st.tuples(st.one_of(st.floats(-1e6, 1e6), st.just(-np.inf)), st.integers(0, 6)), min_size=1,
+                max_size=40), st.integers(1, 8))
+def test_best_per_location_is_the_best_row_of_the_best_places(rows, top):
+    s = np.array([v for v, _ in rows])
+    loc = np.array([k for _, k in rows])
+    out = _best_per_location(s, loc, top)
+    assert len(out) == len(np.unique(loc[out])) <= top  # one per location
+    assert np.all(np.isfinite(s[out])) and np.all(np.diff(s[out]) <= 0)  # finite, best first
+    for j in out:  # the best row of its location
+        assert s[j] == s[loc == loc[j]].max()
+    places = {k: s[loc == k].max() for k in np.unique(loc[np.isfinite(s)])}
+    assert len(out) == min(top, len(places))  # no better place left out
+    if len(out):
+        assert all(v <= s[out[-1]] for k, v in places.items() if k not in set(loc[out].tolist()))
 
 
 @pytest.fixture(scope="module")

@@ -116,8 +116,8 @@ def relocate_placement(scene: Scene, vis: Visibility, problem: PlacementProblem,
                 pose, row, score, c = compass(
                     start, V[int(j)], float(s[j]), np.r_[box.half, f[1]], np.r_[box.centre - box.half, f[2]],
                     np.r_[box.centre + box.half, f[3]], g, levels, admit,
-                    lambda t, j=int(j), cid=cid: polled.get(j, t, lambda u: _trial_rows(engine, scene, vis, cid, u,
-                                                                                         row_map)), halt)
+                    lambda t, cid=cid: polled.get(cid, t, lambda u: _trial_rows(engine, scene, vis, cid, u, row_map)),
+                    halt)  # a pose's row depends on the pose and camera type only: polled by type
                 tried += 1
                 raycast += c["raycast"]
                 if score > best[0] + 1e-9 * max(1.0, abs(best[0])):
@@ -150,7 +150,7 @@ def relocate_placement(scene: Scene, vis: Visibility, problem: PlacementProblem,
 
 def _best_per_location(s: np.ndarray, location_ids: np.ndarray, top: int) -> np.ndarray:
     """Rows of the ``top`` highest finite scores ``s`` (N_g,), one per location (its best pose),
-    best first: the candidates worth refining are spread over ``top`` places."""
+    best first, among the 64·top best rows: the candidates worth refining, spread over places."""
     order = np.argsort(-s, kind="stable")
     order = order[np.isfinite(s[order])][: 64 * top]
     _, first = np.unique(location_ids[order], return_index=True)
