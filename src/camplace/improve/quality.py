@@ -17,7 +17,8 @@ solved again by swap descent and a short tabu; camplace.improve.adaptive) and ``
 When the plan ends early (the refinements converged, a relocation sweep moved nothing), the
 time left goes to ``kick`` steps (``EXTRA_CYCLE``, :func:`kick_refine`: drop two of the least
 useful cameras, refill by swap descent, refine, keep it if better), each with the next seed,
-until less than ``MIN_CYCLE_S`` is left.
+until less than ``MIN_CYCLE_S`` is left or ``KICK_MAX_FAILS`` kicks in a row found nothing
+(then the chain ends before its budget: the run need not wait for nothing).
 
 Measured on standard-store, N_s = 20 (benchmarks/quality.py, docs/benchmarks.md): on the
 0.5 m grid, greedy then two refinements reach gap 0.175 in ~3 s, a relocation 0.173; the
@@ -51,6 +52,7 @@ QUALITY_STEPS: tuple[tuple[str, float], ...] = (("refine", 0.1), ("refine", 0.1)
 
 EXTRA_CYCLE: tuple[tuple[str, float], ...] = (("kick", 1.0),)  # repeated while time is left
 MIN_CYCLE_S = 1.5  # the least time left (s) worth another cycle
+KICK_MAX_FAILS = 3  # the chain ends after this many kicks in a row found nothing (the run need not wait)
 
 
 @dataclass(frozen=True)
@@ -75,18 +77,21 @@ def step_budget(left_s: float, shares: list[float]) -> float:
 
 
 def kick_refine(scene: Scene, vis: Visibility, problem: PlacementProblem, placement: Placement, time_limit_s: float,
-                *, seed: int = 0, drop: int = 2, guard: PoseGuard | None = None, row_map: RowMap | None = None,
+                *, seed: int = 0, drop: int = 2, max_fails: int | None = None, guard: PoseGuard | None = None,
+                row_map: RowMap | None = None,
                 should_stop: Callable[[], bool] | None = None) -> tuple[Visibility, PlacementProblem, Placement]:
     """Iterated local search for ``time_limit_s`` seconds: drop ``drop`` cameras drawn among
     the 2·drop whose loss is least, refill by swap descent (grid and earlier rows alike),
-    refine, keep the result when its cost is lower. The rows raycast stay in V either way."""
+    refine, keep the result when its cost is lower. The rows raycast stay in V either way.
+    ``max_fails``: also end after that many kicks in a row found nothing better (None: never)."""
     from camplace.improve.adaptive import swap_descent
 
     end = time.perf_counter() + time_limit_s
     rng = np.random.default_rng(seed)
     stop = (lambda: False) if should_stop is None else should_stop
     best = problem.cost(placement.selected)
-    while time.perf_counter() < end - 0.3 and not stop():
+    fails = 0
+    while time.perf_counter() < end - 0.3 and not stop() and (max_fails is None or fails < max_fails):
         sel = np.asarray(placement.selected, np.int64)
         loss = np.array([problem.cost(np.delete(sel, k)) for k in range(len(sel))]) - best
         pool = np.argsort(loss)[: 2 * drop]
@@ -98,9 +103,10 @@ def kick_refine(scene: Scene, vis: Visibility, problem: PlacementProblem, placem
                               should_stop=should_stop)
         vis, problem = rf.visibility, rf.problem
         if rf.refined_cost < best - 1e-9:
-            best, placement = rf.refined_cost, rf.placement
+            best, placement, fails = rf.refined_cost, rf.placement, 0
         else:  # the same selection on the extended problem (its rows keep their ids)
             placement = replace(placement, objective=problem.cost(placement.selected))
+            fails += 1
     return vis, problem, placement
 
 
@@ -119,10 +125,10 @@ def high_quality(scene: Scene, vis: Visibility, problem: PlacementProblem, place
     start_cost = problem.cost(placement.selected)
     start_solver, grid_cost, on_grid = placement.solver, start_cost, True
     hist: list[dict] = []
-    plan, n, cycle = list(steps), 0, 0
+    plan, n, cycle, idle = list(steps), 0, 0, False
     while not stop():
         if n == len(plan):  # time left after the plan: EXTRA_CYCLE steps (kicks), the next seed each
-            if end - time.perf_counter() < MIN_CYCLE_S:
+            if end - time.perf_counter() < MIN_CYCLE_S or idle:  # idle: the last kicks found nothing
                 break
             plan += list(EXTRA_CYCLE)
             cycle += 1
@@ -151,8 +157,11 @@ def high_quality(scene: Scene, vis: Visibility, problem: PlacementProblem, place
                                     should_stop=should_stop)
             vis, problem, placement = rf.visibility, rf.problem, rf.placement
         elif name == "kick":
+            c0 = problem.cost(placement.selected)
             vis, problem, placement = kick_refine(scene, vis, problem, placement, budget, seed=seed + cycle,
-                                                  guard=guard, row_map=row_map, should_stop=should_stop)
+                                                  max_fails=KICK_MAX_FAILS, guard=guard, row_map=row_map,
+                                                  should_stop=should_stop)
+            idle = problem.cost(placement.selected) >= c0 - 1e-9
         else:
             raise ValueError(f"unknown quality step {name!r}")
         on_grid = on_grid and name == "tabu"
@@ -170,4 +179,5 @@ def high_quality(scene: Scene, vis: Visibility, problem: PlacementProblem, place
     return QualityResult(vis, problem, out, start_cost, hist)
 
 
-__all__ = ["EXTRA_CYCLE", "MIN_CYCLE_S", "QUALITY_STEPS", "QualityResult", "high_quality", "kick_refine", "step_budget"]
+__all__ = ["EXTRA_CYCLE", "KICK_MAX_FAILS", "MIN_CYCLE_S", "QUALITY_STEPS", "QualityResult", "high_quality",
+           "kick_refine", "step_budget"]
