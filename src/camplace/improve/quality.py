@@ -48,7 +48,7 @@ from camplace.visibility.engine import Visibility
 Progress = Callable[[str, int, int], None]
 # (step, share of the whole budget): shares are of the budget left when the step starts,
 # scaled by the shares of the steps still to come, so unspent time flows on
-QUALITY_STEPS: tuple[tuple[str, float], ...] = (("refine", 0.1), ("refine", 0.1), ("relocate", 0.6), ("refine", 0.2))
+QUALITY_STEPS: tuple[tuple[str, float], ...] = (("refine", 0.1), ("refine", 0.1), ("relocate", 0.7), ("refine", 0.1))
 
 EXTRA_CYCLE: tuple[tuple[str, float], ...] = (("kick", 1.0),)  # repeated while time is left
 MIN_CYCLE_S = 1.5  # the least time left (s) worth another cycle
