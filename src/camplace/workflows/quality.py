@@ -22,7 +22,7 @@ from camplace.visibility.engine import Visibility
 
 QUALITIES = ("default", "high")
 QUALITY_TIME_S = 30.0  # the whole run's seconds with quality="high"
-QUALITY_RESERVE_S = 8.0  # kept for the metrics and, on the command line, the output files and report (s)
+QUALITY_RESERVE_S = 10.0  # kept for the metrics and, on the command line, the output files and report (s)
 QUALITY_DENSITY = 2  # quality="high": each mount's spacing divided by this (4x the ceiling positions)
 QUALITY_MAX_CANDIDATES = 40_000  # ... unless the denser grid would hold more poses than this
 
