@@ -32,3 +32,12 @@ def test_over_the_cap_or_density_one_keeps_the_scene_grid(demo_inputs):
     same_sc, same, note = denser_candidates(sc, cameras, cands, density=2, max_candidates=len(cands))
     assert same_sc is sc and same is cands and "the scene's grid is kept" in note
     assert denser_candidates(sc, cameras, cands, density=1) == (sc, cands, "")
+
+
+def test_a_site_grid_is_not_even_built_denser(demo_inputs, monkeypatch):
+    import camplace.workflows.quality as q
+
+    sc, cameras, cands = demo_inputs
+    monkeypatch.setattr(q, "build_candidates", lambda *a, **k: pytest.fail("built"))
+    same_sc, same, note = denser_candidates(sc, cameras, cands, density=2, max_candidates=len(cands) // 3)
+    assert same_sc is sc and same is cands and f"~{4 * len(cands)} poses" in note

@@ -48,15 +48,19 @@ def denser_candidates(sc: Scene, cameras: dict[str, CameraModel], candidates: Ca
     """(scene, candidates, log line) of a denser grid: every mount's ``spacing`` (m) divided by
     ``density``; the scene's spec carries the new spacing, so the refinement's boxes (half a
     spacing) shrink with it. The scene and ``candidates`` as they are when the denser grid would
-    hold more than ``max_candidates`` poses, and for a building (its storeys keep theirs)."""
+    hold more than ``max_candidates`` poses (not even built past twice that, by density² times
+    the scene's poses), and for a building (its storeys keep theirs)."""
     if density <= 1 or sc.storeys:
         return sc, candidates, ""
+    kept = f"exceeds {max_candidates}; the scene's grid is kept"
+    guess = len(candidates) * density ** 2  # ~the denser grid's poses
+    if guess > 2 * max_candidates:  # a site: not even built
+        return sc, candidates, f"quality high: a {density}x denser grid (~{guess} poses) {kept}"
     mounts = [m.model_copy(update={"spacing": m.spacing / density}) for m in sc.spec.mounts]
     dense_sc = replace(sc, spec=sc.spec.model_copy(update={"mounts": mounts}))
     dense = build_candidates(dense_sc, cameras, extra_pitches)
     if len(dense) > max_candidates:
-        return sc, candidates, (f"quality high: the {density}x denser grid ({len(dense)} poses) exceeds "
-                                f"{max_candidates}; the scene's grid is kept")
+        return sc, candidates, f"quality high: the {density}x denser grid ({len(dense)} poses) {kept}"
     return dense_sc, dense, (f"quality high: mount spacing / {density}: {len(dense)} poses "
                              f"({len(candidates)} on the scene's grid)")
 
