@@ -67,7 +67,7 @@ def spoiled(demo_run):
 
 def test_relocation_brings_a_spoiled_camera_back_and_keeps_the_contract(spoiled):
     r, start = spoiled
-    out = relocate_placement(r.scene, r.visibility, r.problem, start, time_limit_s=20.0)
+    out = relocate_placement(r.scene, r.visibility, r.problem, start, time_limit_s=20.0, top=3, levels=2, max_sweeps=2)
     p, pl = out.problem, out.placement
     assert pl.objective < start.objective - 1e-9  # the useless camera found a better place
     assert pl.objective == pytest.approx(p.cost(pl.selected))
@@ -87,3 +87,18 @@ def test_relocation_never_worsens_a_refined_placement(demo_run):
     out = relocate_placement(r.scene, rf.visibility, rf.problem, rf.placement, time_limit_s=3.0)
     assert out.placement.objective <= rf.placement.objective + 1e-9
     out.problem.check_feasible(out.placement.selected)
+
+
+def test_shakes_never_worsen_stay_feasible_and_end_after_their_failures(spoiled):
+    import time
+
+    from camplace.improve.relocate import shake_relocate
+
+    r, start = spoiled
+    t = time.perf_counter()
+    vis, problem, p = shake_relocate(r.scene, r.visibility, r.problem, start, 4.0, seed=2, max_fails=1)
+    assert time.perf_counter() - t < 4.0 + 3.0  # a step may overrun by one compass poll
+    problem.check_feasible(p.selected)
+    assert vis.V.shape[0] == problem.n_candidates >= r.problem.n_candidates
+    assert p.objective == pytest.approx(problem.cost(p.selected))
+    assert p.objective <= start.objective + 1e-9

@@ -13,12 +13,14 @@ to the next ones. The default plan (``QUALITY_STEPS``), meant for V of a denser 
 
 The other steps a plan may name: ``tabu`` (tabu search warm-started from the placement,
 camplace.solvers.tabu), ``adaptive`` (rounds of finer candidates around the placement, each
-solved again by swap descent and a short tabu; camplace.improve.adaptive) and ``kick``.
-When the plan ends early (the refinements converged, a relocation sweep moved nothing), the
-time left goes to ``kick`` steps (``EXTRA_CYCLE``, :func:`kick_refine`: drop two of the least
-useful cameras, refill by swap descent, refine, keep it if better), each with the next seed,
-until less than ``MIN_CYCLE_S`` is left or ``KICK_MAX_FAILS`` kicks in a row found nothing
-(then the chain ends before its budget: the run need not wait for nothing).
+solved again by swap descent and a short tabu; camplace.improve.adaptive), ``kick``
+(:func:`kick_refine`: drop two of the least useful cameras, refill by swap descent, refine,
+keep it if better) and ``shake``. When the plan ends early (the refinements converged, a
+relocation sweep moved nothing), the time left goes to ``shake`` steps (``EXTRA_CYCLE``,
+camplace.improve.relocate.shake_relocate: three cameras moved at random among good places, then
+refinement, relocation, refinement, kept if better), each with the next seed, until less than
+``MIN_CYCLE_S`` is left or ``SHAKE_MAX_FAILS`` shakes in a row found nothing (then the chain
+ends before its budget: the run need not wait for nothing).
 
 Measured on standard-store, N_s = 20 (benchmarks/quality.py, docs/benchmarks.md): on the
 0.5 m grid, greedy then two refinements reach gap 0.175 in ~3 s, a relocation 0.173; the
@@ -39,7 +41,7 @@ import numpy as np
 
 from camplace.improve.adaptive import adaptive_rounds
 from camplace.improve.refine import PoseGuard, RowMap, refine_placement
-from camplace.improve.relocate import relocate_placement
+from camplace.improve.relocate import relocate_placement, shake_relocate
 from camplace.problem.model import PlacementProblem
 from camplace.scene.build import Scene
 from camplace.solvers.base import Placement
@@ -50,9 +52,10 @@ Progress = Callable[[str, int, int], None]
 # scaled by the shares of the steps still to come, so unspent time flows on
 QUALITY_STEPS: tuple[tuple[str, float], ...] = (("refine", 0.1), ("refine", 0.1), ("relocate", 0.7), ("refine", 0.1))
 
-EXTRA_CYCLE: tuple[tuple[str, float], ...] = (("kick", 1.0),)  # repeated while time is left
+EXTRA_CYCLE: tuple[tuple[str, float], ...] = (("shake", 1.0),)  # repeated while time is left
 MIN_CYCLE_S = 1.5  # the least time left (s) worth another cycle
 KICK_MAX_FAILS = 3  # the chain ends after this many kicks in a row found nothing (the run need not wait)
+SHAKE_MAX_FAILS = 10  # ... or this many shakes (camplace.improve.relocate.shake_relocate)
 
 
 @dataclass(frozen=True)
@@ -156,11 +159,11 @@ def high_quality(scene: Scene, vis: Visibility, problem: PlacementProblem, place
             rf = relocate_placement(scene, vis, problem, placement, budget, guard=guard, row_map=row_map,
                                     should_stop=should_stop)
             vis, problem, placement = rf.visibility, rf.problem, rf.placement
-        elif name == "kick":
+        elif name in ("kick", "shake"):
             c0 = problem.cost(placement.selected)
-            vis, problem, placement = kick_refine(scene, vis, problem, placement, budget, seed=seed + cycle,
-                                                  max_fails=KICK_MAX_FAILS, guard=guard, row_map=row_map,
-                                                  should_stop=should_stop)
+            search, fails = (kick_refine, KICK_MAX_FAILS) if name == "kick" else (shake_relocate, SHAKE_MAX_FAILS)
+            vis, problem, placement = search(scene, vis, problem, placement, budget, seed=seed + cycle,
+                                             max_fails=fails, guard=guard, row_map=row_map, should_stop=should_stop)
             idle = problem.cost(placement.selected) >= c0 - 1e-9
         else:
             raise ValueError(f"unknown quality step {name!r}")
@@ -179,5 +182,5 @@ def high_quality(scene: Scene, vis: Visibility, problem: PlacementProblem, place
     return QualityResult(vis, problem, out, start_cost, hist)
 
 
-__all__ = ["EXTRA_CYCLE", "KICK_MAX_FAILS", "MIN_CYCLE_S", "QUALITY_STEPS", "QualityResult", "high_quality",
-           "kick_refine", "step_budget"]
+__all__ = ["EXTRA_CYCLE", "KICK_MAX_FAILS", "MIN_CYCLE_S", "QUALITY_STEPS", "QualityResult", "SHAKE_MAX_FAILS",
+           "high_quality", "kick_refine", "step_budget"]

@@ -148,6 +148,47 @@ def relocate_placement(scene: Scene, vis: Visibility, problem: PlacementProblem,
     return RefineResult(vis2, prob2, p2, start_cost, cost, info)
 
 
+def shake_relocate(scene: Scene, vis: Visibility, problem: PlacementProblem, placement: Placement,
+                   time_limit_s: float, *, seed: int = 0, moves: int = 3, places: int = 30,
+                   max_fails: int | None = None, guard: PoseGuard | None = None, row_map: RowMap | None = None,
+                   should_stop: Callable[[], bool] | None = None) -> tuple[Visibility, PlacementProblem, Placement]:
+    """Iterated local search for ``time_limit_s`` seconds: ``moves`` cameras drawn at random, each
+    moved to a row drawn among the best of ``places`` places for it (given the others, as in a
+    relocation: any limit and money budget kept), then refinement, relocation and refinement
+    again within the time left; the result is kept when its cost is lower. ``max_fails``: also
+    end after that many tries in a row found nothing better (None: never). The rows raycast stay
+    in V either way. Returns (V, problem, the best placement)."""
+    from camplace.improve.refine import refine_placement
+
+    end = time.perf_counter() + float(time_limit_s)
+    rng = np.random.default_rng(seed)
+    stop = (lambda: False) if should_stop is None else should_stop
+    best, best_cost, fails = placement, problem.cost(placement.selected), 0
+    while time.perf_counter() < end - 0.3 and not stop() and (max_fails is None or fails < max_fails):
+        sel = np.asarray(best.selected, np.int64).copy()
+        for k in rng.choice(len(sel), min(moves, len(sel)), replace=False):
+            g = target_gains(problem, problem.coverage(np.delete(sel, k)))
+            s = np.asarray(problem.V @ g).ravel()
+            s[~_allowed_rows(problem, sel, int(k), problem.location_ids[sel])] = -np.inf
+            s[sel[k]] = -np.inf
+            pool = _best_per_location(s, problem.location_ids, places)
+            if len(pool):
+                sel[k] = int(rng.choice(pool))
+        trial = replace(best, selected=np.sort(sel), objective=problem.cost(sel))
+        for step in (refine_placement, relocate_placement, refine_placement):
+            if end - time.perf_counter() < 0.2 or stop():
+                break
+            r = step(scene, vis, problem, trial, end - time.perf_counter(), guard=guard, row_map=row_map,
+                     should_stop=should_stop)
+            vis, problem, trial = r.visibility, r.problem, r.placement
+        cost = problem.cost(trial.selected)
+        if cost < best_cost - 1e-9:
+            best, best_cost, fails = trial, cost, 0
+        else:  # the same selection on the extended problem (its rows keep their ids)
+            best, fails = replace(best, objective=problem.cost(best.selected)), fails + 1
+    return vis, problem, best
+
+
 def _best_per_location(s: np.ndarray, location_ids: np.ndarray, top: int) -> np.ndarray:
     """Rows of the ``top`` highest finite scores ``s`` (N_g,), one per location (its best pose),
     best first, among the 64·top best rows: the candidates worth refining, spread over places."""
@@ -163,4 +204,4 @@ def _dense(row, n: int) -> np.ndarray:
     return out
 
 
-__all__ = ["relocate_placement"]
+__all__ = ["relocate_placement", "shake_relocate"]
