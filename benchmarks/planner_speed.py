@@ -3,6 +3,7 @@
     python benchmarks/planner_speed.py [--changes 50] [--scene standard-store]
     camplace run warehouse:10000 --out out/wh
     python benchmarks/planner_speed.py --scene warehouse:10000 --run out/wh --changes 150
+    python benchmarks/planner_speed.py --scene warehouse:1000 --run out/wh1k --cache ~/.cache/camplace --changes 0
 
 Runs the scene once (grid, its own budget and solver) into a temporary run folder, or
 opens the run folder ``--run`` (as ``camplace serve RUN --scene SCENE`` does:
@@ -34,6 +35,8 @@ def main() -> None:
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--opened", default=None,
                     help="a pickle of the opened start: loaded when it exists, else written (a site's V takes minutes)")
+    ap.add_argument("--cache", default=None,
+                    help="the visibility cache the run filled (as camplace serve --cache): the open reads V from it")
     args = ap.parse_args()
     from starlette.testclient import TestClient
 
@@ -54,7 +57,10 @@ def main() -> None:
                           scene=r.scene, report=False)
         else:
             out = Path(args.run)
-        opened = open_start(out, scene=args.scene)
+        t_open = time.perf_counter()
+        opened = open_start(out, scene=args.scene, cache_dir=args.cache)
+        print(f"open: {time.perf_counter() - t_open:.2f} s ({opened.vis.info.get('cached_chunks', 0)} of "
+              f"{opened.vis.info.get('chunks')} visibility chunks from the cache)")
         if args.opened:
             Path(args.opened).write_bytes(pickle.dumps(opened))
     session = Session(opened)
@@ -86,7 +92,7 @@ def main() -> None:
     for name, rs in [*rows.items(), ("all", allrows)]:
         cells = []
         for c in ("raycast", "viewshed", "metrics", "total", "round_trip"):
-            v = np.array([x[c] for x in rs])
+            v = np.array([x[c] for x in rs]) if rs else np.full(1, np.nan)
             cells.append(f"{np.median(v):7.1f} / {np.percentile(v, 95):7.1f}")
         print(f"{name:8} {len(rs):>3} " + " ".join(f"{c:>18}" for c in cells))
     print("(ms, median / p95)")

@@ -13,7 +13,6 @@ prints one markdown table row per solver and the cost drop of zones against gree
 from __future__ import annotations
 
 import argparse
-import json
 import os
 import time
 from pathlib import Path

@@ -6,7 +6,6 @@ never a traceback (hypothesis over mutated bytes of small valid files)."""
 from __future__ import annotations
 
 import json
-import math
 from pathlib import Path
 
 import numpy as np

@@ -12,7 +12,6 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from camplace.core.errors import InputError
-from camplace.problem.model import build_problem
 from camplace.metrics.triangulation import ray_angle_deg, well_triangulated, well_triangulated_of_selection
 from camplace.problem.triangulation import effective_coverage
 

@@ -176,6 +176,19 @@ def test_repeatable_plan_set_is_byte_identical(tmp_path, run_result, plan_dir):
         assert (first / name).read_bytes() == (tmp_path / "b" / name).read_bytes(), name
 
 
+def test_report_set_made_in_this_process_is_the_same_bytes(tmp_path, run_result, plan_dir, monkeypatch):
+    """plan.pdf, plan.dxf and scene.glb come from forked children (camplace.outputs.background);
+    without fork they are made here: the same files in the same order, the same bytes."""
+    from camplace.outputs import background
+
+    monkeypatch.setattr(background, "FORK", False)
+    first, paths = plan_dir
+    again = _write(tmp_path / "here", run_result, repeatable=True)
+    assert list(again) == list(paths) and "plan.pdf" in paths
+    for name in paths:
+        assert (first / name).read_bytes() == (tmp_path / "here" / name).read_bytes(), name
+
+
 def test_voxel_surface_keeps_only_exposed_faces():
     from camplace.outputs.scene_glb import voxel_surface
 

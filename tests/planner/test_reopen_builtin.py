@@ -23,3 +23,18 @@ def test_a_warehouse_run_reopens_by_itself(tmp_path):
     assert placed["scene"] == "warehouse-200" and placed["builtin_scene"] == "warehouse:200"
     opened = open_start(tmp_path)
     assert opened.scene_ref == "warehouse:200" and len(opened.cameras) == 1
+
+
+def test_a_run_made_with_a_cache_reopens_from_it(tmp_path):
+    """The planner reads V from the block cache the run filled: no chunk is raycast again,
+    and the V is the run's, entry for entry."""
+    cache = tmp_path / "cache"
+    r = camplace.run("warehouse:200", budget=1, solver="greedy", cache_dir=cache)
+    out = tmp_path / "run"
+    write_outputs(out, r.scene.name, r.visibility, r.placement, 1, r.metrics, {}, scene=r.scene, report=False)
+    opened = open_start(out, cache_dir=cache)
+    info = opened.vis.info
+    assert info["cached_chunks"] == info["chunks"] > 0
+    assert (opened.vis.V != r.visibility.V).nnz == 0
+    fresh = open_start(out)  # no cache: raycast anew, the same V
+    assert fresh.vis.info["cached_chunks"] == 0 and (fresh.vis.V != opened.vis.V).nnz == 0

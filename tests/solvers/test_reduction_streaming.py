@@ -10,7 +10,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from camplace.problem.model import PlacementProblem, reduce_problem
-from camplace.solvers.reduction import reduce_streaming
+from camplace.solvers.reduction import reduce_streaming, row_chunks
 
 
 def same_reduction(a, b) -> None:
@@ -86,3 +86,33 @@ def test_hash_collision_falls_back_to_the_exact_path(monkeypatch):
     monkeypatch.setattr(reduction, "_column_hashes", colliding)
     same_reduction(reduce_streaming(problem), reduce_problem(problem))
     assert reduce_streaming(problem).problem.n_targets == 3
+
+
+def test_chunked_build_releases_the_map_and_keeps_the_reduction(tmp_path, monkeypatch):
+    """Issue 37: the reduced V is built in row chunks with V's mapped pages released after
+    each one; any chunk size gives the same Reduction, and its data is one broadcast byte."""
+    from camplace.solvers import reduction
+    from camplace.workflows.run import prepare, problem_from_visibility
+
+    _, vis = prepare("warehouse:300", cache_dir=tmp_path)
+    problem = problem_from_visibility(vis, 12)
+    ref = reduce_problem(problem)
+    released = []
+    real = reduction.release_pages
+    monkeypatch.setattr(reduction, "release_pages", lambda *a: released.append(real(*a)) or released[-1])
+    monkeypatch.setattr(reduction, "BUILD_CHUNK_NNZ", 5000)
+    got = reduce_streaming(problem)
+    same_reduction(got, ref)
+    n_chunks = len(row_chunks(problem.V.indptr.astype(np.int64), got.candidates, 5000))
+    assert len(released) >= 2 * (n_chunks - 1) > 20 and all(r == 1 for r in released[1:])  # the map, each chunk
+    d = got.problem.V.data
+    assert d.strides == (0,) and not d.flags.writeable and d.nbytes == got.problem.V.nnz  # a view of one byte
+
+
+def test_row_chunks_by_hand():
+    indptr = np.array([0, 3, 3, 10, 11, 20], np.int64)  # rows of 3, 0, 7, 1, 9 entries
+    rows = np.array([0, 2, 3, 4], np.int64)  # 3, 7, 1, 9 entries: cumulative 3, 10, 11, 20
+    assert row_chunks(indptr, rows, 10).tolist() == [0, 2, 4]  # 3 + 7 | 1 + 9
+    assert row_chunks(indptr, rows, 4).tolist() == [0, 1, 3, 4]  # 3 | 7 + 1 | 9
+    assert row_chunks(indptr, rows, 100).tolist() == [0, 4]
+    assert row_chunks(indptr, rows[:0], 4).tolist() == [0]

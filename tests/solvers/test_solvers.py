@@ -136,7 +136,7 @@ def test_common_zero_budget_and_empty(name):
 # ---------------------------------------------------------------------------
 # Solver-specific checks
 
-from camplace.solvers.greedy import solve_greedy, swap_local_search  # noqa: E402
+from camplace.solvers.greedy import solve_greedy  # noqa: E402
 from camplace.solvers.horster import solve_horster  # noqa: E402
 from camplace.solvers.min_cameras import solve_min_cameras  # noqa: E402
 from camplace.solvers.mip import build_tight_model, solve_mip  # noqa: E402

@@ -16,7 +16,7 @@ from camplace.solvers import SOLVERS
 from camplace.spec.loading import parse_scene
 from camplace.workflows.run import run
 
-from workflows.test_sites import DOOR_WALL, RESTROOM, SITE  # the hand-checked site of test_sites
+from workflows.test_sites import SITE  # the hand-checked site of test_sites
 
 FORBID = [[6.5, 0], [8, 0], [8, 4], [6.5, 4]]
 E1 = {"id": "E1", "camera": "cam", "position": [5.0, 1.0, 2.9], "yaw_deg": 0, "pitch_deg": 45}  # faces away

@@ -8,7 +8,7 @@ from typing import Optional
 import typer
 
 from camplace.cli import crowd
-from camplace.cli.common import (FRAME_OPT, MAX_MEMORY_OPT, NO_PLAN_OPT, PAPER_OPT, REPEATABLE_OPT, SCHEDULER_OPT,
+from camplace.cli.common import (MAX_MEMORY_OPT, NO_PLAN_OPT, PAPER_OPT, REPEATABLE_OPT, SCHEDULER_OPT,
                                  WORKERS_OPT, RichProgress, check_options, memory_bytes, progress_bars, repeatable_requested)
 from camplace.cli.space import ImportOptions, scene_data_from_file, space_kind
 from camplace.cli.summary import write_and_summarise

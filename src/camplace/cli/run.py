@@ -117,26 +117,27 @@ REFINE_OPT = typer.Option(None, "--refine/--grid-only",
 
 
 def refine_default(refine: Optional[bool], *, robust: int = 0, certify: Optional[float] = None,
-                   well_triangulated: bool = False) -> bool:
-    """--refine/--grid-only as given, else refine unless the run optimises something the
-    refinement does not keep (robust worst case, a certified grid bound, triangulation)."""
+                   well_triangulated: bool = False) -> bool | str:
+    """--refine/--grid-only as given, else "auto" (refine below site scale: run()'s
+    ``refine``) unless the run optimises something the refinement does not keep (robust
+    worst case, a certified grid bound, triangulation)."""
     if refine is not None:
         return refine
-    return not (robust or certify is not None or well_triangulated)
+    return False if (robust or certify is not None or well_triangulated) else "auto"
 
 
-def beyond_grid_options(refine: bool, refine_time: float, adaptive: int, robust: int,
+def beyond_grid_options(refine: bool | str, refine_time: float, adaptive: int, robust: int,
                         money_budget: Optional[float], tri_angle: str) -> dict:
     """run() keyword arguments of the options beyond the candidate grid (only those given)."""
     try:
         lo, hi = (float(v) for v in tri_angle.split(","))
     except ValueError:
         raise InputError(f"--tri-angle: expected MIN,MAX degrees, got '{tri_angle}'") from None
-    if robust and (refine or adaptive):
+    if robust and (refine is True or adaptive):
         raise InputError("--robust 1 cannot be combined with --refine / --adaptive (they optimise the nominal cost)")
     out: dict = {"triangulation_deg": (lo, hi)}
     if refine:
-        out.update(refine=True, refine_time_s=refine_time)
+        out.update(refine=refine, refine_time_s=refine_time)
     if adaptive:
         out["adaptive"] = adaptive
     if robust:

@@ -3,20 +3,22 @@
 
 from __future__ import annotations
 
+from pathlib import Path
 from typing import Optional
 
 import typer
 
-from camplace.cli.common import console, progress_bars, RichProgress
+from camplace.cli.common import CACHE_OPT, NO_CACHE_OPT, console, progress_bars, RichProgress, scale_options
 
 
-def planner_app(target: str, scene: Optional[str], host: str, port: int, progress=None):
-    """(app, url with the token, session) for ``target`` (a run folder or a scene), nothing started."""
+def planner_app(target: str, scene: Optional[str], host: str, port: int, progress=None, cache_dir=None):
+    """(app, url with the token, session) for ``target`` (a run folder or a scene), nothing started;
+    ``cache_dir``: the visibility block cache (None: V is raycast anew)."""
     from camplace.planner.app import create_app, new_token
     from camplace.planner.opening import open_start
     from camplace.planner.session import Session
 
-    session = Session(open_start(target, scene, root=None, progress=progress))
+    session = Session(open_start(target, scene, root=None, progress=progress, cache_dir=cache_dir))
     token = new_token()
     names = {"127.0.0.1", "localhost", host, "[::1]"}
     hosts = {f"{h}:{port}" for h in names} | (names if port == 80 else set())  # port 80: browsers omit it
@@ -45,15 +47,19 @@ def serve(target: str = typer.Argument(..., help="A run folder (with placement.j
                                               "built-in scene nor a YAML beside the folder."),
           port: int = typer.Option(8765, "--port", min=1, max=65535, help="Port to listen on."),
           host: str = typer.Option("127.0.0.1", "--host", help="Address to bind (default: this machine only)."),
-          no_browser: bool = typer.Option(False, "--no-browser", help="Do not open the page in a browser.")) -> None:
+          no_browser: bool = typer.Option(False, "--no-browser", help="Do not open the page in a browser."),
+          cache: Optional[Path] = CACHE_OPT, no_cache: bool = NO_CACHE_OPT) -> None:
     """Adjust a placement by hand in the browser: drag, turn, add, delete, lock cameras and
     watch coverage, cost and gap update; optimise the unlocked rest; save as camplace
-    evaluate would. Prints the page's URL (with its token); Ctrl-C stops the server."""
+    evaluate would. Prints the page's URL (with its token); Ctrl-C stops the server. V comes
+    from the visibility cache that ``camplace run`` filled (same --cache), so a site-scale run
+    opens without raycasting again."""
     import uvicorn
 
     check_port(host, port)
     with progress_bars() as prog:
-        app, url, session = planner_app(target, scene, host, port, RichProgress(prog))
+        app, url, session = planner_app(target, scene, host, port, RichProgress(prog),
+                                         scale_options(1, None, cache, no_cache)["cache_dir"])
     console.print(f"camplace planner: {session.scene.name}, {len(session.cams)} cameras; saves under "
                   f"{session.opened.root}")
     typer.echo(url)

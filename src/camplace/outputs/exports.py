@@ -33,7 +33,7 @@ import numpy as np
 import yaml
 
 from camplace.core.errors import InputError
-from camplace.core.files import atomic_write_text
+from camplace.core.files import atomic_write_text, atomic_write_texts
 
 COLMAP_MODELS = {  # name -> number of distortion coefficients after fx fy cx cy
     "PINHOLE": 0, "OPENCV": 4, "FULL_OPENCV": 8, "OPENCV_FISHEYE": 4,
@@ -287,10 +287,11 @@ def write_exports(out_dir: str | Path, cameras: list[dict]) -> dict[str, Path]:
     for stale in (out / "opencv").glob("camera_*.yaml"):  # from an earlier run into the same folder
         if stale.name not in names:
             stale.unlink()
+    yamls = {}
     for k, cam in enumerate(cameras):
         cid = cam.get("candidate_id")
-        name = f"opencv/camera_{cid if cid is not None else k}.yaml"
-        paths[name] = atomic_write_text(out / name, opencv_yaml_text(cam))
+        yamls[f"opencv/camera_{cid if cid is not None else k}.yaml"] = opencv_yaml_text(cam)
+    paths.update(zip(yamls, atomic_write_texts({out / n: t for n, t in yamls.items()})))  # fsyncs overlap (issue 37)
     for name, text in zip(("cameras.txt", "images.txt", "points3D.txt"), colmap_texts(cameras)):
         paths[f"colmap/{name}"] = atomic_write_text(out / "colmap" / name, text)
     return paths

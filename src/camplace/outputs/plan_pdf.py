@@ -452,16 +452,27 @@ def _views_mosaic(fig, data: PlanData, views: list[dict]) -> None:
 
 
 def write_plan_pdf(path: str | Path, data: PlanData, plan_fig=None, extra_sheets=()) -> Path:
-    """Write plan.pdf (every page above, then ``extra_sheets``, e.g. the bill of materials of
-    camplace.outputs.plan_bom; ``plan_fig``: sheet 1 when already drawn by plan_figure);
-    repeatable runs (data.dated None) carry no creation date."""
-    return write_pdf_pages(path, data, lambda: [plan_fig or plan_figure(data), coverage_figure(data),
-                                                *schedule_figures(data), views_figure(data), *extra_sheets])
+    """Write plan.pdf (plan_pdf_bytes) atomically."""
+    return atomic_write_bytes(Path(path), plan_pdf_bytes(data, plan_fig, extra_sheets))
 
 
-def write_pdf_pages(path: str | Path, data: PlanData, pages) -> Path:
-    """Write the figures ``pages()`` makes (under the plan set's rc settings) as one PDF, with
-    ``data``'s title in its metadata (no creation date when data.dated is None)."""
+def plan_pdf_bytes(data: PlanData, plan_fig=None, extra_sheets=()) -> bytes:
+    """plan.pdf: every page above, then ``extra_sheets`` (e.g. the bill of materials of
+    camplace.outputs.plan_bom; figures, or one callable making them); ``plan_fig``: sheet 1
+    when already drawn by plan_figure. Repeatable runs (data.dated None) carry no creation date."""
+    def pages():
+        yield plan_fig or plan_figure(data)
+        yield coverage_figure(data)
+        yield from schedule_figures(data)
+        yield views_figure(data)
+        yield from (extra_sheets() if callable(extra_sheets) else extra_sheets)
+
+    return pdf_pages_bytes(data, pages)
+
+
+def pdf_pages_bytes(data: PlanData, pages) -> bytes:
+    """The figures ``pages()`` makes (under the plan set's rc settings, each drawn as it comes)
+    as one PDF, with ``data``'s title in its metadata (no creation date when data.dated is None)."""
     from matplotlib import rc_context
     from matplotlib.backends.backend_pdf import PdfPages
 
@@ -470,10 +481,10 @@ def write_pdf_pages(path: str | Path, data: PlanData, pages) -> Path:
     if data.dated is None:
         meta["CreationDate"] = None
     with rc_context(RC):
-        with PdfPages(buf, metadata=meta) as buf_pages:  # pages into the in-memory buffer, written atomically below
+        with PdfPages(buf, metadata=meta) as buf_pages:
             for fig in pages():
                 fig.savefig(buf_pages, format="pdf")
-    return atomic_write_bytes(Path(path), buf.getvalue())
+    return buf.getvalue()
 
 
 def plan_svg(data: PlanData, plan_fig=None) -> str:

@@ -19,7 +19,8 @@ import numpy as np
 
 from camplace.outputs.plan_bom import bom_figure
 from camplace.outputs.plan_data import VIEWSHED_BUDGET_S, PlanData, free_floor, plan_data
-from camplace.outputs.plan_pdf import coverage_figure, plan_figure, schedule_figures, views_figure, write_pdf_pages
+from camplace.core.files import atomic_write_bytes
+from camplace.outputs.plan_pdf import coverage_figure, pdf_pages_bytes, plan_figure, schedule_figures, views_figure
 from camplace.scene.build import storey_index
 from camplace.visibility.viewshed import STEP, WORKING_HEIGHT, viewsheds
 
@@ -94,6 +95,11 @@ def building_plans(scene, vis, placement: dict, metrics: dict, selected: np.ndar
 
 
 def write_building_pdf(path: str | Path, whole: PlanData, storeys: list[PlanData], plans=None) -> Path:
+    """Write plan.pdf of a building (building_pdf_bytes) atomically."""
+    return atomic_write_bytes(Path(path), building_pdf_bytes(whole, storeys, plans))
+
+
+def building_pdf_bytes(whole: PlanData, storeys: list[PlanData], plans=None) -> bytes:
     """plan.pdf of a building: each storey's floor plan and coverage sheets (lowest first),
     then the camera schedule, the views and the bill of materials of the whole building.
     ``plans``: the storeys' floor plan figures when already drawn (plan_figure)."""
@@ -105,4 +111,4 @@ def write_building_pdf(path: str | Path, whole: PlanData, storeys: list[PlanData
         yield views_figure(whole)
         yield bom_figure(whole)
 
-    return write_pdf_pages(path, whole, pages)
+    return pdf_pages_bytes(whole, pages)

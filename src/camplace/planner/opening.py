@@ -98,11 +98,12 @@ def run_cameras(run_dir: Path, sc: Scene) -> tuple[list[dict], int]:
 
 
 def open_start(target, scene: str | Path | None = None, root: str | Path | None = None,
-               progress=None) -> Opened:
+               progress=None, cache_dir: str | Path | None = None) -> Opened:
     """Open a run folder (with placement.json) or a scene (built-in name, YAML path or
     SceneSpec; run first, grid placement).
     ``root``: the folder no path may leave (default: the run folder, or the current folder
-    for a scene)."""
+    for a scene); ``cache_dir``: the visibility block cache (camplace.visibility.cache), so
+    a run folder made with the same cache opens without raycasting V again."""
     from camplace.workflows.run import prepare_site, run
 
     from camplace.spec.schema import SceneSpec
@@ -119,13 +120,13 @@ def open_start(target, scene: str | Path | None = None, root: str | Path | None 
             except json.JSONDecodeError as err:
                 raise InputError(f"{run_dir / 'placement.json'}: not valid JSON: {err}") from None
         ref = scene_of_run(run_dir, placement if isinstance(placement, dict) else {}, scene)
-        sc, vis, _ = prepare_site(ref, progress)
+        sc, vis, _ = prepare_site(ref, progress, cache_dir=cache_dir)
         cameras, budget = run_cameras(run_dir, sc)
         base = Path(root).resolve() if root is not None else run_dir
         return Opened(ref, sc, vis, cameras, budget, base, run_dir, str(run_dir))
     from camplace.outputs.write import placement_dict
 
-    result = run(target, progress=progress)
+    result = run(target, progress=progress, cache_dir=cache_dir)
     vis = result.visibility
     n = vis.V.shape[0] - int(vis.info.get("existing", 0))
     grid = Visibility(vis.V[:n], vis.candidates.subset(np.arange(n)), vis.targets, vis.mode, dict(vis.info), vis.engine)

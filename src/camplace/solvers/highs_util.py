@@ -14,8 +14,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from camplace.solvers.base import OnIncumbent, ShouldStop, out_of_time, time_left
-from camplace.solvers.highs_process import (FINISH_S_PER_NNZ, HighsRun, remember_model, remember_start, run_model,
-                                            subscribe_stop)
+from camplace.solvers.highs_process import (FINISH_S_PER_NNZ, remember_model, remember_start, run_model)
 
 INF = highspy.kHighsInf
 

@@ -3,7 +3,9 @@
 ``reduce_streaming`` gives the same Reduction as ``reduce_problem`` (same rows, columns,
 weights and maps, bit for bit) without its copies of V: it reads V's rows once per pass
 in compiled code (V may be memory-mapped, camplace.visibility.cache) and holds only the
-reduced V and O(N_g + N_p) arrays. Identical columns are found by two 64-bit hashes of
+reduced V and O(N_g + N_p) arrays (the reduced V's data is one broadcast byte, ``pattern_csr``,
+and it is built in row chunks with V's mapped pages released after each, ``check_and_build``:
+a memory-mapped V never sits in memory beside it; issue 37). Identical columns are found by two 64-bit hashes of
 each column's row list, then checked exactly (every entry's row also holds the group's
 first column, and the counts are equal); a failed check falls back to reduce_problem.
 """
@@ -12,6 +14,7 @@ from __future__ import annotations
 
 import time
 from dataclasses import replace
+from itertools import pairwise
 from typing import Callable
 
 import numba
@@ -115,13 +118,12 @@ def _has(indices, a, b, j):
 
 
 @numba.njit(cache=True)
-def _check_and_build(indptr, indices, live, rows, rep, new_id):
-    """Exact check of the column groups (every row holding a live column also holds its
-    group's first column ``rep[j]``) and the reduced CSR: for each kept row, its first
-    columns renumbered by ``new_id`` (ascending, as the groups are numbered in first-column
-    order). Returns (ok, indptr, indices)."""
-    out_ptr = np.zeros(len(rows) + 1, np.int64)
-    for r in range(len(rows)):
+def _check_count(indptr, indices, live, rows, rep, r0, r1, out_ptr):
+    """Exact check of the column groups for the kept rows r0 <= r < r1 (every row holding a
+    live column also holds its group's first column ``rep[j]``) and their entry counts in
+    the reduced CSR: out_ptr[r + 1] = out_ptr[r] + (first columns in row r). False on a
+    failed check."""
+    for r in range(r0, r1):
         i = rows[r]
         c = 0
         for q in range(indptr[i], indptr[i + 1]):
@@ -130,10 +132,16 @@ def _check_and_build(indptr, indices, live, rows, rep, new_id):
                 if rep[j] == j:
                     c += 1
                 elif not _has(indices, indptr[i], indptr[i + 1], rep[j]):
-                    return False, out_ptr, np.zeros(0, np.int32)
+                    return False
         out_ptr[r + 1] = out_ptr[r] + c
-    out = np.empty(out_ptr[-1], np.int32)
-    for r in range(len(rows)):
+    return True
+
+
+@numba.njit(cache=True)
+def _build(indptr, indices, live, rows, rep, new_id, r0, r1, out_ptr, out):
+    """The reduced CSR's rows r0 <= r < r1: each kept row's first columns renumbered by
+    ``new_id`` (ascending, as the groups are numbered in first-column order)."""
+    for r in range(r0, r1):
         i = rows[r]
         p = out_ptr[r]
         for q in range(indptr[i], indptr[i + 1]):
@@ -141,7 +149,45 @@ def _check_and_build(indptr, indices, live, rows, rep, new_id):
             if live[j] and rep[j] == j:
                 out[p] = new_id[j]
                 p += 1
+
+
+BUILD_CHUNK_NNZ = 1 << 25  # entries of V read between two release_pages (128 MiB of int32 ids)
+
+
+def row_chunks(indptr: np.ndarray, rows: np.ndarray, chunk_nnz: int) -> np.ndarray:
+    """Bounds (k + 1,) int64 of consecutive slices of ``rows`` holding about ``chunk_nnz``
+    entries of V each (a slice holds at least one row)."""
+    cum = np.cumsum(indptr[rows + 1] - indptr[rows])
+    cuts = np.searchsorted(cum, np.arange(chunk_nnz, cum[-1] if len(cum) else 0, chunk_nnz), side="right")
+    return np.unique(np.r_[0, cuts, len(rows)]).astype(np.int64)
+
+
+def check_and_build(V: sp.csr_matrix, indptr: np.ndarray, live: np.ndarray, rows: np.ndarray, rep: np.ndarray,
+                    new_id: np.ndarray) -> tuple[bool, np.ndarray, np.ndarray]:
+    """The exact check of the column groups and the reduced CSR (ok, indptr (k + 1,) int64,
+    indices (nnz,) int32) of the kept ``rows``, in row chunks: a memory-mapped V's pages are
+    released after each chunk (camplace.core.memory.release_pages), so at most one chunk of V
+    is resident beside the reduced V (issue 37)."""
+    indices = V.indices
+    bounds = row_chunks(indptr, rows, BUILD_CHUNK_NNZ)
+    out_ptr = np.zeros(len(rows) + 1, np.int64)
+    for r0, r1 in pairwise(bounds):
+        ok = _check_count(indptr, indices, live, rows, rep, r0, r1, out_ptr)
+        release_pages(indices)
+        if not ok:
+            return False, out_ptr, np.zeros(0, np.int32)
+    out = np.empty(out_ptr[-1], np.int32)
+    for r0, r1 in pairwise(bounds):
+        _build(indptr, indices, live, rows, rep, new_id, r0, r1, out_ptr, out)
+        release_pages(indices)
     return True, out_ptr, out
+
+
+def pattern_csr(indptr: np.ndarray, indices: np.ndarray, shape: tuple[int, int]) -> sp.csr_matrix:
+    """A 0/1 CSR whose data is one read-only byte broadcast over every entry (no array of
+    ones: V's entries are all 1, so only the pattern takes memory; issue 37)."""
+    data = np.broadcast_to(np.ones(1, np.uint8), (len(indices),))
+    return sp.csr_matrix((data, indices, indptr), shape=shape, copy=False)
 
 
 def reduce_streaming(problem: PlacementProblem, dominance: bool = True) -> Reduction:
@@ -196,13 +242,13 @@ def reduce_streaming(problem: PlacementProblem, dominance: bool = True) -> Reduc
     rep[live_t] = live_t[group_first]
     new_id = np.full(n_p, -1, np.int64)
     new_id[live_t[reps]] = np.arange(n_new)
-    ok, r_ptr, r_idx = _check_and_build(indptr, indices, live, cand, rep, new_id)
     release_pages(V.indices, V.data)  # a memory-mapped V (the cache): its pages leave this process's RSS
+    ok, r_ptr, r_idx = check_and_build(V, indptr, live, cand, rep, new_id)
     if not ok:  # a hash collision merged two different columns: the exact (in-memory) path
         return reduce_problem(problem, dominance)
     first = reps
     weights = np.bincount(group_of, weights=problem.weights[live_t], minlength=n_new)
-    Vr = sp.csr_matrix((np.ones(len(r_idx), np.uint8), r_idx, r_ptr), shape=(len(cand), n_new))
+    Vr = pattern_csr(r_ptr, r_idx, (len(cand), n_new))
     target_map = np.full(n_p, -1, np.int64)
     target_map[live_t] = group_of
     info["merged_targets"] = int(len(live_t) - n_new)
@@ -247,6 +293,7 @@ def solve_reduced(problem: PlacementProblem, run: Callable[[PlacementProblem], P
     info["reduction"] = red.info
     if isinstance(info.get("order"), list):
         info["order"] = [int(red.candidates[i]) for i in info["order"]]
+    del red  # the reduced V goes before problem.cost reads V's rows (a mapped V's read-ahead: issue 37)
     return replace(p, selected=sel, objective=problem.cost(sel), info=info)
 
 

@@ -89,7 +89,7 @@ def warehouse_spec(area_m2: float = WAREHOUSE_DEFAULT_AREA) -> SceneSpec:
         "mounts": [{"kind": "ceiling_grid", "spacing": 1.0, "offset_below_ceiling": 0.1,
                     "yaw_deg": {"start": 0, "stop": 330, "step": 30}, "pitch_deg": [30, 45, 60], "roll_deg": [0],
                     "camera": "wide"}],
-        "placement": {"budget": max(1, int(round(a / w["m2_per_camera"]))), "solver": "greedy"},
+        "placement": {"budget": max(1, int(round(a / w["m2_per_camera"]))), "solver": "greedy-fast"},
     }
     return parse_scene(data, f"<built-in warehouse:{a:g}>")
 

@@ -84,3 +84,21 @@ def high_quality_stage(sc: Scene, vis: Visibility, problem: PlacementProblem, pl
 
 __all__ = ["QUALITIES", "QUALITY_DENSITY", "QUALITY_MAX_CANDIDATES", "QUALITY_RESERVE_S", "QUALITY_TIME_S",
            "check_quality", "denser_candidates", "high_quality_stage"]
+
+
+AUTO_REFINE_MAX_PAIRS = 200_000_000  # visible pairs of V above which refine="auto" leaves the refinement out
+
+
+def refine_here(refine: bool | str, n_pairs: int, log: list[str]) -> bool:
+    """run()'s ``refine`` as a yes or no: True / False as given; "auto" refines unless V holds
+    more than AUTO_REFINE_MAX_PAIRS visible pairs ``n_pairs`` (site scale: each refined pose
+    appends a row to V, a copy of it in memory), which a line in ``log`` says."""
+    if refine not in (True, False, "auto"):
+        raise InputError(f"refine: expected True, False or 'auto', got {refine!r}", option="refine")
+    if refine != "auto":
+        return bool(refine)
+    if n_pairs <= AUTO_REFINE_MAX_PAIRS:
+        return True
+    log.append(f"refine: left out at this size (V holds {n_pairs:,} visible pairs, more than "
+               f"{AUTO_REFINE_MAX_PAIRS:,}: the refinement would copy V); ask for it to run it")
+    return False

@@ -33,7 +33,7 @@ from camplace.visibility.registry import get_engine
 from camplace.spec.crowd import crowd_with
 from camplace.workflows.crowd import crowd_scores, crowd_stage
 from camplace.workflows.quality import (QUALITY_DENSITY, QUALITY_TIME_S, check_quality, denser_candidates,
-                                        high_quality_stage)
+                                        high_quality_stage, refine_here)
 from camplace.workflows.sites import Site, site_of
 
 Progress = Callable[[str, int, int], None]
@@ -325,7 +325,7 @@ def run(scene: str | Path | SceneSpec, budget: int | None = None, solver: str | 
         should_stop: Callable[[], bool] | None = None, max_memory_bytes: int | None = None,
         require_feasible: bool = False, workers: int = 1, scheduler: str | None = None,
         cache_dir: str | Path | None = None, visibility_mode: str = "voxel", stride: int | None = None,
-        probe: float | None = None, money_budget: float | None = None, refine: bool = False,
+        probe: float | None = None, money_budget: float | None = None, refine: bool | str = False,
         refine_time_s: float = 60.0, adaptive: int = 0, robust: int = 0, quality: str | None = None,
         quality_time_s: float = QUALITY_TIME_S,
         triangulation_deg: tuple[float, float] = (20.0, 160.0), well_triangulated: bool = False,
@@ -341,8 +341,9 @@ def run(scene: str | Path | SceneSpec, budget: int | None = None, solver: str | 
     cameras). ``crowd``: overrides of the scene's ``crowd:`` keys (camplace.spec.crowd.CROWD_OPTIONS;
     camplace.workflows.crowd: metrics in held-out crowds, and with ``optimise`` the crowd-aware
     problem). ``options``: solver options as a mapping (e.g. the command line's), over the
-    scene's ``placement.options``; keyword solver options win over both. See ``prepare_site``
-    for the other options."""
+    scene's ``placement.options``; keyword solver options win over both. ``refine``: True,
+    False or "auto" (refine unless V is site-scale: camplace.workflows.quality.refine_here).
+    See ``prepare_site`` for the other options."""
     t_run = time.perf_counter()
     timings: dict[str, float] = {}
     log: list[str] = []
@@ -405,6 +406,7 @@ def run(scene: str | Path | SceneSpec, budget: int | None = None, solver: str | 
     timings["solve"] = time.perf_counter() - t
     grid_selected = placement.selected
     stopped = should_stop is not None and should_stop()
+    refine = refine_here(refine, vis.V.nnz, log)
     if (refine or adaptive or robust or quality == "high") and stopped:  # interrupted: keep the solver's best
         log.append("beyond the grid: skipped (interrupted)")
     elif quality == "high":  # one time budget for the whole run (camplace.improve.quality)

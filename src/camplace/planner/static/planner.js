@@ -213,6 +213,7 @@
     S.floor = name;
     $("floor").value = name;
     applyFloor();
+    if (S.view === "3d") draw3d();
   }
 
   function drawLegend() {
@@ -766,16 +767,30 @@
       if (stroke) { ctx.strokeStyle = stroke; ctx.stroke(); }
     };
     ctx.lineWidth = 1;
-    poly(sc.footprint.map((p) => [p[0], p[1], 0]), "#f1f3f6", "#1f2430");
+    // a building: a cut-away, the selected storey and the ones below it, its coverage on its floor
+    const floors = (sc.storeys || []).map((f) => f.name), top = floors.indexOf(S.floor);
+    const below = (name) => !floors.length || !name || floors.indexOf(name) <= top;
+    const ownFloor = (name) => { const k = String(name).indexOf("/"); return k > 0 && floors.includes(name.slice(0, k)) ? name.slice(0, k) : null; };
+    const drawn = { storeys: [], cameras: [] };
+    if (floors.length) {
+      sc.storeys.forEach((f, k) => {
+        if (k > top) return;
+        poly(f.footprint.map((p) => [p[0], p[1], f.elevation_m]), k === top ? "#f1f3f6" : "rgba(241,243,246,0.55)", "#1f2430");
+        drawn.storeys.push(f.name);
+      });
+    } else poly(sc.footprint.map((p) => [p[0], p[1], 0]), "#f1f3f6", "#1f2430");
     if (st && st.coverage_floor && $("show-coverage").checked) {
       const h = (sc.target_cell_m || 0.25) / 2;
+      const z = floors.length ? sc.storeys[top].elevation_m : 0;
       (sc.targets_xy || []).forEach((p, i) => {
-        poly([[p[0] - h, p[1] - h, 0], [p[0] + h, p[1] - h, 0], [p[0] + h, p[1] + h, 0], [p[0] - h, p[1] + h, 0]], covColour(st.coverage_floor[i] || 0, gammaAt(i)));
+        if (floors.length && sc.targets_storey[i] !== S.floor) return;
+        poly([[p[0] - h, p[1] - h, z], [p[0] + h, p[1] - h, z], [p[0] + h, p[1] + h, z], [p[0] - h, p[1] + h, z]], covColour(st.coverage_floor[i] || 0, gammaAt(i)));
       });
     }
     // obstacle faces, far to near
     const faces = [];
     for (const o of sc.obstacles || []) {
+      if (!below(ownFloor(o.name))) continue;
       const pg = o.polygon, z0 = o.zmin || 0, z1 = o.zmax || 0;
       for (let i = 0; i < pg.length; i++) {
         const a = pg[i], b = pg[(i + 1) % pg.length];
@@ -787,8 +802,11 @@
     faces.map((f) => [depth(f.ps), f]).sort((a, b) => b[0] - a[0]).forEach(([, f]) => {
       poly(f.ps, f.top ? "rgba(170,176,188,0.95)" : "rgba(120,128,142,0.88)", "#4b5160");
     });
+    S.drawn3d = drawn;  // what the 3D view shows (the browser tests read it)
     if (!st) return;
     for (const c of st.cameras) {
+      if (!below(c.storey)) continue;
+      drawn.cameras.push(c.id);
       const t = typeOf(c.camera) || { hfov_deg: 60, vfov_deg: 40 };
       const y = c.yaw_deg * Math.PI / 180, p = c.pitch_deg * Math.PI / 180, r = (c.roll_deg || 0) * Math.PI / 180;
       const fw = [Math.cos(p) * Math.cos(y), Math.cos(p) * Math.sin(y), -Math.sin(p)];

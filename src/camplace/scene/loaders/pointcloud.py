@@ -27,7 +27,6 @@ Wrapping pypcd4 would need this header check anyway, and it also drops camplace'
 
 from __future__ import annotations
 
-import re
 from dataclasses import dataclass, field
 from pathlib import Path
 
