@@ -1,4 +1,4 @@
-"""quality="high" (issue 37): the chain of tabu, refinement and adaptive rounds in one time budget."""
+"""quality="high" (issue 37): refinement and relocation (tabu, adaptive rounds, kicks) in one time budget."""
 
 from __future__ import annotations
 
@@ -89,3 +89,13 @@ def test_a_refined_camera_never_moves_onto_another_cameras_position():
                       [1.25, 1.0, 3.0, 0, 30, 0, 4.0], [1.0, 1.0, 3.0, 45, 30, 0, 4.0]])
     assert _free_of_others(poses, 0, trial).tolist() == [False, False, True, True]
     assert _free_of_others(poses, 1, trial).tolist() == [True, True, True, False]
+
+
+def test_kicks_that_find_nothing_end_before_their_time(demo_run):
+    from camplace.improve.quality import kick_refine
+
+    r = demo_run
+    t = time.perf_counter()
+    vis, problem, p = kick_refine(r.scene, r.visibility, r.problem, r.placement, 120.0, seed=1, max_fails=1)
+    assert time.perf_counter() - t < 60.0  # each success lowers the cost; the first failure ends it
+    assert p.objective <= r.problem.cost(r.placement.selected) + 1e-9

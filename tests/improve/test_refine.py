@@ -191,3 +191,20 @@ def test_refined_rows_follow_the_runs_engine(mode, params):
     assert (vis.V[new] != own).nnz == 0
     default = engine_visibility(get_engine("voxel"), r.scene.occupancy, vis.targets, vis.candidates.subset(new)).V
     assert (default != own).nnz > 0  # the rule matters here: rows under the voxel defaults would differ
+
+
+def test_polled_rows_past_their_cap_still_answer_a_poll_of_old_and_new_poses():
+    from camplace.improve.refine import _PolledRows
+
+    def cast(trial):  # row n sees target int(trial[n, 0]) and target 9
+        return sp.csr_matrix((np.ones(2 * len(trial)), (np.repeat(np.arange(len(trial)), 2),
+                                                        np.c_[trial[:, 0], np.full(len(trial), 9)].ravel())),
+                             shape=(len(trial), 10))
+
+    polled = _PolledRows(10, max_entries=5)
+    a = np.array([[1.0, 0], [2.0, 0]])
+    assert polled.get(0, a, cast)[1] == 2
+    b = np.array([[2.0, 0], [3.0, 0], [4.0, 0]])  # one pose seen before, two new: past the cap of 5 entries
+    R, n = polled.get(0, b, cast)
+    assert n == 2 and (R != cast(b)).nnz == 0
+    assert polled.entries <= 6 and polled.get(0, b, cast)[1] == 0  # this poll's poses are kept

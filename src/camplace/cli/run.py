@@ -181,8 +181,8 @@ def run_cmd(scene: Optional[list[str]] = typer.Argument(None, help="Scene YAML f
             robust: int = typer.Option(0, "--robust", help="1: best worst case over any single camera failure."),
             quality: Optional[str] = typer.Option(None, "--quality",
                                                   help="high: the best placement the whole run reaches in "
-                                                       "--quality-time seconds (tabu, refinement and adaptive rounds "
-                                                       "chained; docs/beyond-the-grid.md); default: the scene's "
+                                                       "--quality-time seconds (a 2x denser grid, refinement and "
+                                                       "relocation chained; docs/beyond-the-grid.md); default: the scene's "
                                                        "placement.quality, else default."),
             quality_time: Optional[float] = typer.Option(None, "--quality-time",
                                                          help="--quality high: seconds for the whole run "

@@ -1,26 +1,30 @@
-"""High quality within one time budget (issue 37): tabu, refinement and adaptive rounds chained.
+"""High quality within one time budget (issue 37): refinement and relocation chained.
 
 From the discrete solver's placement, each step gets a share of one time budget (s) and
 starts from the previous step's best selection; a step that finishes early leaves its time
-to the next ones. The default plan (``QUALITY_STEPS``):
+to the next ones. The default plan (``QUALITY_STEPS``), meant for V of a denser grid
+(camplace.workflows.quality: ``quality="high"`` halves the mount spacing):
 
-1. ``tabu`` on the grid problem, warm-started from the placement (camplace.solvers.tabu);
-2. ``adaptive``: rounds of finer candidates around the placement, each solved again by swap
-   descent and a short tabu from the current selection (camplace.improve.adaptive);
-3. ``refine``: each camera off the grid by the compass search (camplace.improve.refine);
-4. ``tabu`` again on the extended problem (grid, adaptive and refined rows), from the
-   refined selection: it may swap in cameras that the next refinement can move;
-5. ``refine`` again (its search box is centred on the current poses);
-6. ``adaptive`` and 7. ``refine`` once more, around the refined poses.
+1. ``refine``: each camera off the grid by the compass search (camplace.improve.refine);
+2. ``refine`` again (its search box is centred on the current poses);
+3. ``relocate``: each camera moved to the best of a few other candidates, each judged by the
+   pose a compass search makes of it (camplace.improve.relocate);
+4. ``refine`` once more.
 
-When the plan ends early (the refinements converged, an adaptive round found nothing), the
-time left goes to ``kick`` steps (``EXTRA_CYCLE``, :func:`kick_refine`: drop two of the least
-useful cameras, refill by swap descent, refine, keep it if better), each with the next seed,
-until less than ``MIN_CYCLE_S`` is left.
+The other steps a plan may name: ``tabu`` (tabu search warm-started from the placement,
+camplace.solvers.tabu), ``adaptive`` (rounds of finer candidates around the placement, each
+solved again by swap descent and a short tabu; camplace.improve.adaptive), ``kick``
+(:func:`kick_refine`: drop two of the least useful cameras, refill by swap descent, refine,
+keep it if better) and ``shake``. When the plan ends early (the refinements converged, a
+relocation sweep moved nothing), the time left goes to ``shake`` steps (``EXTRA_CYCLE``,
+camplace.improve.relocate.shake_relocate: three cameras moved at random among good places, then
+refinement, relocation, refinement, kept if better), each with the next seed, until less than
+``MIN_CYCLE_S`` is left or ``SHAKE_MAX_FAILS`` shakes in a row found nothing (then the chain
+ends before its budget: the run need not wait for nothing).
 
-Measured on standard-store, N_s = 20 (benchmarks/quality.py, docs/benchmarks.md): adaptive
-rounds on the grid before the first refinement pay most (gap 0.178 against 0.182 with the
-adaptive rounds after two tabu/refine cycles); the steps after the first refinement gain little.
+Measured on standard-store, N_s = 20 (benchmarks/quality.py, docs/benchmarks.md): on the
+0.5 m grid, greedy then two refinements reach gap 0.175 in ~3 s, a relocation 0.173; the
+earlier plan (tabu, adaptive rounds, refinements on the 1 m grid) ended at 0.178.
 
 Refinement and adaptive rounds append rows to V, so the returned visibility / problem replace
 the grid ones; the placement stays a selection of V rows and its cost is recomputed from V.
@@ -37,6 +41,7 @@ import numpy as np
 
 from camplace.improve.adaptive import adaptive_rounds
 from camplace.improve.refine import PoseGuard, RowMap, refine_placement
+from camplace.improve.relocate import relocate_placement, shake_relocate
 from camplace.problem.model import PlacementProblem
 from camplace.scene.build import Scene
 from camplace.solvers.base import Placement
@@ -45,11 +50,12 @@ from camplace.visibility.engine import Visibility
 Progress = Callable[[str, int, int], None]
 # (step, share of the whole budget): shares are of the budget left when the step starts,
 # scaled by the shares of the steps still to come, so unspent time flows on
-QUALITY_STEPS: tuple[tuple[str, float], ...] = (("tabu", 0.15), ("adaptive", 0.35), ("refine", 0.1), ("tabu", 0.1),
-                                                ("refine", 0.1), ("adaptive", 0.1), ("refine", 0.1))
+QUALITY_STEPS: tuple[tuple[str, float], ...] = (("refine", 0.1), ("refine", 0.1), ("relocate", 0.7), ("refine", 0.1))
 
-EXTRA_CYCLE: tuple[tuple[str, float], ...] = (("kick", 1.0),)  # repeated while time is left
+EXTRA_CYCLE: tuple[tuple[str, float], ...] = (("shake", 1.0),)  # repeated while time is left
 MIN_CYCLE_S = 1.5  # the least time left (s) worth another cycle
+KICK_MAX_FAILS = 3  # the chain ends after this many kicks in a row found nothing (the run need not wait)
+SHAKE_MAX_FAILS = 10  # ... or this many shakes (camplace.improve.relocate.shake_relocate)
 
 
 @dataclass(frozen=True)
@@ -74,18 +80,21 @@ def step_budget(left_s: float, shares: list[float]) -> float:
 
 
 def kick_refine(scene: Scene, vis: Visibility, problem: PlacementProblem, placement: Placement, time_limit_s: float,
-                *, seed: int = 0, drop: int = 2, guard: PoseGuard | None = None, row_map: RowMap | None = None,
+                *, seed: int = 0, drop: int = 2, max_fails: int | None = None, guard: PoseGuard | None = None,
+                row_map: RowMap | None = None,
                 should_stop: Callable[[], bool] | None = None) -> tuple[Visibility, PlacementProblem, Placement]:
     """Iterated local search for ``time_limit_s`` seconds: drop ``drop`` cameras drawn among
     the 2·drop whose loss is least, refill by swap descent (grid and earlier rows alike),
-    refine, keep the result when its cost is lower. The rows raycast stay in V either way."""
+    refine, keep the result when its cost is lower. The rows raycast stay in V either way.
+    ``max_fails``: also end after that many kicks in a row found nothing better (None: never)."""
     from camplace.improve.adaptive import swap_descent
 
     end = time.perf_counter() + time_limit_s
     rng = np.random.default_rng(seed)
     stop = (lambda: False) if should_stop is None else should_stop
     best = problem.cost(placement.selected)
-    while time.perf_counter() < end - 0.3 and not stop():
+    fails = 0
+    while time.perf_counter() < end - 0.3 and not stop() and (max_fails is None or fails < max_fails):
         sel = np.asarray(placement.selected, np.int64)
         loss = np.array([problem.cost(np.delete(sel, k)) for k in range(len(sel))]) - best
         pool = np.argsort(loss)[: 2 * drop]
@@ -97,9 +106,10 @@ def kick_refine(scene: Scene, vis: Visibility, problem: PlacementProblem, placem
                               should_stop=should_stop)
         vis, problem = rf.visibility, rf.problem
         if rf.refined_cost < best - 1e-9:
-            best, placement = rf.refined_cost, rf.placement
+            best, placement, fails = rf.refined_cost, rf.placement, 0
         else:  # the same selection on the extended problem (its rows keep their ids)
             placement = replace(placement, objective=problem.cost(placement.selected))
+            fails += 1
     return vis, problem, placement
 
 
@@ -118,10 +128,10 @@ def high_quality(scene: Scene, vis: Visibility, problem: PlacementProblem, place
     start_cost = problem.cost(placement.selected)
     start_solver, grid_cost, on_grid = placement.solver, start_cost, True
     hist: list[dict] = []
-    plan, n, cycle = list(steps), 0, 0
+    plan, n, cycle, idle = list(steps), 0, 0, False
     while not stop():
         if n == len(plan):  # time left after the plan: EXTRA_CYCLE steps (kicks), the next seed each
-            if end - time.perf_counter() < MIN_CYCLE_S:
+            if end - time.perf_counter() < MIN_CYCLE_S or idle:  # idle: the last kicks found nothing
                 break
             plan += list(EXTRA_CYCLE)
             cycle += 1
@@ -145,9 +155,16 @@ def high_quality(scene: Scene, vis: Visibility, problem: PlacementProblem, place
                                  solver="tabu", solver_time_s=budget / (2 * adaptive_rounds_max), progress=progress,
                                  guard=guard, row_map=row_map, should_stop=should_stop)
             vis, problem, placement = ar.visibility, ar.problem, ar.placement
-        elif name == "kick":
-            vis, problem, placement = kick_refine(scene, vis, problem, placement, budget, seed=seed + cycle,
-                                                  guard=guard, row_map=row_map, should_stop=should_stop)
+        elif name == "relocate":
+            rf = relocate_placement(scene, vis, problem, placement, budget, guard=guard, row_map=row_map,
+                                    should_stop=should_stop)
+            vis, problem, placement = rf.visibility, rf.problem, rf.placement
+        elif name in ("kick", "shake"):
+            c0 = problem.cost(placement.selected)
+            search, fails = (kick_refine, KICK_MAX_FAILS) if name == "kick" else (shake_relocate, SHAKE_MAX_FAILS)
+            vis, problem, placement = search(scene, vis, problem, placement, budget, seed=seed + cycle,
+                                             max_fails=fails, guard=guard, row_map=row_map, should_stop=should_stop)
+            idle = problem.cost(placement.selected) >= c0 - 1e-9
         else:
             raise ValueError(f"unknown quality step {name!r}")
         on_grid = on_grid and name == "tabu"
@@ -165,4 +182,5 @@ def high_quality(scene: Scene, vis: Visibility, problem: PlacementProblem, place
     return QualityResult(vis, problem, out, start_cost, hist)
 
 
-__all__ = ["EXTRA_CYCLE", "MIN_CYCLE_S", "QUALITY_STEPS", "QualityResult", "high_quality", "kick_refine", "step_budget"]
+__all__ = ["EXTRA_CYCLE", "KICK_MAX_FAILS", "MIN_CYCLE_S", "QUALITY_STEPS", "QualityResult", "SHAKE_MAX_FAILS",
+           "high_quality", "kick_refine", "step_budget"]

@@ -257,7 +257,7 @@ class _PolledRows:
     of a camera whose own pose stayed while its neighbours' moves changed its gains (the
     demo's refinement: 10,936 trial poses, 5,008 distinct). A pose gives the same row
     whenever it is raycast, so a remembered row changes nothing but the time. At most
-    ``max_entries`` V entries are kept (then all are forgotten and kept afresh)."""
+    ``max_entries`` V entries are kept (then all but the current poll's are forgotten)."""
 
     def __init__(self, n_cols: int, max_entries: int = 20_000_000):
         self.n_cols, self.max_entries = n_cols, max_entries
@@ -271,9 +271,9 @@ class _PolledRows:
         new = [n for n, key in enumerate(keys) if key not in self.rows]
         if new:
             R = cast(trial[new])
-            if self.entries + R.nnz > self.max_entries:
-                self.rows.clear()
-                self.entries = 0
+            if self.entries + R.nnz > self.max_entries:  # forget all but this poll's poses seen before
+                self.rows = {key: self.rows[key] for key in keys if key in self.rows}
+                self.entries = sum(len(ix) for ix, _ in self.rows.values())
             for r, n in enumerate(new):
                 self.rows[keys[n]] = (R.indices[R.indptr[r]:R.indptr[r + 1]], R.data[R.indptr[r]:R.indptr[r + 1]])
             self.entries += R.nnz
@@ -342,48 +342,27 @@ def refine_poses(scene: Scene, vis: Visibility, problem: PlacementProblem, selec
             cid = int(cands.camera_ids[i])
             half = np.r_[box.half, fbox[k, 1]]
             lo, hi = np.r_[box.centre - box.half, fbox[k, 2]], np.r_[box.centre + box.half, fbox[k, 3]]
-            dims = np.flatnonzero(half > 0)
-            if len(dims) == 0:
+            if not (half > 0).any():
                 continue
             r = rows[k]
             cov_o = cov.copy()
             cov_o[r.indices] -= 1
             g = target_gains(problem, cov_o)
-            cur = float(g[r.indices].sum())
-            step = half / 2.0
-            for _ in range(levels):
-                while True:
-                    if (deadline is not None and time.perf_counter() > deadline) or (
-                            should_stop is not None and should_stop()):
-                        break
-                    trial = []
-                    for d in dims:
-                        for sgn in (1.0, -1.0):
-                            p = poses[k].copy()
-                            p[d] = np.clip(p[d] + sgn * step[d], lo[d], hi[d])
-                            if abs(p[d] - poses[k, d]) > 1e-9:
-                                trial.append(p)
-                    if not trial:
-                        break
-                    trial = np.array(trial)
-                    trial = trial[_valid_positions(box, scene.occupancy, trial) & _free_of_others(poses, k, trial)]
-                    if guard is not None and len(trial):
-                        trial = trial[_guarded(guard, cands, cid, trial)]
-                    if len(trial) == 0:
-                        break
-                    R, cast = polled.get(k, trial, lambda t: _trial_rows(engine, scene, vis, cid, t, row_map))
-                    trials += len(trial)
-                    raycast += cast
-                    s = _row_sums(R, g)
-                    b = int(np.argmax(s))
-                    if s[b] > cur + 1e-9:
-                        poses[k], rows[k], cur = trial[b], R[b], float(s[b])
-                        moved[k] = True
-                        accepted += 1
-                        improved_any = True
-                        continue
-                    break
-                step = step / 2.0
+
+            def admit(trial: np.ndarray, box=box, k=k, cid=cid) -> np.ndarray:
+                ok = _valid_positions(box, scene.occupancy, trial) & _free_of_others(poses, k, trial)
+                if guard is not None and ok.any():
+                    ok[ok] = _guarded(guard, cands, cid, trial[ok])
+                return ok
+
+            poses[k], rows[k], _, c = compass(
+                poses[k], r, float(g[r.indices].sum()), half, lo, hi, g, levels, admit,
+                lambda t, k=k, cid=cid: polled.get(k, t, lambda u: _trial_rows(engine, scene, vis, cid, u, row_map)),
+                lambda: (deadline is not None and time.perf_counter() > deadline) or (
+                    should_stop is not None and should_stop()))
+            trials, raycast, accepted = trials + c["trials"], raycast + c["raycast"], accepted + c["accepted"]
+            if c["accepted"]:
+                moved[k] = improved_any = True
             cov = cov_o
             cov[rows[k].indices] += 1
             if progress:
@@ -393,6 +372,47 @@ def refine_poses(scene: Scene, vis: Visibility, problem: PlacementProblem, selec
     info = {"trials": trials, "raycast": raycast, "accepted_moves": accepted, "sweeps": sweeps, "stopped": stopped,
             "seconds": time.perf_counter() - t0}
     return poses, moved, rows, info
+
+
+def compass(pose: np.ndarray, row: sp.csr_matrix, cur: float, half: np.ndarray, lo: np.ndarray, hi: np.ndarray,
+            g: np.ndarray, levels: int, admit: Callable[[np.ndarray], np.ndarray],
+            rows_of: Callable[[np.ndarray], tuple[sp.csr_matrix, int]],
+            halt: Callable[[], bool]) -> tuple[np.ndarray, sp.csr_matrix, float, dict]:
+    """Compass search of one camera's pose (7,) within [lo, hi] (see module doc): polls of ±step
+    along each coordinate with half > 0 (steps from half / 2, halved ``levels`` times), the poses
+    ``admit`` keeps, scored by their rows (``rows_of(trial)`` -> (rows, how many raycast)) against
+    the target gains ``g`` (N_p,); a poll's best pose is taken while it beats ``cur`` (the score
+    Σ g of ``row``). Returns (pose, row, score, dict(trials, raycast, accepted)); ``halt()`` ends it."""
+    dims = np.flatnonzero(half > 0)
+    step = half / 2.0
+    n = {"trials": 0, "raycast": 0, "accepted": 0}
+    for _ in range(levels):
+        while not halt():
+            trial = []
+            for d in dims:
+                for sgn in (1.0, -1.0):
+                    p = pose.copy()
+                    p[d] = np.clip(p[d] + sgn * step[d], lo[d], hi[d])
+                    if abs(p[d] - pose[d]) > 1e-9:
+                        trial.append(p)
+            if not trial:
+                break
+            trial = np.array(trial)
+            trial = trial[admit(trial)]
+            if len(trial) == 0:
+                break
+            R, cast = rows_of(trial)
+            n["trials"] += len(trial)
+            n["raycast"] += cast
+            s = _row_sums(R, g)
+            b = int(np.argmax(s))
+            if s[b] > cur + 1e-9:
+                pose, row, cur = trial[b], R[b], float(s[b])
+                n["accepted"] += 1
+                continue
+            break
+        step = step / 2.0
+    return pose, row, cur, n
 
 
 def _free_of_others(poses: np.ndarray, k: int, trial: np.ndarray) -> np.ndarray:
@@ -446,5 +466,5 @@ def refine_placement(scene: Scene, vis: Visibility, problem: PlacementProblem, p
     return RefineResult(vis2, prob2, p2, grid_cost, cost, info)
 
 
-__all__ = ["PoseBox", "RefineResult", "angle_step", "append_candidates", "extend_problem", "pose_box",
+__all__ = ["PoseBox", "RefineResult", "angle_step", "append_candidates", "compass", "extend_problem", "pose_box",
            "raycast_poses", "refine_placement", "refine_poses", "target_gains"]

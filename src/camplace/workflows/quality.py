@@ -1,14 +1,18 @@
 """The ``quality`` setting of a run (issue 37): ``"default"`` keeps the run as it is;
-``"high"`` spends one time budget for the whole run (``quality_time_s``, 30 s by default,
-counted from the start of ``run``) on the improvement chain of camplace.improve.quality
-after the discrete solve, less what the stages before it took and a reserve for the metrics
-and the output files."""
+``"high"`` raycasts a denser candidate grid (``denser_candidates``: each mount's spacing
+divided by QUALITY_DENSITY, as long as that stays within QUALITY_MAX_CANDIDATES poses) and
+spends one time budget for the whole run (``quality_time_s``, 30 s by default, counted from
+the start of ``run``) on the improvement chain of camplace.improve.quality after the discrete
+solve, less what the stages before it took and a reserve for the metrics and the output files."""
 
 from __future__ import annotations
 
 import time
+from dataclasses import replace
 from typing import Callable
 
+from camplace.cameras.candidates import Candidates, build_candidates
+from camplace.cameras.models import CameraModel
 from camplace.core.errors import InputError
 from camplace.improve.quality import high_quality
 from camplace.problem.model import PlacementProblem
@@ -18,7 +22,9 @@ from camplace.visibility.engine import Visibility
 
 QUALITIES = ("default", "high")
 QUALITY_TIME_S = 30.0  # the whole run's seconds with quality="high"
-QUALITY_RESERVE_S = 7.0  # kept for the metrics and, on the command line, the output files and report (s)
+QUALITY_RESERVE_S = 10.0  # kept for the metrics and, on the command line, the output files and report (s)
+QUALITY_DENSITY = 2  # quality="high": each mount's spacing divided by this (4x the ceiling positions)
+QUALITY_MAX_CANDIDATES = 40_000  # ... unless the denser grid would hold more poses than this
 
 
 def check_quality(quality: str, quality_time_s: float, *, refine: bool = False, adaptive: int = 0,
@@ -34,6 +40,29 @@ def check_quality(quality: str, quality_time_s: float, *, refine: bool = False, 
     if quality == "high" and (adaptive or robust):
         raise InputError("quality: quality=high runs its own adaptive rounds and refinement; leave adaptive=0 "
                          "and robust=0", option="quality")
+
+
+def denser_candidates(sc: Scene, cameras: dict[str, CameraModel], candidates: Candidates,
+                      extra_pitches: tuple[float, ...] = (), density: int = QUALITY_DENSITY,
+                      max_candidates: int = QUALITY_MAX_CANDIDATES) -> tuple[Scene, Candidates, str]:
+    """(scene, candidates, log line) of a denser grid: every mount's ``spacing`` (m) divided by
+    ``density``; the scene's spec carries the new spacing, so the refinement's boxes (half a
+    spacing) shrink with it. The scene and ``candidates`` as they are when the denser grid would
+    hold more than ``max_candidates`` poses (not even built past twice that, by density² times
+    the scene's poses), and for a building (its storeys keep theirs)."""
+    if density <= 1 or sc.storeys:
+        return sc, candidates, ""
+    kept = f"exceeds {max_candidates}; the scene's grid is kept"
+    guess = len(candidates) * density ** 2  # ~the denser grid's poses
+    if guess > 2 * max_candidates:  # a site: not even built
+        return sc, candidates, f"quality high: a {density}x denser grid (~{guess} poses) {kept}"
+    mounts = [m.model_copy(update={"spacing": m.spacing / density}) for m in sc.spec.mounts]
+    dense_sc = replace(sc, spec=sc.spec.model_copy(update={"mounts": mounts}))
+    dense = build_candidates(dense_sc, cameras, extra_pitches)
+    if len(dense) > max_candidates:
+        return sc, candidates, f"quality high: the {density}x denser grid ({len(dense)} poses) {kept}"
+    return dense_sc, dense, (f"quality high: mount spacing / {density}: {len(dense)} poses "
+                             f"({len(candidates)} on the scene's grid)")
 
 
 def high_quality_stage(sc: Scene, vis: Visibility, problem: PlacementProblem, placement: Placement,
@@ -53,7 +82,8 @@ def high_quality_stage(sc: Scene, vis: Visibility, problem: PlacementProblem, pl
     return q.visibility, q.problem, q.placement
 
 
-__all__ = ["QUALITIES", "QUALITY_RESERVE_S", "QUALITY_TIME_S", "check_quality", "high_quality_stage"]
+__all__ = ["QUALITIES", "QUALITY_DENSITY", "QUALITY_MAX_CANDIDATES", "QUALITY_RESERVE_S", "QUALITY_TIME_S",
+           "check_quality", "denser_candidates", "high_quality_stage"]
 
 
 AUTO_REFINE_MAX_PAIRS = 200_000_000  # visible pairs of V above which refine="auto" leaves the refinement out

@@ -32,7 +32,8 @@ from camplace.visibility.engine import Visibility, drop_blind_candidates
 from camplace.visibility.registry import get_engine
 from camplace.spec.crowd import crowd_with
 from camplace.workflows.crowd import crowd_scores, crowd_stage
-from camplace.workflows.quality import QUALITY_TIME_S, check_quality, high_quality_stage, refine_here
+from camplace.workflows.quality import (QUALITY_DENSITY, QUALITY_TIME_S, check_quality, denser_candidates,
+                                        high_quality_stage, refine_here)
 from camplace.workflows.sites import Site, site_of
 
 Progress = Callable[[str, int, int], None]
@@ -68,12 +69,16 @@ def prepare_site(scene: str | Path | SceneSpec, progress: Progress | None = None
                  require_feasible: bool = False, workers: int = 1, scheduler: str | None = None,
                  cache_dir: str | Path | None = None, visibility_mode: str = "voxel", stride: int | None = None,
                  probe: float | None = None, keep: str | Path | None = None,
-                 extra_pitches: tuple[float, ...] = ()) -> tuple[Scene, Visibility, Site | None]:
+                 extra_pitches: tuple[float, ...] = (),
+                 candidate_density: int = 1) -> tuple[Scene, Visibility, Site | None]:
     """Scene, targets, candidates and visibility (blind candidates dropped), and the site
     rules (camplace.workflows.sites: None without privacy zones, existing cameras or ``keep``,
     a previous run's placement file whose cameras stay): candidates that see a privacy
     zone or stand at an existing camera are removed before visibility; the existing
     cameras are raycast once.
+
+    ``candidate_density``: > 1 divides every mount's spacing by it (quality="high",
+    camplace.workflows.quality.denser_candidates).
 
     ``visibility_mode``: ``voxel`` (default, centre test per target) or ``pixel`` (the
     paper's per-pixel raycasting, camplace.visibility.pixel, one ray per ``stride`` x
@@ -97,6 +102,9 @@ def prepare_site(scene: str | Path | SceneSpec, progress: Progress | None = None
     t = time.perf_counter()
     _stage(progress, "candidates")
     cands = build_candidates(sc, cameras, extra_pitches)  # extra: a crowd-aware run's steep views (issue 36)
+    if candidate_density > 1:  # quality="high": a denser grid (camplace.workflows.quality)
+        sc, cands, note = denser_candidates(sc, cameras, cands, extra_pitches, candidate_density)
+        log.extend([note] if note else [])
     timings["candidates"] = time.perf_counter() - t
     t = time.perf_counter()
     engine = get_engine(visibility_mode, stride=stride, probe=probe)
@@ -363,7 +371,8 @@ def run(scene: str | Path | SceneSpec, budget: int | None = None, solver: str | 
                                  max_memory_bytes=max_memory_bytes, require_feasible=require_feasible, workers=workers,
                                  scheduler=scheduler, cache_dir=cache_dir, visibility_mode=visibility_mode,
                                  stride=stride, probe=probe, keep=keep,
-                                 extra_pitches=() if crowd_spec is None else crowd_spec.offers_steep())
+                                 extra_pitches=() if crowd_spec is None else crowd_spec.offers_steep(),
+                                 candidate_density=QUALITY_DENSITY if quality == "high" else 1)
     budget = sc.spec.placement.budget if budget is None else budget
     solver = sc.spec.placement.solver if solver is None else solver
     solver_options.setdefault("time_limit_s", sc.spec.placement.time_limit_s if time_limit_s is None else time_limit_s)
