@@ -58,3 +58,20 @@ def test_the_descent_never_raises_its_objective(seed, beta):
     assert len(sel) <= p.budget and len(np.unique(p.location_ids[sel])) == len(sel)
     obj = PeopleCountObjective(p, start, H, beta)
     assert abs(obj.value(p.coverage(sel)) - J(p, sel, start, H, beta)) < 1e-12
+
+
+@settings(max_examples=30, deadline=None)
+@given(st.integers(0, 2**31 - 1), st.floats(0.0, 3.0))
+def test_pose_scores_are_the_drop_of_the_objective(seed, beta):
+    """The refinement's pose_score of a row = J(others) − J(others + that row)."""
+    from camplace.problem.gains import target_gains
+
+    rng = np.random.default_rng(seed)
+    start, H = 3, 2
+    V = sp.csr_matrix((rng.random((6, start + 4 * H)) < 0.4).astype(np.uint8))
+    p = PlacementProblem(V, rng.integers(1, 3, V.shape[1]), rng.random(V.shape[1]) + 0.1, 3, np.arange(6))
+    obj = PeopleCountObjective(p, start, H, beta)
+    cov = p.coverage(np.array([0, 1]))
+    got = obj.pose_scores(V[2:], target_gains(p.gamma, p.weights, cov), cov)
+    want = [obj.value(cov) - obj.value(cov + V[i].toarray().ravel()) for i in range(2, 6)]
+    assert np.allclose(got, want, atol=1e-12)

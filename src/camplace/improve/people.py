@@ -53,6 +53,13 @@ class PeopleCountObjective:
         return (shortfall_cost(self.p.gamma, self.p.weights, cov) / self.norm
                 - self.per_person * persons_seen(cov[self.col0:], self.gamma_p, self.H))
 
+    def pose_scores(self, rows: sp.csr_matrix, g: np.ndarray, cov_other: np.ndarray) -> np.ndarray:
+        """(K,) J's drop when a camera with one of ``rows`` (K, N) joins the others (coverage
+        ``cov_other``; g: the squared cost's gains there): the refinement's pose_score."""
+        R = sp.csr_matrix(rows)
+        return (np.asarray(R @ g).ravel() / self.norm + self.per_person *
+                persons_completed(R[:, self.col0:], cov_other[self.col0:], self.gamma_p, self.H))
+
     def start(self, state: SwapState):
         self.seen = persons_seen(state.cov[self.col0:], self.gamma_p, self.H)
         return None

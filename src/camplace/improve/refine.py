@@ -236,6 +236,9 @@ def _row_sums(rows: sp.csr_matrix, g: np.ndarray) -> np.ndarray:
 # --------------------------------------------------------------------------- search
 
 
+PoseScore = Callable[[sp.csr_matrix, np.ndarray, np.ndarray], np.ndarray]  # (rows (K, N_p), g, cov_other) -> (K,)
+
+
 @dataclass(frozen=True)
 class RefineResult:
     """visibility: V with the refined poses appended; placement: the refined selection on
@@ -304,7 +307,8 @@ def refine_poses(scene: Scene, vis: Visibility, problem: PlacementProblem, selec
                  progress: Progress | None = None,
                  guard: PoseGuard | None = None,
                  row_map: RowMap | None = None,
-                 should_stop: Callable[[], bool] | None = None) -> tuple[np.ndarray, np.ndarray, list[sp.csr_matrix], dict]:
+                 should_stop: Callable[[], bool] | None = None,
+                 pose_score: PoseScore | None = None) -> tuple[np.ndarray, np.ndarray, list[sp.csr_matrix], dict]:
     """Compass search over each selected camera's pose (see module doc).
 
     Returns (poses (k, 7) x, y, z, yaw, pitch, roll, focal_mm; moved (k,) bool; rows: the k
@@ -313,8 +317,11 @@ def refine_poses(scene: Scene, vis: Visibility, problem: PlacementProblem, selec
     varifocal lens's focal length is one more variable (``focal_box``; issue 27).
     ``guard`` rejects trial poses before they are raycast (e.g. poses that see a privacy zone).
     ``should_stop()`` is polled before each poll of trial poses (stopped 'interrupted': the
-    poses reached so far are kept, each of them an accepted improvement)."""
+    poses reached so far are kept, each of them an accepted improvement). ``pose_score(R, g,
+    cov_other)``: what a pose with row R is worth (default R @ g, the cost drop; e.g.
+    camplace.improve.people.PeopleCountObjective.pose_scores)."""
     t0 = time.perf_counter()
+    score = pose_score if pose_score is not None else (lambda R, g, _cov: _row_sums(R, g))
     deadline = None if time_limit_s is None else t0 + float(time_limit_s)
     sel = np.asarray(selected, np.int64)
     cands = vis.candidates
@@ -349,7 +356,7 @@ def refine_poses(scene: Scene, vis: Visibility, problem: PlacementProblem, selec
             cov_o = cov.copy()
             cov_o[r.indices] -= 1
             g = target_gains(problem, cov_o)
-            cur = float(g[r.indices].sum())
+            cur = float(score(r, g, cov_o)[0])
             step = half / 2.0
             for _ in range(levels):
                 while True:
@@ -374,7 +381,7 @@ def refine_poses(scene: Scene, vis: Visibility, problem: PlacementProblem, selec
                     R, cast = polled.get(k, trial, lambda t: _trial_rows(engine, scene, vis, cid, t, row_map))
                     trials += len(trial)
                     raycast += cast
-                    s = _row_sums(R, g)
+                    s = score(R, g, cov_o)
                     b = int(np.argmax(s))
                     if s[b] > cur + 1e-9:
                         poses[k], rows[k], cur = trial[b], R[b], float(s[b])
