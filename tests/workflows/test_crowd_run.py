@@ -105,9 +105,9 @@ def test_the_count_step_sees_more_people_of_its_crowds():
     sc, vis = prepare(spec(), extra_pitches=spec(optimise=True).crowd.offers_steep())
     cp = crowd_problem(sc, vis, problem_from_visibility(vis, 3), spec(optimise=True).crowd)
     start = cp.problem.n_targets - len(cp.people.targets)
-    obj = PeopleCountObjective(cp.problem, start, 2, 1.0)
+    obj = PeopleCountObjective(cp.problem, start, 2, spec().crowd.people_count_weight)
     J = [obj.value(cp.problem.coverage(r.placement.selected)) for r in (squared, count)]
-    assert J[1] <= J[0] + 1e-12
+    assert J[1] <= J[0] + 1e-12  # the same greedy placement, then a descent on J
     assert abs(cp.problem.cost(count.placement.selected) - count.placement.info["crowd"]["objective"]) < 1e-9
     refined = run(spec(optimise=True), solver="greedy", refine=True, refine_time_s=5.0)
     grid, again = refined.placement.info["crowd"]["count_steps"]  # on the grid, then among the refined poses too
