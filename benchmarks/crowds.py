@@ -115,7 +115,8 @@ def refined(a, solver: str, opts: dict, crowd: CrowdSpec) -> dict:
     for name, aware in (("empty-store", False), ("crowd-aware", True)):
         keys = {"density": crowd.density, "samples": crowd.samples, "score_samples": crowd.score_samples,
                 "seed": crowd.seed, "optimise": aware or None, "people_weight": crowd.people_weight,
-                "people_gamma": crowd.people_gamma}
+                "people_gamma": crowd.people_gamma, "people_cost": crowd.people_cost,
+                "people_count_weight": crowd.people_count_weight}
         r, t = timed(run, a.scene, a.budget, solver, refine=True, refine_time_s=a.refine, crowd=keys, **opts)
         c = r.metrics.crowd.to_dict()
         cov = r.problem.coverage(r.placement.selected)
@@ -137,7 +138,7 @@ def main() -> None:
     ap.add_argument("--densities", default="0.3,1.0")
     ap.add_argument("--solvers", default="greedy,tabu")
     ap.add_argument("--time-limit", type=float, default=60.0)
-    ap.add_argument("--samples", type=int, default=64)
+    ap.add_argument("--samples", type=int, default=CrowdSpec().samples)
     ap.add_argument("--score-samples", type=int, default=32)
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--out", default=None)
@@ -147,6 +148,8 @@ def main() -> None:
     ap.add_argument("--refine", type=float, default=None)
     ap.add_argument("--people-weight", type=float, default=None)
     ap.add_argument("--people-gamma", type=int, default=None)
+    ap.add_argument("--people-cost", choices=("count", "squared"), default=None)
+    ap.add_argument("--count-weight", type=float, default=None)
     ap.add_argument("--no-timing", action="store_true", help="skip timing V and V_s (placements only)")
     ap.add_argument("--no-steep", action="store_true", help="no steep candidate pitches for the crowd-aware placement")
     a = ap.parse_args()
@@ -170,6 +173,10 @@ def main() -> None:
         pw = {} if a.people_weight is None else {"people_weight": a.people_weight}
         if a.people_gamma is not None:
             pw["people_gamma"] = a.people_gamma
+        if a.people_cost is not None:
+            pw["people_cost"] = a.people_cost
+        if a.count_weight is not None:
+            pw["people_count_weight"] = a.count_weight
         crowd = CrowdSpec(density=d, samples=a.samples, score_samples=a.score_samples, seed=a.seed, **pw)
         crowds = sample_crowds(sc, crowd)
         per = []
@@ -196,8 +203,9 @@ def main() -> None:
             else:
                 e, te = timed(solve, p, solver, **opts)
                 c, tc = timed(solve, cp.problem, solver, **opts)
+                c = cp.count_step(cp.problem, c)  # people_cost count: the swap descent (as camplace.run)
                 got = {"empty-store": {"solve_seconds": te, **scores(sc, vis, p, e.selected, crowd)},
-                       "crowd-aware": {"solve_seconds": tc, "in_sample_gap": c.objective / cp.problem.normalizer,
+                       "crowd-aware": {"solve_seconds": tc, "in_sample_gap": cp.problem.cost(c.selected) / cp.problem.normalizer,
                                        **scores(sc2, vis2, p2, c.selected, crowd)}}
                 ce = crowd_problem(sc, vis, p, crowd).problem
                 got["empty-store"]["in_sample_gap"] = ce.cost(e.selected) / ce.normalizer

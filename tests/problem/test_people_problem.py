@@ -8,7 +8,7 @@ from hypothesis import given, settings, strategies as st
 
 from camplace.problem.gains import shortfall_cost
 from camplace.problem.model import PlacementProblem
-from camplace.problem.people import mixed_rows, people_problem
+from camplace.problem.people import mixed_rows, people_problem, persons_completed, persons_seen
 
 
 def problem(V) -> PlacementProblem:
@@ -43,3 +43,30 @@ def test_mixed_cost_is_the_weighted_sum_of_both_parts(seed, lam):
     want = (1 - lam) * p.cost(x) + lam * n / n_p * shortfall_cost(g_p, w_p, np.asarray(P[x].sum(axis=0)).ravel())
     assert abs(m.cost(x) - want) <= 1e-9 * max(1.0, want)
     assert abs(m.normalizer - n) <= 1e-9 * n
+
+
+def test_people_seen_and_completed_by_hand():
+    """Two people, torso and head, Γ 2. Person 0 is one view short at its torso, person 1
+    two views short at its torso: a camera completes person 0 only if it sees its torso."""
+    cov = np.array([1, 2, 0, 1])
+    gamma = np.full(4, 2)
+    V = sp.csr_matrix(np.array([[1, 0, 0, 0],    # person 0's torso: completes it
+                                [0, 1, 0, 0],    # person 0's head: already at Γ
+                                [0, 0, 1, 1],    # person 1: torso 0 -> 1, not enough
+                                [1, 1, 1, 1]], np.uint8))
+    assert persons_seen(cov, gamma, 2) == 0 and persons_seen(cov + 1, gamma, 2) == 1
+    assert persons_completed(V, cov, gamma, 2).tolist() == [1, 0, 0, 1]
+    assert persons_completed(V, np.array([2, 2, 1, 1]), gamma, 2).tolist() == [0, 0, 1, 1]
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.integers(0, 2**31 - 1), st.integers(1, 3))
+def test_completed_is_the_count_after_adding_the_row(seed, H):
+    rng = np.random.default_rng(seed)
+    n_persons = int(rng.integers(0, 6))
+    gamma = rng.integers(0, 4, n_persons * H)
+    cov = rng.integers(0, 4, n_persons * H)
+    V = sp.csr_matrix((rng.random((5, n_persons * H)) < 0.5).astype(np.uint8))
+    got = persons_completed(V, cov, gamma, H)
+    want = [persons_seen(cov + V[i].toarray().ravel(), gamma, H) - persons_seen(cov, gamma, H) for i in range(5)]
+    assert got.tolist() == want

@@ -24,12 +24,13 @@ def scene(crowd, zones=()) -> dict:
 def test_defaults_and_overrides():
     c = parse_scene(scene({})).crowd
     assert (c.density, c.radius, c.height, c.samples, c.score_samples, c.seed, c.optimise) == \
-        (0.3, 0.25, 1.75, 64, 32, 0, False)
-    assert (c.people_heights, c.people_gamma, c.people_weight, c.steep_pitches) == ([1.25, 1.6], 2, 0.7, [75.0, 90.0])
+        (0.3, 0.25, 1.75, 256, 32, 0, False)
+    assert (c.people_heights, c.people_gamma, c.people_weight, c.steep_pitches) == ([1.25, 1.6], 2, 0.5, [75.0, 90.0])
+    assert (c.people_cost, c.people_count_weight) == ("count", 0.15)
     assert parse_scene(copy.deepcopy(BASE)).crowd is None
     assert crowd_with(None, {}) is None and crowd_with(None, {"density": None}) is None
     o = crowd_with(c, {"density": 1.0, "optimise": True})
-    assert o.density == 1.0 and o.optimise and o.samples == 64
+    assert o.density == 1.0 and o.optimise and o.samples == 256
     assert crowd_with(None, {"seed": 3}).density == 0.3  # a scene without crowd: the defaults
 
 
@@ -66,6 +67,8 @@ def test_people_keys_are_checked():
                        ({"people_heights": [1.2, 1.2]}, "crowd.people_heights"),
                        ({"people_weight": 1.5}, "crowd.people_weight"),
                        ({"people_gamma": 0}, "crowd.people_gamma"),
+                       ({"people_cost": "linear"}, "crowd.people_cost"),
+                       ({"people_count_weight": -1}, "crowd.people_count_weight"),
                        ({"steep_pitches": [95]}, "crowd.steep_pitches")):
         with pytest.raises(InputError, match=key.replace(".", r"\.")):
             parse_scene(scene(crowd))

@@ -77,7 +77,7 @@ def test_density_0_with_refinement_equals_the_run_without_a_crowd():
 def test_crowd_aware_is_optimal_on_its_own_crowds(empty_store):
     from camplace.workflows.crowd import crowd_problem
 
-    aware = run(spec(optimise=True))
+    aware = run(spec(optimise=True, people_cost="squared"))  # the exact solver's placement, no count step
     opt = aware.placement.info["crowd"]
     assert aware.placement.status == "optimal" and opt["samples"] == 4
     assert aware.placement.objective == aware.problem.cost(aware.placement.selected)  # the contract: empty-store cost
@@ -90,6 +90,31 @@ def test_crowd_aware_is_optimal_on_its_own_crowds(empty_store):
     assert aware.metrics.crowd.to_dict()["optimised"] and not empty_store.metrics.crowd.to_dict()["optimised"]
 
 
+def test_the_count_step_sees_more_people_of_its_crowds():
+    """people_cost count (the default): the greedy placement, then the swap descent of
+    camplace.improve.people; the crowd objective stays the squared crowd cost of the result."""
+    from camplace.improve.people import PeopleCountObjective
+    from camplace.workflows.crowd import crowd_problem
+
+    squared = run(spec(optimise=True, people_cost="squared"), solver="greedy")
+    count = run(spec(optimise=True), solver="greedy")
+    step, = count.placement.info["crowd"]["count_steps"]  # no refinement: one step, on the grid
+    assert "count_steps" not in squared.placement.info["crowd"] and "people_count" not in count.placement.info
+    assert step["people_seen"] >= step["people_seen_before"] and step["people"] == int(count.placement.info[
+        "crowd"]["persons"]["mean"] * 4)  # 4 crowds, the same count in each at density 1
+    sc, vis = prepare(spec(), extra_pitches=spec(optimise=True).crowd.offers_steep())
+    cp = crowd_problem(sc, vis, problem_from_visibility(vis, 3), spec(optimise=True).crowd)
+    start = cp.problem.n_targets - len(cp.people.targets)
+    obj = PeopleCountObjective(cp.problem, start, 2, spec().crowd.people_count_weight)
+    J = [obj.value(cp.problem.coverage(r.placement.selected)) for r in (squared, count)]
+    assert J[1] <= J[0] + 1e-12  # the same greedy placement, then a descent on J
+    assert abs(cp.problem.cost(count.placement.selected) - count.placement.info["crowd"]["objective"]) < 1e-9
+    refined = run(spec(optimise=True), solver="greedy", refine=True, refine_time_s=5.0)
+    grid, again = refined.placement.info["crowd"]["count_steps"]  # on the grid, then among the refined poses too
+    assert again["people_seen"] >= again["people_seen_before"] and grid["people"] == again["people"]
+    assert refined.placement.objective == refined.problem.cost(refined.placement.selected)  # the contract
+
+
 def test_steep_views_are_offered_only_to_a_crowd_aware_run_with_people(empty_store):
     aware = run(spec(optimise=True), solver="greedy")
     pitches = lambda r: set(np.round(r.visibility.candidates.angles_deg[:, 1], 6))  # noqa: E731
@@ -98,7 +123,7 @@ def test_steep_views_are_offered_only_to_a_crowd_aware_run_with_people(empty_sto
 
 
 def test_crowd_aware_refinement_scores_poses_on_the_crowds():
-    r = run(spec(optimise=True), refine=True, refine_time_s=2.0)
+    r = run(spec(optimise=True, people_cost="squared"), refine=True, refine_time_s=2.0)  # it lowers that cost
     info = r.placement.info
     assert info["crowd"]["refined_cost"] <= info["crowd"]["refine_grid_cost"] + 1e-9
     assert r.placement.objective == r.problem.cost(r.placement.selected) and r.placement.bound is None

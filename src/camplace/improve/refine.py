@@ -236,6 +236,9 @@ def _row_sums(rows: sp.csr_matrix, g: np.ndarray) -> np.ndarray:
 # --------------------------------------------------------------------------- search
 
 
+PoseScore = Callable[[sp.csr_matrix, np.ndarray, np.ndarray], np.ndarray]  # (rows (K, N_p), g, cov_other) -> (K,)
+
+
 @dataclass(frozen=True)
 class RefineResult:
     """visibility: V with the refined poses appended; placement: the refined selection on
@@ -304,7 +307,8 @@ def refine_poses(scene: Scene, vis: Visibility, problem: PlacementProblem, selec
                  progress: Progress | None = None,
                  guard: PoseGuard | None = None,
                  row_map: RowMap | None = None,
-                 should_stop: Callable[[], bool] | None = None) -> tuple[np.ndarray, np.ndarray, list[sp.csr_matrix], dict]:
+                 should_stop: Callable[[], bool] | None = None,
+                 pose_score: PoseScore | None = None) -> tuple[np.ndarray, np.ndarray, list[sp.csr_matrix], dict]:
     """Compass search over each selected camera's pose (see module doc).
 
     Returns (poses (k, 7) x, y, z, yaw, pitch, roll, focal_mm; moved (k,) bool; rows: the k
@@ -313,7 +317,9 @@ def refine_poses(scene: Scene, vis: Visibility, problem: PlacementProblem, selec
     varifocal lens's focal length is one more variable (``focal_box``; issue 27).
     ``guard`` rejects trial poses before they are raycast (e.g. poses that see a privacy zone).
     ``should_stop()`` is polled before each poll of trial poses (stopped 'interrupted': the
-    poses reached so far are kept, each of them an accepted improvement)."""
+    poses reached so far are kept, each of them an accepted improvement). ``pose_score(R, g,
+    cov_other)``: what a pose with row R is worth (default R @ g, the cost drop; e.g.
+    camplace.improve.people.PeopleCountObjective.pose_scores)."""
     t0 = time.perf_counter()
     deadline = None if time_limit_s is None else t0 + float(time_limit_s)
     sel = np.asarray(selected, np.int64)
@@ -355,11 +361,13 @@ def refine_poses(scene: Scene, vis: Visibility, problem: PlacementProblem, selec
                     ok[ok] = _guarded(guard, cands, cid, trial[ok])
                 return ok
 
+            score = None if pose_score is None else (lambda R, g=g, cov_o=cov_o: pose_score(R, g, cov_o))
             poses[k], rows[k], _, c = compass(
-                poses[k], r, float(g[r.indices].sum()), half, lo, hi, g, levels, admit,
+                poses[k], r, float(g[r.indices].sum()) if score is None else float(score(r)[0]), half, lo, hi, g,
+                levels, admit,
                 lambda t, k=k, cid=cid: polled.get(k, t, lambda u: _trial_rows(engine, scene, vis, cid, u, row_map)),
                 lambda: (deadline is not None and time.perf_counter() > deadline) or (
-                    should_stop is not None and should_stop()))
+                    should_stop is not None and should_stop()), score)
             trials, raycast, accepted = trials + c["trials"], raycast + c["raycast"], accepted + c["accepted"]
             if c["accepted"]:
                 moved[k] = improved_any = True
@@ -377,12 +385,14 @@ def refine_poses(scene: Scene, vis: Visibility, problem: PlacementProblem, selec
 def compass(pose: np.ndarray, row: sp.csr_matrix, cur: float, half: np.ndarray, lo: np.ndarray, hi: np.ndarray,
             g: np.ndarray, levels: int, admit: Callable[[np.ndarray], np.ndarray],
             rows_of: Callable[[np.ndarray], tuple[sp.csr_matrix, int]],
-            halt: Callable[[], bool]) -> tuple[np.ndarray, sp.csr_matrix, float, dict]:
+            halt: Callable[[], bool],
+            score: Callable[[sp.csr_matrix], np.ndarray] | None = None) -> tuple[np.ndarray, sp.csr_matrix, float, dict]:
     """Compass search of one camera's pose (7,) within [lo, hi] (see module doc): polls of ±step
     along each coordinate with half > 0 (steps from half / 2, halved ``levels`` times), the poses
     ``admit`` keeps, scored by their rows (``rows_of(trial)`` -> (rows, how many raycast)) against
     the target gains ``g`` (N_p,); a poll's best pose is taken while it beats ``cur`` (the score
-    Σ g of ``row``). Returns (pose, row, score, dict(trials, raycast, accepted)); ``halt()`` ends it."""
+    Σ g of ``row``; ``score(rows)`` -> (K,) scores them instead, e.g. a crowd-aware run's count).
+    Returns (pose, row, score, dict(trials, raycast, accepted)); ``halt()`` ends it."""
     dims = np.flatnonzero(half > 0)
     step = half / 2.0
     n = {"trials": 0, "raycast": 0, "accepted": 0}
@@ -404,7 +414,7 @@ def compass(pose: np.ndarray, row: sp.csr_matrix, cur: float, half: np.ndarray, 
             R, cast = rows_of(trial)
             n["trials"] += len(trial)
             n["raycast"] += cast
-            s = _row_sums(R, g)
+            s = _row_sums(R, g) if score is None else score(R)
             b = int(np.argmax(s))
             if s[b] > cur + 1e-9:
                 pose, row, cur = trial[b], R[b], float(s[b])

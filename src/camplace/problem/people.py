@@ -10,6 +10,10 @@ shortfall of the people's points, mixed with the empty-store cost, each part sca
 same normaliser N. It is the ordinary cost of one PlacementProblem whose targets are the
 empty-store targets (left out when λ = 1) followed by the people's points, so every solver,
 bound and the refinement work on it unchanged; cost / N is the mixed coverage gap.
+
+``persons_seen`` and ``persons_completed`` count the people whose every point is covered ≥ its
+Γ^p (what metrics.json ``crowd.people.seen_by_gamma_pct`` counts on held-out crowds), for the
+swap descent of ``people_cost: count`` (camplace.improve.people).
 """
 
 from __future__ import annotations
@@ -22,6 +26,7 @@ import scipy.sparse as sp
 from camplace.core.errors import InputError
 from camplace.problem.model import PlacementProblem
 from camplace.problem.offset import offset_gamma
+from camplace.targets.people import person_coverage
 
 
 def part_weights(problem: PlacementProblem, gamma_p: np.ndarray, weights_p: np.ndarray,
@@ -64,6 +69,35 @@ def people_problem(problem: PlacementProblem, people_V: sp.csr_matrix, gamma_p: 
                    target_positions=pos)
 
 
+def persons_seen(coverage: np.ndarray, gamma: np.ndarray, n_heights: int) -> int:
+    """How many people have every point covered ≥ its Γ: coverage, gamma (P · H,) of the
+    points on P people, H = n_heights points each (person p: points p · H .. p · H + H − 1)."""
+    d = np.asarray(coverage, np.int64) - np.asarray(gamma, np.int64)
+    return int(np.sum(person_coverage(d, n_heights) >= 0))
+
+
+def persons_completed(V: sp.csr_matrix, coverage: np.ndarray, gamma: np.ndarray, n_heights: int) -> np.ndarray:
+    """(N_g,) int64: for each row of V (N_g, P · H: views of the points, as persons_seen), how
+    many people not yet seen (some point below its Γ at ``coverage``) have every point covered
+    ≥ its Γ once that row's camera is added. A person counts when each point is at Γ − 1 or
+    more and the row sees every point at exactly Γ − 1."""
+    V = sp.csr_matrix(V)
+    H = int(n_heights)
+    d = np.asarray(coverage, np.int64) - np.asarray(gamma, np.int64)
+    n_persons = len(d) // H
+    near = person_coverage(d, H) == -1  # one view short at one or more points, none further
+    person = np.arange(len(d), dtype=np.int64) // H
+    need = np.flatnonzero((d == -1) & near[person])
+    if len(need) == 0 or V.shape[0] == 0:
+        return np.zeros(V.shape[0], np.int64)
+    n_need = np.bincount(person[need], minlength=n_persons)
+    A = sp.csr_matrix((np.ones(len(need), np.int32), (need, person[need])), shape=(len(d), n_persons))
+    Y = sp.csr_matrix(V.astype(np.int32) @ A)
+    done = Y.data == n_need[Y.indices]
+    rows = np.repeat(np.arange(V.shape[0], dtype=np.int64), np.diff(Y.indptr))
+    return np.bincount(rows[done], minlength=V.shape[0]).astype(np.int64)
+
+
 def mixed_rows(rows: sp.csr_matrix, people_rows: sp.csr_matrix, people_weight: float) -> sp.csr_matrix:
     """New poses' rows of the crowd-aware problem: [rows | people_rows] (people_rows alone when λ = 1)."""
     P = sp.csr_matrix(people_rows, dtype=np.uint8)
@@ -74,4 +108,4 @@ def mixed_rows(rows: sp.csr_matrix, people_rows: sp.csr_matrix, people_weight: f
     return out
 
 
-__all__ = ["mixed_rows", "part_weights", "people_problem"]
+__all__ = ["mixed_rows", "part_weights", "people_problem", "persons_completed", "persons_seen"]

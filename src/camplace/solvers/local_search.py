@@ -117,6 +117,18 @@ class SwapObjective(Protocol):
         """Nothing left to gain (first improvement then stops without another pass)."""
 
 
+def swap_deltas(problem: PlacementProblem, state: SwapState, a: int | None) -> tuple[np.ndarray, np.ndarray]:
+    """((N_g,) the squared-shortfall cost's drop when a (None: nothing) goes out and b comes in,
+    for every candidate b; (N_p,) the coverage without a)."""
+    cov = state.cov
+    if a is not None:
+        cov = cov.copy()
+        cov[state.row(a)] -= 1
+    tg = target_gains(problem.gamma, problem.weights, cov)
+    loss = float(tg[state.row(a)].sum()) if a is not None else 0.0
+    return np.asarray(problem.V @ tg).ravel() - loss, cov
+
+
 class NominalObjective:
     """The squared-shortfall cost. A key is (improvement δ, tolerance); the current
     selection's key is None and a move beats it when δ > tolerance (abs_tol for an add,
@@ -141,21 +153,15 @@ class NominalObjective:
         return None
 
     def moves(self, state: SwapState, a: int | None, allowed: np.ndarray) -> Iterable[tuple[int, Key]]:
-        p = self.p
-        cov = state.cov
-        if a is not None:
-            cov = cov.copy()
-            cov[state.row(a)] -= 1
-        tg = target_gains(p.gamma, p.weights, cov)
-        loss = float(tg[state.row(a)].sum()) if a is not None else 0.0
-        g = np.where(allowed, np.asarray(p.V @ tg).ravel(), -np.inf)
+        delta, _ = swap_deltas(self.p, state, a)
+        g = np.where(allowed, delta, -np.inf)
         if not len(g):
             return []
         b = int(np.argmax(g))
         if not np.isfinite(g[b]):
             return []
         tol = self.abs_tol if a is None else max(self.abs_tol, self.rel_tol * self.cost)
-        return [(b, (float(g[b]) - loss, tol))]
+        return [(b, (float(g[b]), tol))]
 
     def better(self, k1: Key, k2: Key) -> bool:
         return k1[0] > k1[1] if k2 is None else k1[0] > k2[0]
@@ -256,4 +262,4 @@ def swap_search(problem: PlacementProblem, selected: Iterable[int], objective: S
     return sel, {"moves": moves, "passes": passes, "stopped": status, "seconds": time.perf_counter() - t0}
 
 
-__all__ = ["NominalObjective", "SwapObjective", "SwapState", "swap_search"]
+__all__ = ["NominalObjective", "SwapObjective", "SwapState", "swap_deltas", "swap_search"]

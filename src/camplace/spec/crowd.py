@@ -7,14 +7,16 @@ independent crowds from ``seed`` are what a crowd-aware run (``optimise``) avera
 the crowd metrics average over. The people themselves are targets (issue 36): points on
 each sampled person at ``people_heights`` (default torso and head), each to be seen by
 ``people_gamma`` cameras (default 2: triangulatable); a crowd-aware run minimises the
-sample-average people cost mixed with the empty-store cost by ``people_weight``.
+sample-average people cost mixed with the empty-store cost by ``people_weight``; with
+``people_cost: count`` (default) a swap descent then also counts the people seen by
+``people_gamma`` cameras, weighted by ``people_count_weight`` (camplace.improve.people).
 See docs/scene-file.md#crowd.
 """
 
 from __future__ import annotations
 
 import math
-from typing import Annotated, Any
+from typing import Annotated, Any, Literal
 
 from pydantic import BeforeValidator, Field, StrictBool, ValidationError
 
@@ -35,14 +37,16 @@ class CrowdSpec(_Strict):
     radius: PositiveFloat = 0.25
     height: PositiveFloat = 1.75
     zones: dict[str, Density] = {}  # zone name -> its own density
-    samples: Count = 64  # crowds the crowd-aware optimisation averages over (people: 16 overfit, issue 36)
+    samples: Count = 256  # crowds the crowd-aware optimisation averages over (the people count overfits 64, issue 36)
     score_samples: Count = 32  # held-out crowds the metrics average over
     seed: Annotated[int, Field(ge=0, strict=True)] = 0
     optimise: StrictBool = False  # optimise the sample-average crowd cost (a crowd-aware run)
     report_height: Finite | None = None  # m: where the report draws P(seen by >= 2); default nearest 1.5 m
     people_heights: list[PositiveFloat] = [1.25, 1.6]  # m: the points on each person to be seen (torso, head)
     people_gamma: Annotated[int, Field(ge=1, le=64, strict=True)] = 2  # cameras each person point needs
-    people_weight: Share = 0.7  # crowd-aware objective: this share people cost, the rest empty-store cost
+    people_weight: Share = 0.5  # crowd-aware objective: this share people cost, the rest empty-store cost
+    people_cost: Literal["count", "squared"] = "count"  # count: then a swap descent counting people seen by ≥ Γ
+    people_count_weight: Annotated[float, BeforeValidator(_no_bool), Field(ge=0, allow_inf_nan=False)] = 0.15
     steep_pitches: list[Annotated[float, BeforeValidator(_no_bool), Field(ge=0, le=90, allow_inf_nan=False)]] = \
         [75.0, 90.0]  # degrees down: offered at every mount of a crowd-aware run with people in it
 
@@ -105,7 +109,8 @@ def check_people_heights(c: CrowdSpec, error) -> None:
                                                 f"points on the person, at most {c.height} m")
 
 
-CROWD_OPTIONS = ("density", "samples", "score_samples", "seed", "optimise", "people_weight", "people_gamma")  # run() / evaluate() overrides
+CROWD_OPTIONS = ("density", "samples", "score_samples", "seed", "optimise", "people_weight", "people_gamma",
+                 "people_cost", "people_count_weight")  # run() / evaluate() overrides
 
 
 def crowd_with(spec_crowd: CrowdSpec | None, overrides: dict[str, Any] | None) -> CrowdSpec | None:

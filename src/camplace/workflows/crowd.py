@@ -14,6 +14,10 @@
   ``nominal`` turns the solved placement back into one of the empty-store problem (the
   output contract: objective = cost recomputed from the written V), keeping the crowd
   objective and bound in ``placement.info['crowd']``.
+- ``people_cost: count`` (the default): ``CrowdProblem.count_step`` follows the solver's grid
+  placement with a swap descent that also counts the optimisation crowds' people seen by
+  ≥ Γ^p cameras (camplace.improve.people; issue 36: the squared cost valued a person point's
+  first view 3 times its second, and the optimisers bought first views, not triangulations).
 
 With nobody in any sample (density 0) the crowd-aware problem is the problem itself:
 every result equals the run without a crowd.
@@ -28,6 +32,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from camplace.cameras.candidates import Candidates
+from camplace.improve.people import PeopleCountObjective, people_swap
 from camplace.improve.refine import extend_problem
 from camplace.metrics.crowd import CrowdMetrics, crowd_metrics, people_metrics, spread
 from camplace.problem.crowd import sample_coverage
@@ -45,6 +50,7 @@ from camplace.visibility.people import people_rows
 from camplace.visibility.registry import engine_of
 
 SHOWN_HEIGHT = 1.5  # m: the report's default height (faces), the volume target height nearest to it
+COUNT_SWAP_S = 60.0  # s: at most this long for people_cost count's swap descent
 
 
 def crowd_info(crowd: CrowdSpec, crowds: Crowds) -> dict:
@@ -135,10 +141,38 @@ class CrowdProblem:
     engine: VisibilityEngine | None = None
     occupancy: object = None
     people_weight: float = 1.0
+    people_cost: str = "squared"
+    count_weight: float = 0.0
 
     @property
     def stacked(self) -> bool:
         return self.grid is not None
+
+    def count_step(self, problem: PlacementProblem, placement: Placement, should_stop=None,
+                   log: list | None = None) -> Placement:
+        """With ``people_cost`` count and people in the crowds: ``placement`` (of ``problem``, this
+        crowd problem) after the swap descent of camplace.improve.people, scored on ``problem``
+        (status 'heuristic' when it moved); else ``placement`` itself."""
+        if not self.stacked or self.people_cost != "count":
+            return placement
+        start = problem.n_targets - len(self.people.targets)
+        sel, info = people_swap(problem, placement.selected, start, self.people.n_heights, self.count_weight,
+                                end=time.perf_counter() + COUNT_SWAP_S, should_stop=should_stop)
+        info["cost_before"] = float(placement.objective)
+        if log is not None:
+            log.append(f"crowd-aware, people cost count: {info['moves']} swaps, people of the optimisation crowds "
+                       f"seen by ≥ Γ {info['people_seen_before']} -> {info['people_seen']} of {info['people']}")
+        status = placement.status if info["moves"] == 0 else "heuristic"
+        return replace(placement, selected=sel, objective=problem.cost(sel), status=status,
+                       info=dict(placement.info, people_count=[*placement.info.get("people_count", []), info]))
+
+    def pose_score(self, problem: PlacementProblem):
+        """The refinement's pose_score with ``people_cost`` count (J of camplace.improve.people on
+        ``problem``, this crowd problem); None otherwise (the cost drop)."""
+        if not self.stacked or self.people_cost != "count":
+            return None
+        start = problem.n_targets - len(self.people.targets)
+        return PeopleCountObjective(problem, start, self.people.n_heights, self.count_weight).pose_scores
 
     def row_map(self, poses: Candidates, rows: sp.csr_matrix) -> sp.csr_matrix:
         """Raycast rows (K, N_p) of new ``poses`` -> their rows of the crowd-aware problem
@@ -161,6 +195,8 @@ class CrowdProblem:
                  "objective": float(placement.objective), "bound": placement.bound, "status": placement.status,
                  "coverage_gap": float(placement.objective) / norm if norm > 0 else 0.0, **self.info}
         info = dict(placement.info, crowd=crowd)
+        if "people_count" in info:  # count_step's swaps and the people they see (on the grid, after refining)
+            crowd["count_steps"] = info.pop("people_count")
         for step in ("adaptive", "refine"):  # their costs were crowd costs: say so, give the empty-store ones
             if isinstance(info.get(step), dict) and "grid_cost" in info[step]:
                 d = dict(info[step])
@@ -204,8 +240,9 @@ def crowd_problem(sc: Scene, vis: Visibility, problem: PlacementProblem, crowd: 
     info = {"persons": spread(crowds.counts), "people_points": len(pt), "people_weight": float(crowd.people_weight),
             "people_gamma": int(crowd.people_gamma), "people_heights": [float(z) for z in crowd.people_heights],
             "people_seen_pct": 100.0 * float(np.mean(np.diff(seen.tocsc().indptr) > 0)) if len(pt) else 0.0}
+    info["people_cost"] = crowd.people_cost
     return CrowdProblem(mixed, crowds, grid, t, info, (t1 - t0) / S, people, engine, sc.occupancy,
-                        float(crowd.people_weight))
+                        float(crowd.people_weight), crowd.people_cost, float(crowd.people_count_weight))
 
 
 def describe(cp: CrowdProblem, crowd: CrowdSpec) -> str:
@@ -218,7 +255,8 @@ def describe(cp: CrowdProblem, crowd: CrowdSpec) -> str:
             f"{crowd.density:g} /m², seed {crowd.seed}); {i['people_points']} points on them (heights "
             f"{', '.join(f'{z:g}' for z in i['people_heights'])} m, Γ {i['people_gamma']}), "
             f"{i['people_seen_pct']:.1f} % seen by some candidate; people weight {i['people_weight']:g}; "
-            f"{cp.seconds_per_sample:.3f} s per sample; the solvers see {cp.problem.n_targets} targets")
+            f"people cost {i['people_cost']}; {cp.seconds_per_sample:.3f} s per sample; the solvers see "
+            f"{cp.problem.n_targets} targets")
 
 
 class _Stopped(Exception):

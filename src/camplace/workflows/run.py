@@ -265,7 +265,7 @@ def improve_placement(sc: Scene, vis: Visibility, problem: PlacementProblem, pla
                       time_limit_s: float | None = None, should_stop: Callable[[], bool] | None = None,
                       progress: Progress | None = None, log: list | None = None,
                       guard=None, timings: dict | None = None,
-                      row_map=None) -> tuple[Visibility, PlacementProblem, Placement]:
+                      row_map=None, pose_score=None) -> tuple[Visibility, PlacementProblem, Placement]:
     """Beyond the grid (issue 10), after the discrete solve: ``robust`` = 1 minimises the
     worst case over single camera failures (camplace.solvers.robust: swap/tabu heuristic, then the
     scenario MIP, exact on small V, as a large-neighbourhood search on large V); ``adaptive`` rounds of
@@ -274,7 +274,8 @@ def improve_placement(sc: Scene, vis: Visibility, problem: PlacementProblem, pla
     problem replace the grid ones (the placement stays a selection of V rows). time_limit_s
     caps the robust search (default 60 s) and the adaptive rounds (default 120 s). ``guard``
     (camplace.improve.refine.PoseGuard, e.g. the privacy guard) rejects new poses; ``row_map``
-    (camplace.improve.refine.RowMap) turns their raycast rows into the problem's. Each
+    (camplace.improve.refine.RowMap) turns their raycast rows into the problem's; ``pose_score``
+    scores the refinement's trial poses (camplace.improve.refine.refine_poses). Each
     step's wall-clock seconds go to ``timings`` (``robust``, ``adaptive``, ``refine``): they
     are metrics.json figures, never placement.json ones."""
     log = [] if log is None else log
@@ -312,7 +313,7 @@ def improve_placement(sc: Scene, vis: Visibility, problem: PlacementProblem, pla
 
         t = time.perf_counter()
         rf = refine_placement(sc, vis, problem, placement, time_limit_s=refine_time_s, progress=progress,
-                              guard=guard, row_map=row_map, should_stop=should_stop)
+                              guard=guard, row_map=row_map, should_stop=should_stop, pose_score=pose_score)
         vis, problem, placement = rf.visibility, rf.problem, rf.placement
         timings["refine"] = time.perf_counter() - t
         log.append(f"refine: cost {rf.grid_cost:.6g} -> {rf.refined_cost:.6g} ({rf.info['moved']} cameras moved, "
@@ -403,6 +404,8 @@ def run(scene: str | Path | SceneSpec, budget: int | None = None, solver: str | 
         log.append(f"greedy-triangulated: triangulation-aware cost {placement.info['triangulated_cost']:.6g}")
     else:
         placement = solve_stoppable(solving, solver, log=log, **solver_options)
+    if cp is not None:  # people_cost count: a swap descent that counts the people seen by ≥ Γ^p
+        placement = cp.count_step(solving, placement, should_stop=should_stop, log=log)
     timings["solve"] = time.perf_counter() - t
     grid_selected = placement.selected
     stopped = should_stop is not None and should_stop()
@@ -420,8 +423,11 @@ def run(scene: str | Path | SceneSpec, budget: int | None = None, solver: str | 
         vis, solving, placement = improve_placement(
             sc, vis, solving, placement, refine=refine, refine_time_s=refine_time_s, adaptive=adaptive,
             robust=robust, should_stop=should_stop, progress=progress, log=log,
-            guard=None if site is None else site.guard, timings=timings, row_map=None if cp is None else cp.row_map)
+            guard=None if site is None else site.guard, timings=timings, row_map=None if cp is None else cp.row_map,
+            pose_score=None if cp is None else cp.pose_score(solving))
         timings["beyond_grid"] = time.perf_counter() - t
+    if cp is not None and vis.V.shape[0] > problem.n_candidates:  # count again among the new poses too
+        placement = cp.count_step(solving, placement, should_stop=should_stop, log=log)
     if cp is not None and cp.stacked:  # back to the empty-store problem (the contract's cost); crowd cost in info
         problem, placement = cp.nominal(vis, problem, placement, grid_selected)
     else:
