@@ -68,19 +68,19 @@ def _figure(paper: str):
 
 
 def _title_block(fig, data: PlanData, page: str) -> None:
+    """The framed title block, bottom right: figure-level artists in mm, no axes (faster; issue 37)."""
+    from matplotlib.patches import Rectangle
+    from matplotlib.transforms import Affine2D
+
     w, h = page_size_mm(data.paper)
     bw, bh = SIDE_MM - 6.0, 6.0 + 4.2 * (len(data.title_pairs) + 2)
-    ax = fig.add_axes(((w - MARGIN_MM - bw) / w, MARGIN_MM / h, bw / w, bh / h))
-    ax.set_xticks([])
-    ax.set_yticks([])
-    ax.set_xlim(0, bw)
-    ax.set_ylim(0, bh)
-    ax.text(3, bh - 4, "camplace \u2013 camera plan", fontsize=9, weight="bold", va="top")
-    for k, (lab, val) in enumerate(data.title_pairs):
-        y = bh - 10 - 4.2 * k
-        ax.text(3, y, lab, fontsize=6.5, color="#555555", va="top")
-        ax.text(30, y, val, fontsize=6.5, va="top")
-    ax.text(3, 2.5, page, fontsize=6.5, weight="bold", va="bottom")
+    mm = Affine2D().translate(w - MARGIN_MM - bw, MARGIN_MM).scale(1.0 / w, 1.0 / h) + fig.transFigure  # block mm
+    fig.patches.append(Rectangle((0, 0), bw, bh, transform=mm, facecolor="white", edgecolor="black", linewidth=0.8))
+    fig.text(3, bh - 4, "camplace \u2013 camera plan", fontsize=9, weight="bold", va="top", transform=mm)
+    for y, (lab, val) in zip(bh - 10 - 4.2 * np.arange(len(data.title_pairs)), data.title_pairs):
+        fig.text(3, y, lab, fontsize=6.5, color="#555555", va="top", transform=mm)
+        fig.text(30, y, val, fontsize=6.5, va="top", transform=mm)
+    fig.text(3, 2.5, page, fontsize=6.5, weight="bold", va="bottom", transform=mm)
 
 
 def _plan_axes(fig, data: PlanData):
@@ -335,7 +335,9 @@ def coverage_figure(data: PlanData):
         ax.add_patch(MPolygon(fp, closed=True, fill=False, edgecolor="black", linewidth=0.8))
         at = vol & (np.abs(t.positions[:, 2] - sl.height) < 1e-6)
         met = float(np.mean(data.coverage[at] >= t.gamma[at]) * 100) if at.any() else 0.0
-        ax.set_title(f"z = {sl.height:.2f} m: {met:.1f} % of targets reach \u0393", fontsize=7)
+        # title y and axis label places fixed: no search of the tick labels (issue 37)
+        ax.set_title(f"z = {sl.height:.2f} m: {met:.1f} % of targets reach \u0393", fontsize=7, y=1.0)
+        ax.xaxis.set_label_coords(0.5, -0.1), ax.yaxis.set_label_coords(-0.1, 0.5)
         ax.set_aspect("equal")
         ax.tick_params(labelsize=5)
     fig.legend(handles=[Patch(color=c, label=lab) for lab, c in COVERAGE_CLASSES], title="cameras seeing",
