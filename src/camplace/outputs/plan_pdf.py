@@ -22,6 +22,7 @@ import numpy as np
 
 from camplace.core.files import atomic_write_bytes
 from camplace.outputs.figures import AREA_STYLES, COVERAGE_CLASSES, SceneView, coverage_slices
+from camplace.outputs.pdf_text import pdf_layout_cache
 from camplace.outputs.plan_data import DORI_COLOURS, PAPERS_MM, PlanData
 from camplace.outputs.walls import label_colours, mpl_path, plan_cut, scene_walls
 from camplace.visibility.viewshed import DORI_LEVELS
@@ -482,10 +483,9 @@ def pdf_pages_bytes(data: PlanData, pages) -> bytes:
     meta = {"Title": f"camplace plan: {data.placement.get('scene', data.scene.name)}", "Creator": "camplace"}
     if data.dated is None:
         meta["CreationDate"] = None
-    with rc_context(RC):
-        with PdfPages(buf, metadata=meta) as buf_pages:
-            for fig in pages():
-                fig.savefig(buf_pages, format="pdf")
+    with rc_context(RC), pdf_layout_cache(), PdfPages(buf, metadata=meta) as buf_pages:  # each string laid out once
+        for fig in pages():
+            fig.savefig(buf_pages, format="pdf")
     return buf.getvalue()
 
 
