@@ -160,8 +160,8 @@ def _draw_room(ax, data: PlanData, n: int) -> None:
     ax.add_patch(MPolygon(fp, closed=True, facecolor="#fbfbf8", edgecolor="none", zorder=0))
     ax.add_patch(MPolygon(fp, closed=True, fill=False, edgecolor="black", linewidth=2.2, zorder=5, joinstyle="miter"))
     for name, (bmin, bmax) in data.scene.boxes.items():
-        ax.add_patch(Rectangle((bmin[0], bmin[1]), bmax[0] - bmin[0], bmax[1] - bmin[1], facecolor="#c8c8c8",
-                               edgecolor="#444444", linewidth=0.6, hatch="///", zorder=4))
+        ax.add_artist(Rectangle((bmin[0], bmin[1]), bmax[0] - bmin[0], bmax[1] - bmin[1], facecolor="#c8c8c8",
+                                edgecolor="#444444", linewidth=0.6, hatch="///", zorder=4))  # limits set: no search
         vertical = (bmax[1] - bmin[1]) > 1.5 * (bmax[0] - bmin[0])
         ax.text((bmin[0] + bmax[0]) / 2, (bmin[1] + bmax[1]) / 2, f"{name}\n{bmax[2]:.2f} m", fontsize=5,
                 ha="center", va="center", rotation=90 if vertical else 0, zorder=6,
@@ -214,7 +214,7 @@ def _draw_cameras(ax, data: PlanData, n: int) -> None:
                                               zorder=7)),
                           ("symbol", Circle((x, y), r, facecolor="white", edgecolor=colour, linewidth=0.9, zorder=8))):
             art.set_gid(f"camera-{mark}-{part}")  # plan.svg: <g id="camera-C1-symbol"> (report.html's hover rows)
-            ax.add_patch(art)
+            ax.add_artist(art)  # not add_patch: the limits are set, no Bezier extrema per symbol (issue 37)
         # the mark once, inside the circle (as the schedule spells it)
         t = ax.text(x, y, mark, fontsize=4.2 if len(mark) < 4 else 3.4, ha="center", va="center", weight="bold",
                     color=colour, zorder=9)
