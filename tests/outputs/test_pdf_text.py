@@ -66,3 +66,32 @@ def test_backend_restored_after_the_block_even_on_error_and_nested_blocks_share_
             raise RuntimeError("stop")
     assert backend_pdf._text_helpers is _text_helpers
     assert "_get_font_ttf" not in backend_pdf.RendererPdf.__dict__
+
+
+@pytest.mark.skipif(not hasattr(__import__("os"), "fork"), reason="no fork on this platform")
+def test_a_child_forked_while_another_thread_holds_the_lock_can_take_it():
+    import os
+    import threading
+    import warnings
+
+    from camplace.outputs import pdf_text
+
+    held, release = threading.Event(), threading.Event()
+
+    def hold():
+        with pdf_text._LOCK:
+            held.set()
+            release.wait(5)
+
+    t = threading.Thread(target=hold)
+    t.start()
+    held.wait(5)
+    with warnings.catch_warnings():  # Python 3.12+ warns about fork with threads
+        warnings.simplefilter("ignore", DeprecationWarning)
+        pid = os.fork()
+    if pid == 0:
+        os._exit(0 if pdf_text._LOCK.acquire(timeout=2) else 1)
+    _, status = os.waitpid(pid, 0)
+    release.set()
+    t.join()
+    assert os.waitstatus_to_exitcode(status) == 0

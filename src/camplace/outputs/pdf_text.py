@@ -9,17 +9,29 @@ glyphs at the same places, the same bytes (tests/outputs/test_pdf_text.py).
 
 The memo sits only in matplotlib.backends.backend_pdf (its module name ``_text_helpers`` points
 to a shim for the block); PostScript, SVG, Agg and TextPath lay text out as before. One block
-at a time across threads (a re-entrant lock): the PDF writer holds the GIL anyway.
+at a time across threads (a re-entrant lock, new in a forked child): the PDF writer holds the
+GIL anyway.
 """
 
 from __future__ import annotations
 
 import contextlib
+import os
 import threading
 from collections.abc import Iterator
 
 _LOCK = threading.RLock()
 _ACTIVE: list = []  # the memo of the block in progress (nested blocks reuse it)
+
+
+def _new_lock_in_child() -> None:
+    """A forked child (plan.pdf's: camplace.outputs.background) never inherits a held lock."""
+    global _LOCK
+    _LOCK = threading.RLock()
+
+
+if hasattr(os, "register_at_fork"):
+    os.register_at_fork(after_in_child=_new_lock_in_child)
 
 
 class _LayoutMemo:
