@@ -81,6 +81,19 @@ def test_pdf_pages_and_text(plan_dir):
     assert "date" not in plan  # repeatable: no date in the title block
 
 
+def test_every_sheet_carries_its_title_block_and_slice_titles(plan_dir):
+    """The title block (figure-level text since issue 37, no axes) on each of the 5 sheets with
+    its own sheet number; the coverage sheet titles each target height's slice."""
+    out, _ = plan_dir
+    pages = [p.extract_text() for p in pypdf.PdfReader(out / "plan.pdf").pages]
+    for k, (text, name) in enumerate(zip(pages, ("floor plan", "coverage", "camera schedule", "camera views",
+                                                  "bill of materials")), start=1):
+        assert "camplace \u2013 camera plan" in text, k
+        assert f"sheet {k}: {name}" in text and "test-room" in text and "greedy" in text, k
+    for z in ("1.00", "1.50"):
+        assert f"z = {z} m:" in pages[1]
+
+
 @pytest.mark.skipif(shutil.which("pdftoppm") is None, reason="pdftoppm (poppler-utils) not installed")
 def test_first_page_renders_with_ink_at_the_cameras(plan_dir, run_result, tmp_path):
     from PIL import Image

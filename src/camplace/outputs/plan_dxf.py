@@ -196,7 +196,7 @@ def _zones(msp, f: PlanFrame, data: PlanData) -> None:
         drawn.add(name)
     t = data.targets
     vol = ~np.asarray(t.is_surface, bool)
-    half = float(data.scene.spec.voxel_size) / 2
+    cell = float(data.scene.spec.voxel_size)
     for r, name in enumerate(t.region_names):
         m = vol & (t.region_ids == r)
         if not m.any() or str(name) in drawn or (data.storey and str(name).removeprefix(f"{data.storey}/") in drawn):
@@ -204,11 +204,27 @@ def _zones(msp, f: PlanFrame, data: PlanData) -> None:
         zs = np.unique(np.round(t.positions[m, 2], 6))
         z = zs[np.argmin(np.abs(zs - data.height))]
         p = t.positions[m & (np.abs(t.positions[:, 2] - z) < 1e-6)]
-        geom = shapely.union_all(shapely.box(p[:, 0] - half, p[:, 1] - half, p[:, 0] + half, p[:, 1] + half))
+        geom = cells_outline(p[:, :2], cell)
         for ext, holes in _rings(geom.simplify(1e-6)):
             for ring in [ext, *holes]:
                 msp.add_lwpolyline(f.xy(ring), close=True, dxfattribs={"layer": "CAMPLACE-ZONES"})
         _text(msp, f, str(name), geom.representative_point().coords[0], 0.2, {"layer": "CAMPLACE-ZONES"})
+
+
+def cells_outline(xy: np.ndarray, cell: float):
+    """The union of the square cells (side ``cell`` m) centred at ``xy`` (n, 2) m, as a shapely
+    geometry. Centres on one regular grid: each shared edge computed once from integer indices
+    (exactly equal on both sides), then GEOS's coverage union (≈ 10× faster than union_all on
+    30,000 cells; issue 37); off-grid centres: union_all of the squares."""
+    import shapely
+
+    o = xy.min(0)
+    i = np.round((xy - o) / cell).astype(np.int64)
+    if np.abs(o + i * cell - xy).max(initial=0.0) > 1e-6 * cell:
+        h = cell / 2
+        return shapely.union_all(shapely.box(xy[:, 0] - h, xy[:, 1] - h, xy[:, 0] + h, xy[:, 1] + h))
+    lo, hi = o + (i - 0.5) * cell, o + (i + 0.5) * cell
+    return shapely.coverage_union_all(shapely.box(lo[:, 0], lo[:, 1], hi[:, 0], hi[:, 1]))
 
 
 def write_plan_dxf(path: str | Path, data: PlanData) -> Path:

@@ -22,6 +22,7 @@ import numpy as np
 
 from camplace.core.files import atomic_write_bytes
 from camplace.outputs.figures import AREA_STYLES, COVERAGE_CLASSES, SceneView, coverage_slices
+from camplace.outputs.pdf_text import pdf_layout_cache
 from camplace.outputs.plan_data import DORI_COLOURS, PAPERS_MM, PlanData
 from camplace.outputs.walls import label_colours, mpl_path, plan_cut, scene_walls
 from camplace.visibility.viewshed import DORI_LEVELS
@@ -68,19 +69,19 @@ def _figure(paper: str):
 
 
 def _title_block(fig, data: PlanData, page: str) -> None:
+    """The framed title block, bottom right: figure-level artists in mm, no axes (faster; issue 37)."""
+    from matplotlib.patches import Rectangle
+    from matplotlib.transforms import Affine2D
+
     w, h = page_size_mm(data.paper)
     bw, bh = SIDE_MM - 6.0, 6.0 + 4.2 * (len(data.title_pairs) + 2)
-    ax = fig.add_axes(((w - MARGIN_MM - bw) / w, MARGIN_MM / h, bw / w, bh / h))
-    ax.set_xticks([])
-    ax.set_yticks([])
-    ax.set_xlim(0, bw)
-    ax.set_ylim(0, bh)
-    ax.text(3, bh - 4, "camplace \u2013 camera plan", fontsize=9, weight="bold", va="top")
-    for k, (lab, val) in enumerate(data.title_pairs):
-        y = bh - 10 - 4.2 * k
-        ax.text(3, y, lab, fontsize=6.5, color="#555555", va="top")
-        ax.text(30, y, val, fontsize=6.5, va="top")
-    ax.text(3, 2.5, page, fontsize=6.5, weight="bold", va="bottom")
+    mm = Affine2D().translate(w - MARGIN_MM - bw, MARGIN_MM).scale(1.0 / w, 1.0 / h) + fig.transFigure  # block mm
+    fig.patches.append(Rectangle((0, 0), bw, bh, transform=mm, facecolor="white", edgecolor="black", linewidth=0.8))
+    fig.text(3, bh - 4, "camplace \u2013 camera plan", fontsize=9, weight="bold", va="top", transform=mm)
+    for y, (lab, val) in zip(bh - 10 - 4.2 * np.arange(len(data.title_pairs)), data.title_pairs):
+        fig.text(3, y, lab, fontsize=6.5, color="#555555", va="top", transform=mm)
+        fig.text(30, y, val, fontsize=6.5, va="top", transform=mm)
+    fig.text(3, 2.5, page, fontsize=6.5, weight="bold", va="bottom", transform=mm)
 
 
 def _plan_axes(fig, data: PlanData):
@@ -159,8 +160,8 @@ def _draw_room(ax, data: PlanData, n: int) -> None:
     ax.add_patch(MPolygon(fp, closed=True, facecolor="#fbfbf8", edgecolor="none", zorder=0))
     ax.add_patch(MPolygon(fp, closed=True, fill=False, edgecolor="black", linewidth=2.2, zorder=5, joinstyle="miter"))
     for name, (bmin, bmax) in data.scene.boxes.items():
-        ax.add_patch(Rectangle((bmin[0], bmin[1]), bmax[0] - bmin[0], bmax[1] - bmin[1], facecolor="#c8c8c8",
-                               edgecolor="#444444", linewidth=0.6, hatch="///", zorder=4))
+        ax.add_artist(Rectangle((bmin[0], bmin[1]), bmax[0] - bmin[0], bmax[1] - bmin[1], facecolor="#c8c8c8",
+                                edgecolor="#444444", linewidth=0.6, hatch="///", zorder=4))  # limits set: no search
         vertical = (bmax[1] - bmin[1]) > 1.5 * (bmax[0] - bmin[0])
         ax.text((bmin[0] + bmax[0]) / 2, (bmin[1] + bmax[1]) / 2, f"{name}\n{bmax[2]:.2f} m", fontsize=5,
                 ha="center", va="center", rotation=90 if vertical else 0, zorder=6,
@@ -213,7 +214,7 @@ def _draw_cameras(ax, data: PlanData, n: int) -> None:
                                               zorder=7)),
                           ("symbol", Circle((x, y), r, facecolor="white", edgecolor=colour, linewidth=0.9, zorder=8))):
             art.set_gid(f"camera-{mark}-{part}")  # plan.svg: <g id="camera-C1-symbol"> (report.html's hover rows)
-            ax.add_patch(art)
+            ax.add_artist(art)  # not add_patch: the limits are set, no Bezier extrema per symbol (issue 37)
         # the mark once, inside the circle (as the schedule spells it)
         t = ax.text(x, y, mark, fontsize=4.2 if len(mark) < 4 else 3.4, ha="center", va="center", weight="bold",
                     color=colour, zorder=9)
@@ -335,7 +336,9 @@ def coverage_figure(data: PlanData):
         ax.add_patch(MPolygon(fp, closed=True, fill=False, edgecolor="black", linewidth=0.8))
         at = vol & (np.abs(t.positions[:, 2] - sl.height) < 1e-6)
         met = float(np.mean(data.coverage[at] >= t.gamma[at]) * 100) if at.any() else 0.0
-        ax.set_title(f"z = {sl.height:.2f} m: {met:.1f} % of targets reach \u0393", fontsize=7)
+        # title y and axis label places fixed: no search of the tick labels (issue 37)
+        ax.set_title(f"z = {sl.height:.2f} m: {met:.1f} % of targets reach \u0393", fontsize=7, y=1.0)
+        ax.xaxis.set_label_coords(0.5, -0.1), ax.yaxis.set_label_coords(-0.1, 0.5)
         ax.set_aspect("equal")
         ax.tick_params(labelsize=5)
     fig.legend(handles=[Patch(color=c, label=lab) for lab, c in COVERAGE_CLASSES], title="cameras seeing",
@@ -480,10 +483,9 @@ def pdf_pages_bytes(data: PlanData, pages) -> bytes:
     meta = {"Title": f"camplace plan: {data.placement.get('scene', data.scene.name)}", "Creator": "camplace"}
     if data.dated is None:
         meta["CreationDate"] = None
-    with rc_context(RC):
-        with PdfPages(buf, metadata=meta) as buf_pages:
-            for fig in pages():
-                fig.savefig(buf_pages, format="pdf")
+    with rc_context(RC), pdf_layout_cache(), PdfPages(buf, metadata=meta) as buf_pages:  # each string laid out once
+        for fig in pages():
+            fig.savefig(buf_pages, format="pdf")
     return buf.getvalue()
 
 
