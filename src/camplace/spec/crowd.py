@@ -47,10 +47,10 @@ class CrowdSpec(_Strict):
     people_gamma: Annotated[int, Field(ge=1, le=64, strict=True)] = 2  # cameras each person point needs
     people_weight: Share = 0.5  # crowd-aware objective: this share people cost, the rest empty-store cost
     people_cost: Literal["count", "squared"] = "count"  # count: then a swap descent counting people seen by ≥ Γ
-    people_count_weight: Annotated[float, BeforeValidator(_no_bool), Field(ge=0, allow_inf_nan=False)] = 0.15
+    people_count_weight: Annotated[float, BeforeValidator(_no_bool), Field(ge=0, allow_inf_nan=False)] = 0.25
     # people_cost count's cost cap: no move lifts the empty-store cost above (1 + this) × the greedy grid
     # solve's (camplace.workflows.crowd); null: no cap
-    max_cost_rise: Annotated[float, BeforeValidator(_no_bool), Field(ge=0, allow_inf_nan=False)] | None = 0.12
+    max_cost_rise: Annotated[float, BeforeValidator(_no_bool), Field(ge=0, allow_inf_nan=False)] | None = 0.0
     steep_pitches: list[Annotated[float, BeforeValidator(_no_bool), Field(ge=0, le=90, allow_inf_nan=False)]] = \
         [75.0, 90.0]  # degrees down: offered at every mount of a crowd-aware run with people in it
 
