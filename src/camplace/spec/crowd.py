@@ -10,7 +10,8 @@ each sampled person at ``people_heights`` (default torso and head), each to be s
 sample-average people cost mixed with the empty-store cost by ``people_weight``; with
 ``people_cost: count`` (default) a swap descent then also counts the people seen by
 ``people_gamma`` cameras, weighted by ``people_count_weight`` (camplace.improve.people),
-never lifting the empty-store cost by more than ``max_cost_rise`` (the cost cap).
+with ``max_cost_rise`` (the cost cap; none by default) never lifting the empty-store cost by
+more than that share over the greedy grid solve's.
 See docs/scene-file.md#crowd.
 """
 
@@ -49,8 +50,8 @@ class CrowdSpec(_Strict):
     people_cost: Literal["count", "squared"] = "count"  # count: then a swap descent counting people seen by ≥ Γ
     people_count_weight: Annotated[float, BeforeValidator(_no_bool), Field(ge=0, allow_inf_nan=False)] = 0.25
     # people_cost count's cost cap: no move lifts the empty-store cost above (1 + this) × the greedy grid
-    # solve's (camplace.workflows.crowd); null: no cap
-    max_cost_rise: Annotated[float, BeforeValidator(_no_bool), Field(ge=0, allow_inf_nan=False)] | None = 0.0
+    # solve's (camplace.workflows.crowd); null (the default: the cap at 0 cost store-a people, issue 36): no cap
+    max_cost_rise: Annotated[float, BeforeValidator(_no_bool), Field(ge=0, allow_inf_nan=False)] | None = None
     steep_pitches: list[Annotated[float, BeforeValidator(_no_bool), Field(ge=0, le=90, allow_inf_nan=False)]] = \
         [75.0, 90.0]  # degrees down: offered at every mount of a crowd-aware run with people in it
 
