@@ -24,7 +24,8 @@ Issue 36: the placements are also scored on the people themselves (% of the held
 crowds' people seen by ≥ 2 / ≥ Γ^p cameras, camplace.workflows.crowd), the crowd-aware
 one is the people-aware problem (camplace.problem.people; ``--people-weight``, default the
 scene's) over the candidates plus the steep pitches a crowd-aware run offers
-(``--no-steep``: without them); ``--no-timing`` skips timing V and V_s.
+(``--no-steep``: without them); ``--no-timing`` skips timing V and V_s; ``--count-weight`` β and
+``--max-cost-rise`` the cost cap of ``people_cost: count``.
 ``--timing-only``: V and V_s times only (no placements), e.g. on a site-scale scene
 (``--scene warehouse:5000``) with V_s on a process pool (``--workers 2``) or a Dask cluster.
 """
@@ -116,7 +117,7 @@ def refined(a, solver: str, opts: dict, crowd: CrowdSpec) -> dict:
         keys = {"density": crowd.density, "samples": crowd.samples, "score_samples": crowd.score_samples,
                 "seed": crowd.seed, "optimise": aware or None, "people_weight": crowd.people_weight,
                 "people_gamma": crowd.people_gamma, "people_cost": crowd.people_cost,
-                "people_count_weight": crowd.people_count_weight}
+                "people_count_weight": crowd.people_count_weight, "max_cost_rise": crowd.max_cost_rise}
         r, t = timed(run, a.scene, a.budget, solver, refine=True, refine_time_s=a.refine, crowd=keys, **opts)
         c = r.metrics.crowd.to_dict()
         cov = r.problem.coverage(r.placement.selected)
@@ -150,6 +151,8 @@ def main() -> None:
     ap.add_argument("--people-gamma", type=int, default=None)
     ap.add_argument("--people-cost", choices=("count", "squared"), default=None)
     ap.add_argument("--count-weight", type=float, default=None)
+    ap.add_argument("--max-cost-rise", type=float, default=None,
+                    help="the cost cap of people_cost count (default the scene's; a huge value: no cap)")
     ap.add_argument("--no-timing", action="store_true", help="skip timing V and V_s (placements only)")
     ap.add_argument("--no-steep", action="store_true", help="no steep candidate pitches for the crowd-aware placement")
     a = ap.parse_args()
@@ -177,6 +180,8 @@ def main() -> None:
             pw["people_cost"] = a.people_cost
         if a.count_weight is not None:
             pw["people_count_weight"] = a.count_weight
+        if a.max_cost_rise is not None:
+            pw["max_cost_rise"] = a.max_cost_rise
         crowd = CrowdSpec(density=d, samples=a.samples, score_samples=a.score_samples, seed=a.seed, **pw)
         crowds = sample_crowds(sc, crowd)
         per = []

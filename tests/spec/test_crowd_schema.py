@@ -26,7 +26,8 @@ def test_defaults_and_overrides():
     assert (c.density, c.radius, c.height, c.samples, c.score_samples, c.seed, c.optimise) == \
         (0.3, 0.25, 1.75, 256, 32, 0, False)
     assert (c.people_heights, c.people_gamma, c.people_weight, c.steep_pitches) == ([1.25, 1.6], 2, 0.5, [75.0, 90.0])
-    assert (c.people_cost, c.people_count_weight) == ("count", 0.15)
+    assert (c.people_cost, c.people_count_weight, c.max_cost_rise) == ("count", 0.25, None)
+    assert parse_scene(scene({"max_cost_rise": 0})).crowd.max_cost_rise == 0.0
     assert parse_scene(copy.deepcopy(BASE)).crowd is None
     assert crowd_with(None, {}) is None and crowd_with(None, {"density": None}) is None
     o = crowd_with(c, {"density": 1.0, "optimise": True})
@@ -69,6 +70,8 @@ def test_people_keys_are_checked():
                        ({"people_gamma": 0}, "crowd.people_gamma"),
                        ({"people_cost": "linear"}, "crowd.people_cost"),
                        ({"people_count_weight": -1}, "crowd.people_count_weight"),
+                       ({"max_cost_rise": -0.1}, "crowd.max_cost_rise"),
+                       ({"max_cost_rise": True}, "crowd.max_cost_rise"),
                        ({"steep_pitches": [95]}, "crowd.steep_pitches")):
         with pytest.raises(InputError, match=key.replace(".", r"\.")):
             parse_scene(scene(crowd))

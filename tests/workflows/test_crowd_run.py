@@ -115,6 +115,24 @@ def test_the_count_step_sees_more_people_of_its_crowds():
     assert refined.placement.objective == refined.problem.cost(refined.placement.selected)  # the contract
 
 
+def test_the_cost_cap_holds_through_the_descents_and_the_refinement():
+    """max_cost_rise 0: the final placement's empty-store cost (the contract's objective, full Γ)
+    is at most that of the greedy grid solve of the empty-store part (the reference, in the
+    crowd problem's weights (1 − people_weight) × w), after the descent (which without the cap
+    goes above it here) and after both descents and the refinement."""
+    lam = spec().crowd.people_weight
+    free = run(spec(optimise=True, max_cost_rise=None, people_count_weight=3.0), solver="greedy")
+    capped = run(spec(optimise=True, max_cost_rise=0.0, people_count_weight=3.0), solver="greedy")
+    cap = capped.placement.info["crowd"]["cost_cap"]
+    assert cap["max_cost_rise"] == 0.0 and cap["limit"] == cap["reference_cost"] > 0
+    assert "cost_cap" not in free.placement.info["crowd"]
+    assert (1 - lam) * free.placement.objective > cap["limit"] >= (1 - lam) * capped.placement.objective
+    r = run(spec(optimise=True, max_cost_rise=0.0, people_count_weight=3.0), solver="greedy", refine=True,
+            refine_time_s=3.0)
+    assert (1 - lam) * r.placement.objective <= r.placement.info["crowd"]["cost_cap"]["limit"] * (1 + 1e-9)
+    assert "cost_cap" not in run(spec(optimise=True, people_cost="squared"), solver="greedy").placement.info["crowd"]
+
+
 def test_steep_views_are_offered_only_to_a_crowd_aware_run_with_people(empty_store):
     aware = run(spec(optimise=True), solver="greedy")
     pitches = lambda r: set(np.round(r.visibility.candidates.angles_deg[:, 1], 6))  # noqa: E731

@@ -9,7 +9,9 @@ each sampled person at ``people_heights`` (default torso and head), each to be s
 ``people_gamma`` cameras (default 2: triangulatable); a crowd-aware run minimises the
 sample-average people cost mixed with the empty-store cost by ``people_weight``; with
 ``people_cost: count`` (default) a swap descent then also counts the people seen by
-``people_gamma`` cameras, weighted by ``people_count_weight`` (camplace.improve.people).
+``people_gamma`` cameras, weighted by ``people_count_weight`` (camplace.improve.people),
+with ``max_cost_rise`` (the cost cap; none by default) never lifting the empty-store cost by
+more than that share over the greedy grid solve's.
 See docs/scene-file.md#crowd.
 """
 
@@ -46,7 +48,10 @@ class CrowdSpec(_Strict):
     people_gamma: Annotated[int, Field(ge=1, le=64, strict=True)] = 2  # cameras each person point needs
     people_weight: Share = 0.5  # crowd-aware objective: this share people cost, the rest empty-store cost
     people_cost: Literal["count", "squared"] = "count"  # count: then a swap descent counting people seen by ≥ Γ
-    people_count_weight: Annotated[float, BeforeValidator(_no_bool), Field(ge=0, allow_inf_nan=False)] = 0.15
+    people_count_weight: Annotated[float, BeforeValidator(_no_bool), Field(ge=0, allow_inf_nan=False)] = 0.25
+    # people_cost count's cost cap: no move lifts the empty-store cost above (1 + this) × the greedy grid
+    # solve's (camplace.workflows.crowd); null (the default: the cap at 0 cost store-a people, issue 36): no cap
+    max_cost_rise: Annotated[float, BeforeValidator(_no_bool), Field(ge=0, allow_inf_nan=False)] | None = None
     steep_pitches: list[Annotated[float, BeforeValidator(_no_bool), Field(ge=0, le=90, allow_inf_nan=False)]] = \
         [75.0, 90.0]  # degrees down: offered at every mount of a crowd-aware run with people in it
 
@@ -110,7 +115,7 @@ def check_people_heights(c: CrowdSpec, error) -> None:
 
 
 CROWD_OPTIONS = ("density", "samples", "score_samples", "seed", "optimise", "people_weight", "people_gamma",
-                 "people_cost", "people_count_weight")  # run() / evaluate() overrides
+                 "people_cost", "people_count_weight", "max_cost_rise")  # run() / evaluate() overrides
 
 
 def crowd_with(spec_crowd: CrowdSpec | None, overrides: dict[str, Any] | None) -> CrowdSpec | None:

@@ -18,6 +18,10 @@
   placement with a swap descent that also counts the optimisation crowds' people seen by
   ≥ Γ^p cameras (camplace.improve.people; issue 36: the squared cost valued a person point's
   first view 3 times its second, and the optimisers bought first views, not triangulations).
+  With ``max_cost_rise`` r (the cost cap) the descents and the refinement's pose scores
+  refuse any move that lifts the empty-store part of the cost above (1 + r) × its value at
+  the reference placement: the greedy grid solve of the empty-store part of the same
+  problem (same candidates, budget and rules; ``CrowdProblem.cost_limit``).
 
 With nobody in any sample (density 0) the crowd-aware problem is the problem itself:
 every result equals the run without a crowd.
@@ -36,10 +40,12 @@ from camplace.improve.people import PeopleCountObjective, people_swap
 from camplace.improve.refine import extend_problem
 from camplace.metrics.crowd import CrowdMetrics, crowd_metrics, people_metrics, spread
 from camplace.problem.crowd import sample_coverage
+from camplace.problem.gains import shortfall_cost
 from camplace.problem.model import PlacementProblem
 from camplace.problem.people import mixed_rows, people_problem
 from camplace.scene.build import Scene
 from camplace.solvers.base import Placement
+from camplace.solvers.registry import solve
 from camplace.spec.crowd import CrowdSpec
 from camplace.targets.build import Targets
 from camplace.targets.crowd import OPTIMISE, SCORE, Crowds, sample_crowds
@@ -143,6 +149,8 @@ class CrowdProblem:
     people_weight: float = 1.0
     people_cost: str = "squared"
     count_weight: float = 0.0
+    max_cost_rise: float | None = None
+    limit: dict | None = None  # the cost cap, once computed: reference cost, limit (cost_limit)
 
     @property
     def stacked(self) -> bool:
@@ -156,9 +164,13 @@ class CrowdProblem:
         if not self.stacked or self.people_cost != "count":
             return placement
         start = problem.n_targets - len(self.people.targets)
+        limit = self.cost_limit(problem)
         sel, info = people_swap(problem, placement.selected, start, self.people.n_heights, self.count_weight,
-                                end=time.perf_counter() + COUNT_SWAP_S, should_stop=should_stop)
+                                end=time.perf_counter() + COUNT_SWAP_S, should_stop=should_stop, cost_limit=limit)
         info["cost_before"] = float(placement.objective)
+        if limit is not None:  # the empty-store part's cost after the descent (the refinement's start)
+            cov = problem.coverage(sel)[:start]
+            info["empty_cost"] = self.limit["now"] = shortfall_cost(problem.gamma[:start], problem.weights[:start], cov)
         if log is not None:
             log.append(f"crowd-aware, people cost count: {info['moves']} swaps, people of the optimisation crowds "
                        f"seen by ≥ Γ {info['people_seen_before']} -> {info['people_seen']} of {info['people']}")
@@ -172,7 +184,30 @@ class CrowdProblem:
         if not self.stacked or self.people_cost != "count":
             return None
         start = problem.n_targets - len(self.people.targets)
-        return PeopleCountObjective(problem, start, self.people.n_heights, self.count_weight).pose_scores
+        limit = self.cost_limit(problem)
+        if limit is not None:  # a start above the cap (the grid solve's): the refinement never lifts E past it
+            limit = max(limit, self.limit.get("now", limit))
+        return PeopleCountObjective(problem, start, self.people.n_heights, self.count_weight,
+                                    cost_limit=limit).pose_scores
+
+    def cost_limit(self, problem: PlacementProblem) -> float | None:
+        """The cost cap on ``problem`` (this crowd problem, its grid or an extension of it; the
+        first call fixes it): (1 + ``max_cost_rise``) × the empty-store part's cost (the columns
+        before the people's) at the greedy solve of that part on the grid; None without a cap or
+        without an empty-store part (``people_weight`` 1)."""
+        start = problem.n_targets - len(self.people.targets)
+        if self.max_cost_rise is None or start == 0:
+            return None
+        if self.limit is None:
+            grid = problem.take_candidates(np.arange(self.problem.n_candidates))
+            empty = replace(grid, V=sp.csr_matrix(grid.V[:, :start]), gamma=grid.gamma[:start],
+                            weights=grid.weights[:start], target_positions=None if grid.target_positions is None
+                            else grid.target_positions[:start])
+            ref = solve(empty, "greedy").selected
+            cost = empty.cost(ref)
+            self.limit = {"reference": "greedy on the empty-store part, grid", "reference_cost": cost,
+                          "max_cost_rise": float(self.max_cost_rise), "limit": (1 + self.max_cost_rise) * cost}
+        return self.limit["limit"]
 
     def row_map(self, poses: Candidates, rows: sp.csr_matrix) -> sp.csr_matrix:
         """Raycast rows (K, N_p) of new ``poses`` -> their rows of the crowd-aware problem
@@ -194,6 +229,8 @@ class CrowdProblem:
         crowd = {"samples": self.crowds.n_samples, "seed": int(self.crowds.info.get("seed", 0)),
                  "objective": float(placement.objective), "bound": placement.bound, "status": placement.status,
                  "coverage_gap": float(placement.objective) / norm if norm > 0 else 0.0, **self.info}
+        if self.limit is not None:  # the cost cap (in the crowd problem's weights: (1 − people_weight) × w)
+            crowd["cost_cap"] = {k: v for k, v in self.limit.items() if k != "now"}
         info = dict(placement.info, crowd=crowd)
         if "people_count" in info:  # count_step's swaps and the people they see (on the grid, after refining)
             crowd["count_steps"] = info.pop("people_count")
@@ -242,7 +279,8 @@ def crowd_problem(sc: Scene, vis: Visibility, problem: PlacementProblem, crowd: 
             "people_seen_pct": 100.0 * float(np.mean(np.diff(seen.tocsc().indptr) > 0)) if len(pt) else 0.0}
     info["people_cost"] = crowd.people_cost
     return CrowdProblem(mixed, crowds, grid, t, info, (t1 - t0) / S, people, engine, sc.occupancy,
-                        float(crowd.people_weight), crowd.people_cost, float(crowd.people_count_weight))
+                        float(crowd.people_weight), crowd.people_cost, float(crowd.people_count_weight),
+                        crowd.max_cost_rise)
 
 
 def describe(cp: CrowdProblem, crowd: CrowdSpec) -> str:
